@@ -1,0 +1,227 @@
+"""Decoding of PNG files and arrays into boolean shape masks.
+
+Rules (SPEC §4): greyscale, RGB, RGBA, palette (with or without transparency) and
+16-bit PNGs are accepted. Where the image *uses* transparency, the shape is the set of
+non-transparent pixels; otherwise it is the set of pixels whose grey value is non-zero.
+
+Choices made where the SPEC is silent:
+
+- An image uses transparency when at least one pixel is fully transparent: alpha 0 in
+  an alpha channel, a palette entry with alpha 0 that some pixel uses, or a pixel equal
+  to the tRNS colour key. An RGBA file whose alpha is 255 everywhere is therefore read
+  by its grey values, like the RGB file it really is.
+- With transparency, "non-transparent" means alpha > 0 (anti-aliased edges count).
+- "Grey value non-zero" is taken exactly, before any rounding: a colour pixel belongs
+  to the shape unless it is pure black.
+- The chunk structure (lengths, CRCs, a final IEND) is checked before Pillow decodes, so
+  a truncated or corrupted file is refused instead of half-decoded.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import struct
+import zlib
+from pathlib import Path
+
+import numpy as np
+from PIL import Image, UnidentifiedImageError
+
+from skelprune.errors import ImageTooLargeError, InvalidImageError
+
+__all__ = ["PNG_SIGNATURE", "png_size", "read_mask"]
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+_MAX_DIMENSION = 2**31 - 1  # PNG spec limit for width and height
+_ALPHA_MODES = {"RGBA", "LA", "PA", "RGBa", "La"}
+
+
+def _ihdr(data: bytes) -> tuple[int, int, int, int]:
+    """Return ``(width, height, bit_depth, colour_type)`` from the IHDR chunk."""
+    if len(data) < 8 or data[:8] != PNG_SIGNATURE:
+        raise InvalidImageError("not a PNG file: the 8-byte PNG signature is missing")
+    if len(data) < 33:
+        raise InvalidImageError(f"truncated PNG: {len(data)} bytes, the IHDR chunk needs 33")
+    length, ctype = struct.unpack(">I4s", data[8:16])
+    if ctype != b"IHDR" or length != 13:
+        raise InvalidImageError("corrupt PNG: the first chunk is not a 13-byte IHDR")
+    width, height, depth, colour = struct.unpack(">IIBB", data[16:26])
+    if not (0 < width <= _MAX_DIMENSION and 0 < height <= _MAX_DIMENSION):
+        raise InvalidImageError(f"corrupt PNG: invalid size {width}×{height} in IHDR")
+    return width, height, depth, colour
+
+
+def png_size(data: bytes) -> tuple[int, int]:
+    """Read the size of a PNG from its header, without decoding it.
+
+    Parameters
+    ----------
+    data : bytes
+        The PNG file (at least its first 33 bytes).
+
+    Returns
+    -------
+    tuple of int
+        ``(width, height)`` in pixels.
+
+    Raises
+    ------
+    InvalidImageError
+        Bad signature, data shorter than the IHDR chunk, or an invalid IHDR.
+
+    Examples
+    --------
+    >>> import io, numpy as np
+    >>> from PIL import Image
+    >>> buf = io.BytesIO(); Image.fromarray(np.zeros((3, 5), np.uint8)).save(buf, "PNG")
+    >>> png_size(buf.getvalue())
+    (5, 3)
+    """
+    width, height, _, _ = _ihdr(bytes(data[:33]))
+    return width, height
+
+
+def _check_chunks(data: bytes) -> None:
+    """Walk the chunk list: every chunk complete, every CRC right, IEND present."""
+    pos = 8
+    n = len(data)
+    while True:
+        if pos + 8 > n:
+            raise InvalidImageError(f"truncated PNG: file ends at byte {n} before the IEND chunk")
+        length, ctype = struct.unpack(">I4s", data[pos : pos + 8])
+        end = pos + 12 + length
+        name = ctype.decode("latin-1")
+        if end > n:
+            raise InvalidImageError(
+                f"truncated PNG: chunk {name!r} at byte {pos} needs {length + 12} bytes, "
+                f"only {n - pos} left"
+            )
+        (crc,) = struct.unpack(">I", data[end - 4 : end])
+        if zlib.crc32(data[pos + 4 : end - 4]) != crc:
+            raise InvalidImageError(f"corrupt PNG: CRC mismatch in chunk {name!r} at byte {pos}")
+        if ctype == b"IEND":
+            return
+        pos = end
+
+
+def _decode(data: bytes) -> Image.Image:
+    try:
+        im = Image.open(io.BytesIO(data), formats=["PNG"])
+        im.load()
+    except Image.DecompressionBombError as exc:
+        raise ImageTooLargeError(f"image too large to decode safely: {exc}") from None
+    except (UnidentifiedImageError, OSError, SyntaxError, ValueError, EOFError,
+            struct.error, zlib.error) as exc:
+        raise InvalidImageError(f"cannot decode PNG: {exc}") from None
+    return im
+
+
+def _is_key(arr: np.ndarray, key: object) -> np.ndarray:
+    """Pixels equal to a tRNS colour key (an int for grey, an RGB tuple for colour)."""
+    if arr.ndim == 3:
+        return np.all(arr[..., :3] == np.asarray(key, dtype=np.int64)[:3], axis=-1)
+    return arr == int(key)  # type: ignore[call-overload]
+
+
+def _image_mask(im: Image.Image, bit_depth: int) -> np.ndarray:
+    mode = im.mode
+    if mode == "P":
+        # Palette: Pillow maps tRNS (per-entry alpha) to RGBA for us.
+        has_trns = "transparency" in im.info
+        im = im.convert("RGBA" if has_trns else "RGB")
+        mode = im.mode
+    if mode == "1":
+        return np.array(im, dtype=bool)
+    arr = np.asarray(im)
+    if mode in _ALPHA_MODES:
+        alpha = arr[..., -1]
+        if np.any(alpha == 0):
+            return alpha > 0
+        colour = arr[..., :-1]
+        return np.any(colour != 0, axis=-1) if colour.ndim == 3 else colour != 0
+    key = im.info.get("transparency")
+    if key is not None and not isinstance(key, bytes):
+        if mode == "RGB" and bit_depth == 16:
+            # Pillow keeps the high byte of 16-bit colour samples, the key is 16-bit.
+            key = tuple(int(k) >> 8 for k in key)
+        transparent = _is_key(arr, key)
+        if transparent.any():
+            return ~transparent
+    return np.any(arr != 0, axis=-1) if arr.ndim == 3 else arr != 0
+
+
+def _array_mask(arr: np.ndarray) -> np.ndarray:
+    if arr.ndim == 2:
+        return np.ascontiguousarray(arr != 0) if arr.dtype != bool else arr.copy()
+    if arr.ndim == 3 and arr.shape[2] in (1, 2, 3, 4):
+        if arr.shape[2] in (2, 4):
+            alpha = arr[..., -1]
+            if np.any(alpha == 0):
+                return np.ascontiguousarray(alpha > 0)
+            arr = arr[..., :-1]
+        return np.ascontiguousarray(np.any(arr != 0, axis=-1))
+    raise InvalidImageError(
+        f"array of shape {arr.shape} is not an image: expected (H, W) or (H, W, 1-4)"
+    )
+
+
+def read_mask(
+    source: bytes | bytearray | memoryview | str | os.PathLike[str] | np.ndarray,
+    *,
+    max_pixels: int | None = None,
+) -> np.ndarray:
+    """Decode a PNG (bytes or file path) or an array into a boolean shape mask.
+
+    Parameters
+    ----------
+    source : bytes, str, os.PathLike or numpy.ndarray
+        PNG file contents, the path of a PNG file, or an image array of shape
+        ``(H, W)`` or ``(H, W, C)`` with ``C`` in 1–4 (2 and 4: last channel is alpha).
+    max_pixels : int, optional
+        Refuse images with more pixels than this. For PNG input the check reads the
+        header only, before anything is decoded.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(H, W)`` boolean array, True on the shape.
+
+    Raises
+    ------
+    InvalidImageError
+        Not a PNG, truncated or corrupt data, unreadable file, or an array that is
+        not an image.
+    ImageTooLargeError
+        More pixels than ``max_pixels``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> read_mask(np.array([[0, 3], [0, 0]])).tolist()
+    [[False, True], [False, False]]
+    """
+    if isinstance(source, np.ndarray):
+        mask = _array_mask(source)
+        if max_pixels is not None and mask.size > max_pixels:
+            raise ImageTooLargeError(
+                f"image has {mask.size} pixels ({mask.shape[1]}×{mask.shape[0]}), "
+                f"the limit is {max_pixels}"
+            )
+        return mask
+    if isinstance(source, (str, os.PathLike)):
+        try:
+            data = Path(source).read_bytes()
+        except OSError as exc:
+            raise InvalidImageError(f"cannot read {os.fspath(source)!r}: {exc.strerror}") from None
+    else:
+        data = bytes(source)
+    width, height, depth, _ = _ihdr(data)
+    if max_pixels is not None and width * height > max_pixels:
+        raise ImageTooLargeError(
+            f"image has {width * height} pixels ({width}×{height}), the limit is {max_pixels}"
+        )
+    _check_chunks(data)
+    im = _decode(data)
+    mask = _image_mask(im, depth)
+    return np.ascontiguousarray(mask, dtype=bool)

@@ -1,0 +1,48 @@
+"""skelprune: parameter-free Bayesian skeleton pruning.
+
+Shen, Bai, Yang & Latecki, "Skeleton pruning as trade-off between skeleton
+simplicity and reconstruction error", Science China Information Sciences, 2013.
+
+>>> import numpy as np, skelprune
+>>> m = np.zeros((30, 60), bool); m[5:25, 5:55] = True
+>>> doc = skelprune.prune(m).to_dict()
+>>> sorted(doc)
+['beta', 'coarse', 'components', 'height', 'method', 'width']
+"""
+
+from .api import components, prune
+from .errors import (
+    EmptyMaskError,
+    ImageTooLargeError,
+    InvalidImageError,
+    InvalidOptionError,
+    InvalidPolygonError,
+    SkelpruneError,
+)
+from .frame import PixelFrame
+from .graph import BranchGraph
+from .medial_axis import MedialAxis, medial_axis, squared_distance
+from .reconstruction import reconstruction, reconstruction_error
+from .result import ComponentResult, PruneResult
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "BranchGraph",
+    "ComponentResult",
+    "EmptyMaskError",
+    "ImageTooLargeError",
+    "InvalidImageError",
+    "InvalidOptionError",
+    "InvalidPolygonError",
+    "MedialAxis",
+    "PixelFrame",
+    "PruneResult",
+    "SkelpruneError",
+    "components",
+    "medial_axis",
+    "prune",
+    "reconstruction",
+    "reconstruction_error",
+    "squared_distance",
+]

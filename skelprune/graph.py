@@ -1,0 +1,408 @@
+"""Skeleton graph: endpoints, junction clusters, branches and loops (SPEC §2.3–2.4).
+
+A skeleton is a set of pixels. Pixels with three or more 8-neighbours are junction
+pixels; adjacent junction pixels form one junction node. Branches are the pixel
+paths between nodes; a path with no junction at all is a single branch (two free
+ends), and a cycle with no junction is a loop branch.
+
+:class:`BranchGraph` is the mutable graph the pruning works on. It implements the
+one operation pruning needs, removing an end branch, with the rule of SPEC §2.4: a
+junction left with two branch ends is dissolved and its two branches become one.
+Lengths are kept as exact integer counts of axial and diagonal steps, so that two
+implementations that do the same removals get bit-identical lengths.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+
+from .medial_axis import NEIGHBOURS
+
+__all__ = ["SQRT2", "Branch", "BranchGraph", "step_counts"]
+
+SQRT2 = math.sqrt(2.0)
+
+
+@njit(cache=True)
+def _point_index(rows, cols, shape):
+    index = np.full(shape, -1, dtype=np.int64)
+    for k in range(rows.size):
+        index[rows[k], cols[k]] = k
+    return index
+
+
+@njit(cache=True)
+def _neighbours(rows, cols, index):
+    """(n, 8) neighbour point indices (-1 where none) and the degree of each point."""
+    n = rows.size
+    nbr = np.full((n, 8), -1, dtype=np.int64)
+    deg = np.zeros(n, dtype=np.int64)
+    for k in range(n):
+        for i in range(8):
+            q = index[rows[k] + NEIGHBOURS[i, 0], cols[k] + NEIGHBOURS[i, 1]]
+            if q >= 0:
+                nbr[k, i] = q
+                deg[k] += 1
+    return nbr, deg
+
+
+@njit(cache=True)
+def _trace(nbr, deg):
+    """Trace all branches.
+
+    Returns the concatenated point lists (``pts``, split at ``starts``) and, per
+    branch, the junction pixel each end attaches to (-1: a free end; -2: the branch
+    is a closed cycle without junction).
+    """
+    n = deg.size
+    junction = deg >= 3
+    visited = np.zeros(n, dtype=np.bool_)
+    pts = np.empty(n, dtype=np.int64)
+    starts = np.zeros(n + 1, dtype=np.int64)
+    att = np.empty((n, 2), dtype=np.int64)
+    used = 0
+    nb = 0
+
+    def walk(prev, cur, used):
+        # Follow degree-2 points from ``cur`` (coming from ``prev``); returns where it ended.
+        while True:
+            visited[cur] = True
+            pts[used] = cur
+            used += 1
+            if deg[cur] != 2:
+                return -1, used
+            nxt = -1
+            for i in range(8):
+                q = nbr[cur, i]
+                if q >= 0 and q != prev:
+                    nxt = q
+                    break
+            if junction[nxt]:
+                return nxt, used
+            if visited[nxt]:
+                return -2, used
+            prev, cur = cur, nxt
+
+    for j in range(n):
+        if not junction[j]:
+            continue
+        for i in range(8):
+            q = nbr[j, i]
+            if q < 0 or junction[q] or visited[q]:
+                continue
+            end, used = walk(j, q, used)
+            att[nb, 0] = j
+            att[nb, 1] = max(end, -1)
+            nb += 1
+            starts[nb] = used
+    for k in range(n):
+        if visited[k] or junction[k] or deg[k] > 1:
+            continue
+        visited[k] = True
+        pts[used] = k
+        used += 1
+        end = -1
+        if deg[k] == 1:
+            first = -1
+            for i in range(8):
+                if nbr[k, i] >= 0:
+                    first = nbr[k, i]
+            if junction[first]:
+                end = first
+            elif not visited[first]:
+                end, used = walk(k, first, used)
+        att[nb, 0] = -1
+        att[nb, 1] = max(end, -1)
+        nb += 1
+        starts[nb] = used
+    for k in range(n):
+        if visited[k] or junction[k]:
+            continue
+        # A cycle of degree-2 points: walk it from its first point.
+        prev = -1
+        for i in range(8):
+            if nbr[k, i] >= 0:
+                prev = nbr[k, i]
+        _, used = walk(prev, k, used)
+        att[nb, 0] = -2
+        att[nb, 1] = -2
+        nb += 1
+        starts[nb] = used
+    return pts[:used], starts[: nb + 1], att[:nb]
+
+
+def step_counts(rows: np.ndarray, cols: np.ndarray) -> tuple[int, int]:
+    """Axial and diagonal steps along a pixel path given in order."""
+    if rows.size < 2:
+        return 0, 0
+    diag = (np.diff(rows) != 0) & (np.diff(cols) != 0)
+    nd = int(diag.sum())
+    return int(rows.size - 1 - nd), nd
+
+
+@dataclass
+class Branch:
+    """A branch: ordered points and, for each end, the junction node it attaches to.
+
+    ``node[e]`` is a junction node id or ``None`` (a free end: an endpoint);
+    ``attach[e]`` is the junction pixel the end touches. A loop without junction has
+    ``loop = True`` and no nodes.
+    """
+
+    points: list[int]
+    node: list[int | None]
+    attach: list[int]
+    na: int
+    nd: int
+    loop: bool = False
+    alive: bool = True
+
+    @property
+    def length(self) -> float:
+        return self.na + self.nd * SQRT2
+
+
+@dataclass
+class Junction:
+    points: list[int]
+    ends: list[tuple[int, int]] = field(default_factory=list)  # (branch, end index)
+    alive: bool = True
+
+
+class BranchGraph:
+    """Mutable branch graph of a skeleton given as pixel coordinates.
+
+    Parameters
+    ----------
+    rows, cols : (n,) int arrays
+        Skeleton pixels (one pixel thin, 8-connected components).
+    shape : tuple
+        Shape of the array the coordinates index; the border must be empty.
+
+    Examples
+    --------
+    >>> rows = np.array([1, 1, 1, 1, 1, 2, 3]); cols = np.array([1, 2, 3, 4, 5, 3, 3])
+    >>> g = BranchGraph(rows, cols, (5, 7))
+    >>> len(g.end_branches())
+    3
+    """
+
+    def __init__(self, rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int]) -> None:
+        self.rows = np.asarray(rows, dtype=np.int64)
+        self.cols = np.asarray(cols, dtype=np.int64)
+        index = _point_index(self.rows, self.cols, shape)
+        self.nbr, self.degree = _neighbours(self.rows, self.cols, index)
+        self.extra_na = 0  # steps inside dissolved junction clusters, a running total
+        self.extra_nd = 0
+        self.branches: list[Branch] = []
+        self.junctions: list[Junction] = []
+        self._build()
+
+    # -- construction -------------------------------------------------------------
+    def _step(self, a: int, b: int) -> tuple[int, int]:
+        diag = self.rows[a] != self.rows[b] and self.cols[a] != self.cols[b]
+        return (0, 1) if diag else (1, 0)
+
+    def _build(self) -> None:
+        pts, starts, att = _trace(self.nbr, self.degree)
+        junction_of = np.full(self.rows.size, -1, dtype=np.int64)
+        for j in np.flatnonzero(self.degree >= 3):
+            if junction_of[j] >= 0:
+                continue
+            jid = len(self.junctions)
+            stack, members = [int(j)], []
+            junction_of[j] = jid
+            while stack:
+                a = stack.pop()
+                members.append(a)
+                for q in self.nbr[a]:
+                    if q >= 0 and self.degree[q] >= 3 and junction_of[q] < 0:
+                        junction_of[q] = jid
+                        stack.append(int(q))
+            self.junctions.append(Junction(sorted(members)))
+        for b in range(att.shape[0]):
+            seg = pts[starts[b] : starts[b + 1]].tolist()
+            a0, a1 = int(att[b, 0]), int(att[b, 1])
+            if a0 == -2:
+                na, nd = step_counts(self.rows[seg + seg[:1]], self.cols[seg + seg[:1]])
+                self.branches.append(Branch(seg, [None, None], [-1, -1], na, nd, loop=True))
+                continue
+            chain = ([a0] if a0 >= 0 else []) + seg + ([a1] if a1 >= 0 else [])
+            na, nd = step_counts(self.rows[chain], self.cols[chain])
+            nodes = [int(junction_of[a]) if a >= 0 else None for a in (a0, a1)]
+            self.branches.append(Branch(seg, nodes, [a0, a1], na, nd))
+            for e in (0, 1):
+                if nodes[e] is not None:
+                    self.junctions[nodes[e]].ends.append((b, e))
+        for jid, junc in enumerate(self.junctions):
+            if len(junc.ends) <= 2:
+                self._dissolve(jid)
+        self.ends = {b for b in range(len(self.branches)) if self.is_end_branch(b)}
+        self.na = sum(b.na for b in self.branches if b.alive)
+        self.nd = sum(b.nd for b in self.branches if b.alive)
+
+    # -- queries ------------------------------------------------------------------
+    def is_end_branch(self, b: int) -> bool:
+        br = self.branches[b]
+        return br.alive and not br.loop and (br.node[0] is None) != (br.node[1] is None)
+
+    def end_branches(self) -> list[int]:
+        """Ids of the current end branches (one free end, one junction end), sorted."""
+        return sorted(self.ends)
+
+    def endpoint(self, b: int) -> int:
+        """The free-end point of end branch ``b``."""
+        br = self.branches[b]
+        return br.points[0] if br.node[0] is None else br.points[-1]
+
+    def n_endpoints(self) -> int:
+        """Number of free branch ends (a single isolated point counts once)."""
+        n = 0
+        for br in self.branches:
+            if br.alive and not br.loop:
+                free = (br.node[0] is None) + (br.node[1] is None)
+                n += 1 if free == 2 and len(br.points) == 1 else free
+        return n
+
+    def length_counts(self) -> tuple[int, int]:
+        """Total (axial, diagonal) step counts of the current skeleton."""
+        return self.na, self.nd
+
+    def alive_points(self) -> np.ndarray:
+        """Indices of the points still in the skeleton."""
+        keep: list[int] = []
+        for br in self.branches:
+            if br.alive:
+                keep.extend(br.points)
+        for junc in self.junctions:
+            if junc.alive:
+                keep.extend(junc.points)
+        return np.array(sorted(keep), dtype=np.int64)
+
+    # -- mutation -----------------------------------------------------------------
+    def remove_end_branch(self, b: int) -> tuple[int, int, int, list[int]] | None:
+        """Remove end branch ``b``.
+
+        Returns ``None``, or, when its junction is dissolved, ``(kept, absorbed, jid,
+        moved)``: branch ``absorbed`` (maybe equal to ``kept`` for a loop) and the
+        junction's pixels now belong to branch ``kept``; ``moved`` lists the points
+        that changed owner.
+        """
+        if not self.is_end_branch(b):
+            raise ValueError(f"branch {b} is not an end branch")
+        br = self.branches[b]
+        br.alive = False
+        self.ends.discard(b)
+        self.na -= br.na
+        self.nd -= br.nd
+        e = 0 if br.node[0] is not None else 1
+        jid = br.node[e]
+        assert jid is not None
+        junc = self.junctions[jid]
+        junc.ends.remove((b, e))
+        if len(junc.ends) != 2:
+            return None
+        before = self.extra_na, self.extra_nd
+        merged = self._dissolve(jid)
+        self.na += self.extra_na - before[0]
+        self.nd += self.extra_nd - before[1]
+        if merged is not None:
+            kept, absorbed = merged[0], merged[1]
+            self.ends.discard(absorbed)
+            if self.is_end_branch(kept):
+                self.ends.add(kept)
+            else:
+                self.ends.discard(kept)
+        return merged
+
+    def _cluster_path(self, jid: int, a: int, z: int) -> tuple[list[int], int, int]:
+        """Shortest path from pixel ``a`` to ``z`` inside junction cluster ``jid``."""
+        members = set(self.junctions[jid].points)
+        best: dict[int, float] = {a: 0.0}
+        prev: dict[int, tuple[int, tuple[int, int]]] = {}
+        heap = [(0.0, a)]
+        while heap:
+            d, u = heapq.heappop(heap)
+            if u == z or d > best[u]:
+                continue
+            for q in self.nbr[u]:
+                q = int(q)
+                if q < 0 or q not in members:
+                    continue
+                step = self._step(u, q)
+                nd = d + step[0] + step[1] * SQRT2
+                if nd < best.get(q, math.inf) - 1e-12:
+                    best[q] = nd
+                    prev[q] = (u, step)
+                    heapq.heappush(heap, (nd, q))
+        path, na, ndg = [z], 0, 0
+        while path[-1] != a:
+            u, step = prev[path[-1]]
+            na += step[0]
+            ndg += step[1]
+            path.append(u)
+        return path[::-1], na, ndg
+
+    def _dissolve(self, jid: int) -> tuple[int, int, int, list[int]] | None:
+        """A junction with at most two branch ends becomes ordinary points."""
+        junc = self.junctions[jid]
+        junc.alive = False
+        ends = list(junc.ends)
+        junc.ends.clear()
+        if not ends:  # an isolated blob of junction pixels: one branch, two free ends
+            self.branches.append(Branch(list(junc.points), [None, None], [-1, -1], 0, 0))
+            return None
+        if len(ends) == 1:  # the cluster is the tip of a branch
+            b, e = ends[0]
+            br = self.branches[b]
+            path, na, nd = self._cluster_path(jid, br.attach[e], br.attach[e])
+            rest = [p for p in junc.points if p not in path]
+            tip = path + rest
+            br.points = br.points + tip if e == 1 else tip[::-1] + br.points
+            br.node[e], br.attach[e] = None, -1
+            return None
+        (b1, e1), (b2, e2) = ends
+        if b1 == b2:  # a loop through the junction closes into a cycle
+            br = self.branches[b1]
+            path, na, nd = self._cluster_path(jid, br.attach[1], br.attach[0])
+            moved = list(dict.fromkeys(path + list(junc.points)))
+            br.points = br.points + moved
+            br.na += na
+            br.nd += nd
+            self.extra_na += na
+            self.extra_nd += nd
+            br.node, br.attach, br.loop = [None, None], [-1, -1], True
+            return b1, b1, jid, moved
+        # Keep the branch with more points so that the fewer points change owner.
+        if len(self.branches[b2].points) > len(self.branches[b1].points):
+            (b1, e1), (b2, e2) = (b2, e2), (b1, e1)
+        k, a = self.branches[b1], self.branches[b2]
+        kp = k.points if e1 == 1 else k.points[::-1]
+        kn = [k.node[1 - e1], None]
+        kt = [k.attach[1 - e1], -1]
+        ap = a.points if e2 == 0 else a.points[::-1]
+        path, na, nd = self._cluster_path(jid, k.attach[e1], a.attach[e2])
+        rest = [p for p in junc.points if p not in path]
+        k.points = kp + path + rest + ap
+        k.node = [kn[0], a.node[1 - e2]]
+        k.attach = [kt[0], a.attach[1 - e2]]
+        k.na += a.na + na
+        k.nd += a.nd + nd
+        self.extra_na += na
+        self.extra_nd += nd
+        a.alive = False
+        # Re-point the far junctions' records; the kept branch's own record first, so
+        # that a loop through one other junction does not confuse the two.
+        near, far = kn[0], a.node[1 - e2]
+        if near is not None and e1 == 0:
+            nj = self.junctions[near]
+            nj.ends[nj.ends.index((b1, 1))] = (b1, 0)
+        if far is not None:
+            fj = self.junctions[far]
+            fj.ends[fj.ends.index((b2, 1 - e2))] = (b1, 1)
+        return b1, b2, jid, list(junc.points) + ap

@@ -1,0 +1,187 @@
+"""Bayesian skeleton pruning (SPEC §2.3–2.4, eqs. 7 and 9–11 of the paper).
+
+Starting from the medial axis ``M``, end branches are removed one at a time, each
+time the one whose removal gives the smallest target ``λ = α·AR + LR``; the
+skeleton of the whole sequence with the smallest ``λ`` is the answer.
+
+Each step costs only the disks that change: :class:`~skelprune.reconstruction.Coverage`
+keeps the area each branch alone covers, so the candidates' lost areas are read,
+not recomputed. The naive oracle in ``tests/oracle.py`` recomputes everything from
+scratch and must agree exactly.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import dijkstra
+
+from .graph import SQRT2, BranchGraph
+from .reconstruction import Coverage
+
+__all__ = [
+    "Normalisation",
+    "PruningSequence",
+    "bayesian_sequence",
+    "choose_step",
+    "normalisation",
+    "objective",
+]
+
+
+def objective(lost: int, area: int, na: int, nd: int, alpha: float, lbar: float) -> float:
+    """``λ(S) = α·AR(S) + log(Γ(S) + 1)`` with ``Γ = length / ℓ̄`` (eq. 7)."""
+    return alpha * lost / area + math.log((na + nd * SQRT2) / lbar + 1.0)
+
+
+@dataclass(frozen=True)
+class Normalisation:
+    """Seed point, mean end-path length ``ℓ̄`` and ``α`` of a medial axis."""
+
+    seed: int
+    lbar: float
+    alpha: float | None
+
+
+def normalisation(graph: BranchGraph, r2: np.ndarray, beta: float) -> Normalisation:
+    """Seed ``o`` (largest radius; ties: smallest (row, col)), ``ℓ̄`` and ``α``.
+
+    ``α`` is ``None`` where pruning is undefined: no end branch or ``ℓ̄ = 0``.
+    """
+    rows, cols = graph.rows, graph.cols
+    seed = int(np.lexsort((cols, rows, -r2))[0])
+    ends = sorted({graph.endpoint(b) for b in range(len(graph.branches))
+                   if graph.is_end_branch(b)})
+    if not ends:
+        return Normalisation(seed, 0.0, None)
+    n = rows.size
+    src, dst, w = [], [], []
+    for i in range(8):
+        q = graph.nbr[:, i]
+        ok = q >= 0
+        src.append(np.flatnonzero(ok))
+        dst.append(q[ok])
+        diag = (rows[ok] != rows[q[ok]]) & (cols[ok] != cols[q[ok]])
+        w.append(np.where(diag, SQRT2, 1.0))
+    adj = csr_matrix((np.concatenate(w), (np.concatenate(src), np.concatenate(dst))),
+                     shape=(n, n))
+    dist = dijkstra(adj, indices=seed)
+    lbar = float(np.mean(dist[ends]))
+    length = graph.na + graph.nd * SQRT2
+    if not lbar > 0 or not length > 0:
+        return Normalisation(seed, lbar, None)
+    return Normalisation(seed, lbar, beta * math.log(length / lbar))
+
+
+@dataclass
+class PruningSequence:
+    """The greedy removal sequence of one component.
+
+    ``removed[i]`` is the branch removed at step ``i + 1``; the per-step arrays have
+    one entry per skeleton ``S(0) = M, …, S(n)``.
+    """
+
+    removed: list[int]
+    lost: list[int]
+    na: list[int]
+    nd: list[int]
+    area: int
+    alpha: float | None
+    lbar: float
+
+    @property
+    def length(self) -> np.ndarray:
+        return np.asarray(self.na, float) + np.asarray(self.nd, float) * SQRT2
+
+    @property
+    def ar(self) -> np.ndarray:
+        return np.asarray(self.lost, float) / self.area
+
+    @property
+    def lr(self) -> np.ndarray:
+        if not self.lbar > 0:
+            return np.zeros(len(self.lost))
+        return np.log(self.length / self.lbar + 1.0)
+
+    @property
+    def objective(self) -> np.ndarray:
+        if self.alpha is None:
+            return self.lr
+        return np.array([objective(lo, self.area, a, d, self.alpha, self.lbar)
+                         for lo, a, d in zip(self.lost, self.na, self.nd, strict=True)])
+
+
+def choose_step(objectives: np.ndarray) -> int:
+    """``argmin λ`` over the sequence; ties go to the later, simpler skeleton."""
+    best = 0
+    for i, v in enumerate(objectives):
+        if v <= objectives[best]:
+            best = i
+    return best
+
+
+def candidate_key(graph: BranchGraph, b: int, lam: float, d_area: int) -> tuple:
+    """Order of SPEC §2.4: smallest λ, then smaller lost area, shorter, smaller endpoint."""
+    p = graph.endpoint(b)
+    return (lam, d_area, graph.branches[b].length, int(graph.rows[p]), int(graph.cols[p]))
+
+
+def bayesian_sequence(
+    graph: BranchGraph,
+    mask: np.ndarray,
+    r2: np.ndarray,
+    alpha: float | None,
+    lbar: float,
+    keep_going: Callable[[BranchGraph, int], bool] | None = None,
+) -> PruningSequence:
+    """Remove end branches greedily until none is left; record every step.
+
+    Parameters
+    ----------
+    graph : BranchGraph
+        The skeleton to prune; modified in place (it ends as ``S(n)``).
+    mask : (H, W) bool array
+        The shape ``D`` in the graph's frame.
+    r2 : (n,) int array
+        Squared radius of each graph point.
+    alpha, lbar : float
+        ``α`` and ``ℓ̄`` of the medial axis; with ``alpha=None`` nothing is removed.
+    """
+    area = int(mask.sum())
+    nb = len(graph.branches)
+    labels = np.zeros(graph.rows.size, np.int64)
+    for b, br in enumerate(graph.branches):
+        if br.alive:
+            labels[br.points] = b + 1
+    for j, junc in enumerate(graph.junctions):
+        if junc.alive:
+            labels[junc.points] = nb + 1 + j
+    cov = Coverage(mask, graph.rows, graph.cols, r2, labels, nb + len(graph.junctions) + 1)
+    seq = PruningSequence([], [cov.lost], [graph.na], [graph.nd], area, alpha, lbar)
+    if alpha is None:
+        return seq
+    while graph.ends:
+        best = None
+        for b in graph.ends:
+            d_area = int(cov.exclusive[b + 1])
+            br = graph.branches[b]
+            lam = objective(cov.lost + d_area, area, graph.na - br.na, graph.nd - br.nd,
+                            alpha, lbar)
+            key = candidate_key(graph, b, lam, d_area)
+            if best is None or key < best:
+                best, pick = key, b
+        points = graph.branches[pick].points
+        cov.remove(np.asarray(points, np.int64))
+        merged = graph.remove_end_branch(pick)
+        if merged is not None:
+            kept, _, _, moved = merged
+            cov.relabel(np.asarray(moved, np.int64), kept + 1)
+        seq.removed.append(pick)
+        seq.lost.append(cov.lost)
+        seq.na.append(graph.na)
+        seq.nd.append(graph.nd)
+    return seq

@@ -28,7 +28,7 @@ def components(mask: np.ndarray) -> list[tuple[np.ndarray, tuple[int, int]]]:
     Each crop has one background pixel all around (so shapes touching the image
     border work) and holds only its own component.
     """
-    labels, n = ndimage.label(mask, structure=EIGHT)
+    labels, _n = ndimage.label(mask, structure=EIGHT)
     out = []
     for k, sl in enumerate(ndimage.find_objects(labels), start=1):
         crop = np.pad(labels[sl] == k, 1)

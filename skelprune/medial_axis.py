@@ -64,7 +64,9 @@ def _build_tables() -> tuple[np.ndarray, np.ndarray]:
 
         fg_comps = components(fg, adj8)
         # Background components count only where 4-adjacent to the centre pixel.
-        bg_comps = [c for c in components(bg, adj4) if any(abs(nb[i][0]) + abs(nb[i][1]) == 1 for i in c)]
+        bg_comps = [
+            c for c in components(bg, adj4) if any(abs(nb[i][0]) + abs(nb[i][1]) == 1 for i in c)
+        ]
         simple[code] = len(fg_comps) == 1 and len(bg_comps) == 1
     return simple, degree
 
@@ -154,7 +156,7 @@ def _anchors(r2: np.ndarray, need: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
-def _ordered_thinning(fg: np.ndarray, r2: np.ndarray, anchor: np.ndarray, simple: np.ndarray) -> None:
+def _ordered_thinning(fg, r2, anchor, simple) -> None:
     """Distance-ordered homotopic thinning in place: a bucket queue keyed by ``r2``.
 
     A pixel found not simple leaves the queue; it comes back (at the current level)
@@ -219,7 +221,7 @@ def _paint(cover: np.ndarray, rows, cols, r2s, offsets, count, delta: int) -> No
 
 @njit(cache=True)
 def _lossless(cover, r, c, v, offsets, count) -> bool:
-    for j in range(count[v]):
+    for j in range(count[v]):  # noqa: SIM110 (numba compiles loops, not generators)
         if cover[r + offsets[j, 0], c + offsets[j, 1]] < 2:
             return False
     return True

@@ -13,7 +13,6 @@ scratch and must agree exactly.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -136,7 +135,6 @@ def bayesian_sequence(
     r2: np.ndarray,
     alpha: float | None,
     lbar: float,
-    keep_going: Callable[[BranchGraph, int], bool] | None = None,
 ) -> PruningSequence:
     """Remove end branches greedily until none is left; record every step.
 

@@ -44,7 +44,7 @@ def render_overlay(result: PruneResult) -> np.ndarray:
     mask = result.mask
     rows, cols, r2 = result.skeleton_points()
     covered = reconstruction(mask.shape, rows, cols, r2) if rows.size else np.zeros_like(mask)
-    img = np.empty(mask.shape + (3,), np.uint8)
+    img = np.empty((*mask.shape, 3), np.uint8)
     img[:] = COLOURS["background"]
     img[mask & covered] = COLOURS["shape"]
     img[mask & ~covered] = COLOURS["error"]

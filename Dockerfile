@@ -1,0 +1,90 @@
+# skelprune service image.
+#
+#   docker build -t skelprune .
+#   docker run --rm -p 8000:8000 skelprune
+#
+# Needs BuildKit (Docker >= 23 uses it by default) or buildah for the RUN --mount lines.
+# Build arguments:
+#   BASE_IMAGE           any Debian-like image with python3 >= 3.11 and its venv module
+#   PIP_INDEX_URL, PIP_EXTRA_INDEX_URL   a package mirror, when PyPI is not reachable
+# Build secret (optional): --secret id=cacert,src=/path/to/ca-bundle.crt, a CA bundle for
+# pip behind a TLS-intercepting proxy. It is used during the build only, never stored.
+
+ARG BASE_IMAGE=python:3.11-slim
+
+# ---------------------------------------------------------------------------------------
+# build: a virtual environment with the package and its `service` extra
+# ---------------------------------------------------------------------------------------
+FROM ${BASE_IMAGE} AS build
+
+ARG PIP_INDEX_URL
+ARG PIP_EXTRA_INDEX_URL
+ENV PIP_DISABLE_PIP_VERSION_CHECK=1 \
+    PIP_DEFAULT_TIMEOUT=120 \
+    PYTHONDONTWRITEBYTECODE=1
+
+RUN python3 -m venv /opt/venv
+
+# Dependencies first (from pyproject.toml alone), so that a code change does not
+# download them again.
+WORKDIR /src
+COPY pyproject.toml ./
+RUN python3 -c "import tomllib; p = tomllib.load(open('pyproject.toml', 'rb'))['project']; print('\n'.join(p['dependencies'] + p['optional-dependencies']['service']))" > /tmp/requirements.txt
+RUN --mount=type=secret,id=cacert,required=false \
+    --mount=type=cache,target=/root/.cache/pip \
+    if [ -s /run/secrets/cacert ]; then \
+        export PIP_CERT=/run/secrets/cacert REQUESTS_CA_BUNDLE=/run/secrets/cacert; \
+    fi \
+    && /opt/venv/bin/pip install -r /tmp/requirements.txt
+
+# Then the package itself (not editable; tests, docs, benchmarks stay out, see .dockerignore).
+COPY . ./
+RUN --mount=type=secret,id=cacert,required=false \
+    --mount=type=cache,target=/root/.cache/pip \
+    if [ -s /run/secrets/cacert ]; then \
+        export PIP_CERT=/run/secrets/cacert REQUESTS_CA_BUNDLE=/run/secrets/cacert; \
+    fi \
+    && /opt/venv/bin/pip install ".[service]" \
+    && /opt/venv/bin/pip check \
+    && /opt/venv/bin/python -c "import service, skelprune"
+
+# ---------------------------------------------------------------------------------------
+# runtime: the base image, the virtual environment, an unprivileged user
+# ---------------------------------------------------------------------------------------
+FROM ${BASE_IMAGE} AS runtime
+
+LABEL org.opencontainers.image.title="skelprune" \
+      org.opencontainers.image.description="Parameter-free Bayesian skeleton pruning as a REST service" \
+      org.opencontainers.image.licenses="MIT"
+
+RUN groupadd --gid 10001 skelprune \
+    && useradd --uid 10001 --gid skelprune --no-create-home \
+       --home-dir /nonexistent --shell /usr/sbin/nologin skelprune
+
+COPY --from=build /opt/venv /opt/venv
+
+# The worker pool gives the parallelism: one BLAS/OpenMP/numba thread per worker process.
+# numba compiles with cache=True; its cache goes to a writable place, not the read-only
+# site-packages (mount an emptyDir on /tmp with a read-only root filesystem).
+ENV PATH=/opt/venv/bin:$PATH \
+    PYTHONUNBUFFERED=1 \
+    PYTHONDONTWRITEBYTECODE=1 \
+    SKELPRUNE_HOST=0.0.0.0 \
+    SKELPRUNE_PORT=8000 \
+    OMP_NUM_THREADS=1 \
+    OPENBLAS_NUM_THREADS=1 \
+    MKL_NUM_THREADS=1 \
+    NUMBA_NUM_THREADS=1 \
+    NUMBA_CACHE_DIR=/tmp/numba-cache
+
+WORKDIR /tmp
+USER 10001:10001
+EXPOSE 8000
+
+# No curl in the image: the health check is a python one-liner (exit 1 on any failure).
+HEALTHCHECK --interval=30s --timeout=5s --start-period=60s --retries=3 \
+    CMD ["python", "-c", "import os, urllib.request as u; u.urlopen('http://127.0.0.1:%s/healthz' % os.environ.get('SKELPRUNE_PORT', '8000'), timeout=4)"]
+
+# SIGTERM: stop accepting, finish the requests in flight, exit 0.
+STOPSIGNAL SIGTERM
+CMD ["python", "-m", "service"]

@@ -1,0 +1,231 @@
+#!/usr/bin/env bash
+# Container smoke test: build the service image from the repo's Dockerfile with buildah,
+# run it with podman, prove that it serves a real prune request, and that it stops cleanly
+# on SIGTERM. Fails (non-zero exit) when the image does not build, start, serve or stop.
+#
+# No registry image can be pulled on the CI machines, so the base image is made locally:
+# a Debian bookworm minbase root filesystem (debootstrap, through the machine's own apt
+# mirror) with python3 and python3-venv, imported into the container storage. It is cached
+# under $SKELPRUNE_BASE_CACHE (default /var/tmp/skelprune-base) between runs.
+#
+# Usage: bash scripts/container-smoke.sh [--base-only]
+# Environment:
+#   SKELPRUNE_BASE_CACHE   where the base root filesystem tarball is cached
+#   SKELPRUNE_SMOKE_PNG    the PNG to POST (default: the first of ../shared/data/kimia216)
+#   SKELPRUNE_SMOKE_KEEP=1 keep the built image afterwards (default: removed)
+# Needs root (debootstrap, buildah/podman with chroot isolation and the vfs driver).
+set -euo pipefail
+
+REPO=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+BASE_CACHE=${SKELPRUNE_BASE_CACHE:-/var/tmp/skelprune-base}
+# Bump when the base recipe below changes, so stale caches are rebuilt.
+BASE_RECIPE=bookworm-minbase-python3-v1
+BASE_IMAGE=localhost/skelprune-base:${BASE_RECIPE}
+IMAGE=localhost/skelprune:smoke-$$
+CONTAINER=skelprune-smoke-$$
+STORE=(--storage-driver=vfs)
+PODMAN=(podman "${STORE[@]}" --runtime runc --cgroup-manager=cgroupfs)
+BASE_ONLY=0
+[[ ${1:-} == --base-only ]] && BASE_ONLY=1
+
+START=$(date +%s)
+log() { printf '[container-smoke +%ss] %s\n' "$(($(date +%s) - START))" "$*" >&2; }
+die() { log "FAIL: $*"; exit 1; }
+
+[[ $(id -u) -eq 0 ]] || die "must run as root (debootstrap, buildah --isolation=chroot)"
+
+# --- tools -------------------------------------------------------------------------------
+ensure_tools() {
+    local missing=() tool
+    declare -A pkg=([buildah]=buildah [podman]=podman [runc]=runc [debootstrap]=debootstrap
+                    [curl]=curl [python3]=python3)
+    for tool in buildah podman runc debootstrap curl python3; do
+        command -v "$tool" >/dev/null 2>&1 || missing+=("${pkg[$tool]}")
+    done
+    # debootstrap verifies the Release file with the archive keyring
+    [[ -f /usr/share/keyrings/debian-archive-keyring.gpg ]] || missing+=(debian-archive-keyring)
+    if ((${#missing[@]})); then
+        log "installing ${missing[*]}"
+        apt-get update -q >/dev/null
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
+            "${missing[@]}" >/dev/null
+    fi
+}
+
+# The Debian mirror this machine's apt uses (deb822 .sources or one-line sources.list).
+debian_mirror() {
+    local uri
+    uri=$(grep -hsE '^[[:space:]]*URIs:' /etc/apt/sources.list.d/*.sources 2>/dev/null \
+          | awk '{print $2}' | grep -vE 'security|updates' | grep -E '/debian/?$' | head -n1 || true)
+    if [[ -z $uri ]]; then
+        uri=$(grep -hsE '^[[:space:]]*deb[[:space:]]' /etc/apt/sources.list \
+                  /etc/apt/sources.list.d/*.list 2>/dev/null \
+              | awk '{for (i = 2; i <= NF; i++) if ($i !~ /^\[/) {print $i; break}}' \
+              | grep -vE 'security' | grep -E '/debian/?$' | head -n1 || true)
+    fi
+    echo "${uri:-http://deb.debian.org/debian}"
+}
+
+# apt's proxy setting, if any, for debootstrap (which honours http_proxy).
+apt_proxy() {
+    apt-config dump 2>/dev/null | sed -nE 's/^Acquire::http::Proxy "(.+)";$/\1/p' | head -n1
+}
+
+# --- base image --------------------------------------------------------------------------
+make_base() {
+    local tarball=$BASE_CACHE/$BASE_RECIPE.tar
+    if "${PODMAN[@]}" image exists "$BASE_IMAGE"; then
+        log "base image $BASE_IMAGE present"
+        return
+    fi
+    if [[ ! -s $tarball ]]; then
+        local mirror proxy rootfs
+        mirror=$(debian_mirror)
+        proxy=$(apt_proxy)
+        rootfs=$BASE_CACHE/rootfs.tmp
+        mkdir -p "$BASE_CACHE"
+        rm -rf "$rootfs"
+        log "debootstrap bookworm (minbase + python3, python3-venv) from $mirror"
+        http_proxy=${proxy:-${http_proxy:-}} debootstrap --variant=minbase \
+            --include=python3,python3-venv,ca-certificates \
+            bookworm "$rootfs" "$mirror" >"$BASE_CACHE/debootstrap.log" 2>&1 \
+            || { tail -n 30 "$BASE_CACHE/debootstrap.log" >&2; die "debootstrap failed"; }
+        # slim it: no package lists, caches, docs or manuals in the image
+        chroot "$rootfs" apt-get clean
+        rm -rf "${rootfs:?}"/var/lib/apt/lists/* "${rootfs:?}"/var/cache/apt/*.bin \
+               "${rootfs:?}"/usr/share/doc/* "${rootfs:?}"/usr/share/man/* "${rootfs:?}"/usr/share/info/* \
+               "${rootfs:?}"/usr/share/locale/* "${rootfs:?}"/var/log/*.log "${rootfs:?}"/tmp/* \
+               "${rootfs:?}"/dev/*
+        chroot "$rootfs" python3 -c 'import ensurepip, venv' \
+            || die "base root filesystem has no working python3 venv"
+        tar --numeric-owner -C "$rootfs" -cf "$tarball.tmp" .
+        mv "$tarball.tmp" "$tarball"
+        rm -rf "$rootfs"
+    else
+        log "using cached base root filesystem $tarball"
+    fi
+    log "importing $tarball as $BASE_IMAGE"
+    "${PODMAN[@]}" import --quiet \
+        --change 'ENV PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin' \
+        --change 'ENV LANG=C.UTF-8' \
+        --change 'CMD ["/usr/bin/python3"]' \
+        "$tarball" "$BASE_IMAGE" >/dev/null
+}
+
+# --- pip settings passed into the build --------------------------------------------------
+# The build reaches PyPI the way this machine does. Local file:// indexes and find-links
+# do not exist inside the build, so only http(s) settings are handed on.
+pip_setting() {
+    local env_name=$1 key=$2 value
+    value=${!env_name:-}
+    if [[ -z $value ]] && command -v pip >/dev/null 2>&1; then
+        value=$(pip config get "global.$key" 2>/dev/null || true)
+    fi
+    # keep only http(s) URLs
+    tr ' ' '\n' <<<"$value" | grep -E '^https?://' | paste -sd' ' || true
+}
+
+ensure_tools
+make_base
+if ((BASE_ONLY)); then
+    log "base image ready: $BASE_IMAGE"
+    exit 0
+fi
+
+SAMPLE=${SKELPRUNE_SMOKE_PNG:-}
+if [[ -z $SAMPLE ]]; then
+    SAMPLE=$(find "$REPO/../shared/data/kimia216" -maxdepth 1 -name '*.png' 2>/dev/null \
+             | sort | head -n1 || true)
+fi
+[[ -n $SAMPLE && -f $SAMPLE ]] || die "no sample PNG (looked in $REPO/../shared/data/kimia216)"
+
+WORK=$(mktemp -d)
+cleanup() {
+    local rc=$?
+    "${PODMAN[@]}" rm -f -t 5 "$CONTAINER" >/dev/null 2>&1 || true
+    if [[ ${SKELPRUNE_SMOKE_KEEP:-0} != 1 ]]; then
+        "${PODMAN[@]}" rmi -f "$IMAGE" >/dev/null 2>&1 || true
+    fi
+    rm -rf "$WORK"
+    if ((rc == 0)); then log "OK"; else log "FAILED (exit $rc)"; fi
+    exit "$rc"
+}
+trap cleanup EXIT
+trap 'exit 130' INT TERM
+
+# --- build -------------------------------------------------------------------------------
+build_args=(--build-arg "BASE_IMAGE=$BASE_IMAGE")
+index_url=$(pip_setting PIP_INDEX_URL index-url)
+extra_index=$(pip_setting PIP_EXTRA_INDEX_URL extra-index-url)
+[[ -n $index_url ]] && build_args+=(--build-arg "PIP_INDEX_URL=$index_url")
+[[ -n $extra_index ]] && build_args+=(--build-arg "PIP_EXTRA_INDEX_URL=$extra_index")
+secret_args=()
+CA_BUNDLE=${SKELPRUNE_CA_BUNDLE:-/etc/ssl/certs/ca-certificates.crt}
+[[ -s $CA_BUNDLE ]] && secret_args+=(--secret "id=cacert,src=$CA_BUNDLE")
+
+log "building $IMAGE from $REPO/Dockerfile"
+buildah bud --isolation=chroot "${STORE[@]}" --format docker --layers=false \
+    "${build_args[@]}" "${secret_args[@]}" \
+    -f "$REPO/Dockerfile" -t "$IMAGE" "$REPO" >"$WORK/build.log" 2>&1 \
+    || { tail -n 40 "$WORK/build.log" >&2; die "image build failed"; }
+log "built $IMAGE"
+
+# --- run ---------------------------------------------------------------------------------
+PORT=$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+log "starting container on port $PORT"
+"${PODMAN[@]}" run -d --name "$CONTAINER" \
+    --ulimit nofile=1024:1024 --ulimit nproc=1024:1024 \
+    --network=host -e "SKELPRUNE_PORT=$PORT" "$IMAGE" >/dev/null \
+    || die "podman run failed"
+
+show_logs() { "${PODMAN[@]}" logs "$CONTAINER" 2>&1 | tail -n 40 >&2 || true; }
+
+deadline=$(($(date +%s) + 120))
+until curl -fsS -m 2 "http://127.0.0.1:$PORT/healthz" >/dev/null 2>&1; do
+    state=$("${PODMAN[@]}" inspect -f '{{.State.Status}}' "$CONTAINER" 2>/dev/null || echo gone)
+    [[ $state == running ]] || { show_logs; die "container is $state before becoming healthy"; }
+    (($(date +%s) < deadline)) || { show_logs; die "no /healthz within 120 s"; }
+    sleep 1
+done
+log "/healthz answers"
+
+# The image's own HEALTHCHECK command must pass too (it is what docker/podman will run).
+health=$("${PODMAN[@]}" inspect -f '{{json .Config.Healthcheck}}' "$IMAGE" 2>/dev/null || true)
+[[ $health == *healthz* ]] || die "image has no HEALTHCHECK on /healthz (got: $health)"
+"${PODMAN[@]}" healthcheck run "$CONTAINER" >/dev/null 2>&1 \
+    || { show_logs; die "the image's HEALTHCHECK command fails in the running container"; }
+log "image HEALTHCHECK passes"
+
+user=$("${PODMAN[@]}" exec "$CONTAINER" id -u)
+[[ $user != 0 ]] || die "the service runs as root inside the container"
+
+log "POST $(basename "$SAMPLE") to /v1/prune"
+code=$(curl -sS -m 120 -o "$WORK/prune.json" -w '%{http_code}' \
+    -H 'Content-Type: image/png' --data-binary "@$SAMPLE" \
+    "http://127.0.0.1:$PORT/v1/prune") || { show_logs; die "POST /v1/prune failed"; }
+[[ $code == 200 ]] || { head -c 2000 "$WORK/prune.json" >&2; show_logs; die "POST /v1/prune: HTTP $code"; }
+python3 - "$WORK/prune.json" <<'EOF' || die "unexpected /v1/prune response"
+import json
+import sys
+
+doc = json.load(open(sys.argv[1]))
+comps = doc["components"]
+assert isinstance(comps, list) and comps, "no components"
+for c in comps:
+    sk = c["skeleton"]
+    assert sk["endpoints"], "a component without endpoints"
+    ids = {n["id"] for n in sk["nodes"]}
+    assert set(sk["endpoints"]) <= ids, "endpoints that are not nodes"
+    assert sk["branches"], "a component without branches"
+    assert 0.0 <= c["rer"] <= 1.0, "rer out of range"
+print(f"{len(comps)} component(s), endpoints {[len(c['skeleton']['endpoints']) for c in comps]}",
+      file=sys.stderr)
+EOF
+log "prune response is a skeleton document"
+
+# --- graceful stop -----------------------------------------------------------------------
+log "SIGTERM"
+"${PODMAN[@]}" stop -t 30 "$CONTAINER" >/dev/null || die "podman stop failed"
+state=$("${PODMAN[@]}" inspect -f '{{.State.Status}} {{.State.ExitCode}}' "$CONTAINER")
+[[ $state == "exited 0" ]] || { show_logs; die "container did not exit cleanly on SIGTERM: $state"; }
+log "container exited with code 0 on SIGTERM"

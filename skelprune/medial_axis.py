@@ -256,7 +256,8 @@ def _thin(fg, r2, rows, cols, offsets, count, simple, degree) -> None:
                 for j in range(count[v]):
                     cover[r + offsets[j, 0], c + offsets[j, 1]] -= 1
                 changed = True
-        found = False
+        # No lossless removal left: take the one that loses the fewest pixels.
+        best, best_loss = -1, 1 << 60
         for k in range(n):
             r, c = rows[k], cols[k]
             if not fg[r, c]:
@@ -265,13 +266,19 @@ def _thin(fg, r2, rows, cols, offsets, count, simple, degree) -> None:
             if degree[code] < 2 or not simple[code]:
                 continue
             v = r2[r, c]
-            fg[r, c] = False
+            loss = 0
             for j in range(count[v]):
-                cover[r + offsets[j, 0], c + offsets[j, 1]] -= 1
-            found = True
-            break
-        if not found:
+                if cover[r + offsets[j, 0], c + offsets[j, 1]] == 1:
+                    loss += 1
+            if loss < best_loss:
+                best, best_loss = k, loss
+        if best < 0:
             return
+        r, c = rows[best], cols[best]
+        v = r2[r, c]
+        fg[r, c] = False
+        for j in range(count[v]):
+            cover[r + offsets[j, 0], c + offsets[j, 1]] -= 1
 
 
 @dataclass(frozen=True)

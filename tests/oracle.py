@@ -17,7 +17,7 @@ from skelprune.pruning import candidate_key, objective
 
 def disk_pixels(rows, cols, r2, shape) -> list[np.ndarray]:
     """Flat pixel indices of each point's disk ``|p - s|^2 < r2``, by brute force."""
-    h, w = shape
+    w = shape[1]
     out = []
     for r, c, v in zip(rows, cols, r2, strict=True):
         rad = int(np.ceil(np.sqrt(v)))

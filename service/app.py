@@ -1,0 +1,177 @@
+"""Application factory: settings, worker pool, metrics, errors, OpenAPI."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import AsyncIterator, Callable
+from contextlib import asynccontextmanager
+from dataclasses import dataclass
+from typing import Any
+
+from fastapi import FastAPI
+from fastapi.openapi.utils import get_openapi
+from prometheus_client import CollectorRegistry, Gauge, Histogram
+from prometheus_fastapi_instrumentator import Instrumentator
+from pydantic.json_schema import models_json_schema
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from service import __version__
+from service.errors import BodyTooLargeError, install_error_handlers, problem_response
+from service.jobs import warmup
+from service.pool import WorkerPool
+from service.routes import router
+from service.schemas import Problem, PruneDocument, SkeletonGeoJSON, polygon_request_adapter
+from service.settings import Settings
+
+__all__ = ["BodyLimitMiddleware", "Metrics", "create_app"]
+
+REF_TEMPLATE = "#/components/schemas/{model}"
+
+
+class BodyLimitMiddleware:
+    """Refuse request bodies over ``limit`` bytes with 413, streamed or not.
+
+    A declared ``Content-Length`` over the limit is answered before anything is read;
+    a chunked body is counted as it arrives and stopped at the limit.
+    """
+
+    def __init__(self, app: ASGIApp, limit: int) -> None:
+        self.app = app
+        self.limit = limit
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        declared = dict(scope["headers"]).get(b"content-length")
+        message = f"request body exceeds the limit of {self.limit} bytes"
+        if declared is not None and declared.isdigit() and int(declared) > self.limit:
+            response = problem_response(
+                413, f"{message} (Content-Length: {int(declared)})", slug="body-too-large",
+                title="Request body too large", instance=scope.get("path"),
+            )
+            await response(scope, receive, send)
+            return
+        received = 0
+
+        async def limited() -> Message:
+            nonlocal received
+            msg = await receive()
+            if msg["type"] == "http.request":
+                received += len(msg.get("body", b""))
+                if received > self.limit:
+                    raise BodyTooLargeError(message)
+            return msg
+
+        await self.app(scope, limited, send)
+
+
+@dataclass
+class Metrics:
+    """The service's own Prometheus metrics (HTTP ones come from the instrumentator)."""
+
+    registry: CollectorRegistry
+    prune_seconds: Histogram
+    job_seconds: Histogram
+
+
+def _metrics(registry: CollectorRegistry, pool: WorkerPool) -> Metrics:
+    buckets = (0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1, 2, 5, 10, 30, 60)
+    m = Metrics(
+        registry=registry,
+        prune_seconds=Histogram("skelprune_prune_seconds", "Time in skelprune.prune per job.",
+                                buckets=buckets, registry=registry),
+        job_seconds=Histogram("skelprune_job_seconds",
+                              "Worker round trip per job: decode, prune, serialise, transfer.",
+                              buckets=buckets, registry=registry),
+    )
+    Gauge("skelprune_queue_depth", "Jobs waiting for a free worker.",
+          registry=registry).set_function(lambda: pool.waiting)
+    Gauge("skelprune_workers_busy", "Workers running a job.",
+          registry=registry).set_function(lambda: pool.busy)
+    Gauge("skelprune_workers", "Worker processes alive.",
+          registry=registry).set_function(pool.alive)
+    Gauge("skelprune_worker_restarts", "Workers replaced after a timeout or crash.",
+          registry=registry).set_function(lambda: pool.restarts)
+    pool.on_job_done = m.job_seconds.observe
+    return m
+
+
+def _simplify_query_params(schema: dict[str, Any]) -> None:
+    """``X | None`` query options: drop the ``null`` branch, a query string cannot be null."""
+    for operations in schema.get("paths", {}).values():
+        for op in operations.values():
+            for param in op.get("parameters", []):
+                sub = param.get("schema", {})
+                branches = sub.get("anyOf")
+                if param.get("in") == "query" and branches:
+                    kept = [b for b in branches if b != {"type": "null"}]
+                    if len(kept) == 1:
+                        del sub["anyOf"]
+                        sub.update(kept[0])
+
+
+def _openapi(app: FastAPI) -> Callable[[], dict[str, Any]]:
+    def build() -> dict[str, Any]:
+        if app.openapi_schema is None:
+            schema = get_openapi(
+                title=app.title, version=app.version, description=app.description,
+                routes=app.routes,
+            )
+            _simplify_query_params(schema)
+            components = schema.setdefault("components", {}).setdefault("schemas", {})
+            _, defs = models_json_schema(
+                [(m, "validation") for m in (Problem, PruneDocument, SkeletonGeoJSON)],
+                ref_template=REF_TEMPLATE,
+            )
+            components.update(defs.get("$defs", {}))
+            request = polygon_request_adapter.json_schema(ref_template=REF_TEMPLATE)
+            components.update(request.pop("$defs", {}))
+            components["PolygonRequest"] = {"title": "PolygonRequest", **request}
+            # Round-trip through JSON so that the document is plain data (stable output).
+            app.openapi_schema = json.loads(json.dumps(schema, sort_keys=True))
+        return app.openapi_schema
+
+    return build
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    """Build the FastAPI application.
+
+    Parameters
+    ----------
+    settings : Settings, optional
+        Defaults to :class:`Settings` read from the environment.
+    """
+    settings = settings or Settings()
+    pool = WorkerPool(
+        settings.workers, queue_size=settings.queue_size, job_timeout=settings.job_timeout,
+        initializer=warmup if settings.warmup else None,
+        startup_timeout=settings.startup_timeout, context=settings.mp_context,
+    )
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        await pool.start()
+        try:
+            yield
+        finally:
+            await pool.close()
+
+    app = FastAPI(
+        title="skelprune",
+        version=__version__,
+        description="Pruned skeletons of 2-D shapes (Bayesian skeleton pruning, "
+        "Shen, Bai, Yang & Latecki 2013). Errors are RFC 9457 problem details.",
+        lifespan=lifespan,
+    )
+    registry = CollectorRegistry()
+    app.state.settings = settings
+    app.state.pool = pool
+    app.state.metrics = _metrics(registry, pool)
+    app.include_router(router)
+    install_error_handlers(app, retry_after=settings.retry_after)
+    Instrumentator(registry=registry, excluded_handlers=["/metrics"]).instrument(app)
+    app.add_middleware(BodyLimitMiddleware, limit=settings.max_body_bytes)
+    app.openapi = _openapi(app)  # type: ignore[method-assign]
+    return app

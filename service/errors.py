@@ -1,0 +1,188 @@
+"""RFC 9457 problem details for every error the service returns.
+
+One table, :data:`PROBLEMS`, maps each exception type to its HTTP status and problem
+type; the handlers below cover domain errors, pool errors, FastAPI's own 4xx
+(404, 405, 400, 422) and, as a last resort, any other exception (500, with no
+internals in the answer; the traceback goes to the server log only).
+"""
+
+from __future__ import annotations
+
+import http
+import logging
+import uuid
+from dataclasses import dataclass
+from typing import Any
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from service.pool import (
+    JobFailedError,
+    JobTimeoutError,
+    PoolClosedError,
+    QueueFullError,
+    WorkerCrashedError,
+)
+from skelprune.errors import (
+    EmptyMaskError,
+    ImageTooLargeError,
+    InvalidImageError,
+    InvalidOptionError,
+    InvalidPolygonError,
+    SkelpruneError,
+)
+
+__all__ = [
+    "PROBLEMS",
+    "PROBLEM_MEDIA_TYPE",
+    "BodyTooLargeError",
+    "NotAcceptableError",
+    "UnsupportedMediaTypeError",
+    "install_error_handlers",
+    "problem_response",
+]
+
+log = logging.getLogger("service.errors")
+
+PROBLEM_MEDIA_TYPE = "application/problem+json"
+TYPE_PREFIX = "urn:skelprune:problem:"
+
+
+class BodyTooLargeError(Exception):
+    """The request body is larger than ``SKELPRUNE_MAX_BODY_BYTES``."""
+
+
+class UnsupportedMediaTypeError(Exception):
+    """The request's Content-Type is not one the endpoint reads."""
+
+
+class NotAcceptableError(Exception):
+    """None of the media types in Accept can be produced."""
+
+
+@dataclass(frozen=True)
+class Problem:
+    status: int
+    slug: str
+    title: str
+
+
+#: The one table: exception type -> (status, problem type, title). Looked up along
+#: the MRO, so subclasses inherit their parent's row.
+PROBLEMS: dict[type[BaseException], Problem] = {
+    InvalidImageError: Problem(400, "invalid-image", "Invalid image"),
+    ImageTooLargeError: Problem(413, "image-too-large", "Image too large"),
+    EmptyMaskError: Problem(422, "empty-mask", "Empty mask"),
+    InvalidPolygonError: Problem(422, "invalid-polygon", "Invalid polygon"),
+    InvalidOptionError: Problem(422, "invalid-option", "Invalid option"),
+    SkelpruneError: Problem(422, "invalid-input", "Invalid input"),
+    BodyTooLargeError: Problem(413, "body-too-large", "Request body too large"),
+    UnsupportedMediaTypeError: Problem(415, "unsupported-media-type", "Unsupported media type"),
+    NotAcceptableError: Problem(406, "not-acceptable", "Not acceptable"),
+    QueueFullError: Problem(503, "queue-full", "Service busy"),
+    PoolClosedError: Problem(503, "unavailable", "Service unavailable"),
+    JobTimeoutError: Problem(504, "job-timeout", "Job timed out"),
+    WorkerCrashedError: Problem(500, "worker-crashed", "Worker crashed"),
+    JobFailedError: Problem(500, "internal-error", "Internal error"),
+    RequestValidationError: Problem(422, "validation-error", "Request validation failed"),
+}
+
+
+def lookup(exc: BaseException) -> Problem | None:
+    """The table row for ``exc``'s type or its nearest ancestor."""
+    for cls in type(exc).__mro__:
+        if cls in PROBLEMS:
+            return PROBLEMS[cls]
+    return None
+
+
+def problem_response(
+    status: int,
+    detail: str,
+    *,
+    slug: str | None = None,
+    title: str | None = None,
+    instance: str | None = None,
+    headers: dict[str, str] | None = None,
+    extra: dict[str, Any] | None = None,
+) -> JSONResponse:
+    """Build an ``application/problem+json`` response."""
+    phrase = http.HTTPStatus(status).phrase
+    body: dict[str, Any] = {
+        "type": TYPE_PREFIX + slug if slug else "about:blank",
+        "title": title or phrase,
+        "status": status,
+        "detail": detail,
+    }
+    if instance:
+        body["instance"] = instance
+    if extra:
+        body.update(extra)
+    return JSONResponse(body, status_code=status, headers=headers, media_type=PROBLEM_MEDIA_TYPE)
+
+
+def _loc(loc: tuple[Any, ...] | list[Any]) -> str:
+    return ".".join(str(p) for p in loc)
+
+
+def install_error_handlers(app: FastAPI, *, retry_after: int) -> None:
+    """Register the problem+json handlers on ``app``."""
+
+    async def domain_error(request: Request, exc: Exception) -> JSONResponse:
+        row = lookup(exc)
+        assert row is not None
+        headers = {"Retry-After": str(retry_after)} if row.status == 503 else None
+        if row.status >= 500:
+            log.warning("%s %s -> %d: %s", request.method, request.url.path, row.status, exc)
+        return problem_response(
+            row.status, str(exc) or row.title, slug=row.slug, title=row.title,
+            instance=request.url.path, headers=headers,
+        )
+
+    async def http_error(request: Request, exc: Exception) -> JSONResponse:
+        assert isinstance(exc, StarletteHTTPException)
+        status = exc.status_code
+        detail = exc.detail if isinstance(exc.detail, str) else http.HTTPStatus(status).phrase
+        if status == 404 and detail == "Not Found":
+            detail = f"no resource at {request.url.path}"
+        elif status == 405:
+            allow = (exc.headers or {}).get("Allow") or (exc.headers or {}).get("allow")
+            detail = f"method {request.method} is not allowed on {request.url.path}" + (
+                f"; allowed: {allow}" if allow else ""
+            )
+        return problem_response(
+            status, detail, instance=request.url.path, headers=dict(exc.headers or {}) or None
+        )
+
+    async def validation_error(request: Request, exc: Exception) -> JSONResponse:
+        assert isinstance(exc, RequestValidationError)
+        errors = [
+            {"loc": [str(p) for p in e.get("loc", ())], "msg": str(e.get("msg", "")),
+             "type": str(e.get("type", ""))}
+            for e in exc.errors()
+        ]
+        shown = "; ".join(f"{_loc(e['loc'])}: {e['msg']}" for e in errors[:5])
+        more = f" (and {len(errors) - 5} more)" if len(errors) > 5 else ""
+        row = PROBLEMS[RequestValidationError]
+        return problem_response(
+            row.status, shown + more or row.title, slug=row.slug, title=row.title,
+            instance=request.url.path, extra={"errors": errors},
+        )
+
+    async def unexpected(request: Request, exc: Exception) -> JSONResponse:
+        ref = uuid.uuid4().hex[:12]
+        log.exception("unhandled error %s on %s %s", ref, request.method, request.url.path)
+        return problem_response(
+            500, f"internal error (reference {ref}); the server log has the details",
+            slug="internal-error", title="Internal error", instance=request.url.path,
+        )
+
+    for cls in PROBLEMS:
+        if cls is not RequestValidationError:
+            app.add_exception_handler(cls, domain_error)
+    app.add_exception_handler(StarletteHTTPException, http_error)
+    app.add_exception_handler(RequestValidationError, validation_error)
+    app.add_exception_handler(Exception, unexpected)

@@ -1,0 +1,148 @@
+"""OpenAPI fragments: request bodies, responses and their examples.
+
+Kept static (not computed from the library) so that ``openapi.md`` only changes when
+the API does.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+__all__ = [
+    "METRICS_EXAMPLE",
+    "PRUNE_REQUEST_BODY",
+    "PRUNE_RESPONSES",
+    "problem_response",
+]
+
+REF = "#/components/schemas/"
+
+SQUARE_POLYGON = {
+    "type": "Polygon",
+    "coordinates": [[[0, 0], [40, 0], [40, 20], [0, 20], [0, 0]]],
+}
+
+DOCUMENT_EXAMPLE: dict[str, Any] = {
+    "width": 60, "height": 30, "method": "bayesian", "beta": 9.0, "coarse": None,
+    "components": [{
+        "area": 1000, "alpha": 8.64, "rer": 0.0, "ss": 1.28, "objective": 1.28,
+        "medial_axis": {"rer": 0.0, "length": 71.08, "endpoints": 4, "branches": 5},
+        "skeleton": {
+            "length": 71.08,
+            "nodes": [
+                {"id": 0, "x": 14.0, "y": 14.0, "radius": 10.0, "kind": "junction",
+                 "points": [[14.0, 14.0, 10.0], [14.0, 15.0, 10.0]]},
+                {"id": 1, "x": 7.0, "y": 7.0, "radius": 3.0, "kind": "endpoint", "points": []},
+            ],
+            "branches": [
+                {"id": 0, "source": 0, "target": 1, "length": 8.49,
+                 "points": [[13.0, 13.0, 9.0], [12.0, 12.0, 8.0], [7.0, 7.0, 3.0]]},
+            ],
+            "endpoints": [1],
+        },
+        "curve": [
+            {"step": 0, "length": 71.08, "ar": 0.0, "lr": 1.28, "objective": 1.28},
+            {"step": 1, "length": 62.18, "ar": 0.014, "lr": 1.19, "objective": 1.31},
+        ],
+        "chosen_step": 0,
+    }],
+}
+
+GEOJSON_EXAMPLE: dict[str, Any] = {
+    "type": "FeatureCollection",
+    "features": [
+        {"type": "Feature",
+         "geometry": {"type": "LineString", "coordinates": [[13.0, 13.0], [7.0, 7.0]]},
+         "properties": {"component": 0, "kind": "branch", "id": 0, "source": 0, "target": 1,
+                        "length": 8.49, "radii": [9.0, 3.0]}},
+        {"type": "Feature", "geometry": {"type": "Point", "coordinates": [7.0, 7.0]},
+         "properties": {"component": 0, "kind": "endpoint", "id": 1, "radius": 3.0}},
+    ],
+}
+
+METRICS_EXAMPLE = (
+    "# HELP skelprune_queue_depth Jobs waiting for a free worker.\n"
+    "# TYPE skelprune_queue_depth gauge\n"
+    "skelprune_queue_depth 0.0\n"
+)
+
+
+def problem_response(status: int, slug: str | None, title: str, detail: str) -> dict[str, Any]:
+    """A documented problem+json response with one example."""
+    example = {
+        "type": f"urn:skelprune:problem:{slug}" if slug else "about:blank",
+        "title": title, "status": status, "detail": detail, "instance": "/v1/prune",
+    }
+    response: dict[str, Any] = {
+        "description": title,
+        "content": {"application/problem+json": {
+            "schema": {"$ref": REF + "Problem"}, "example": example,
+        }},
+    }
+    if status == 503:
+        response["headers"] = {"Retry-After": {
+            "description": "Seconds to wait before retrying.", "schema": {"type": "integer"},
+        }}
+    return response
+
+
+PRUNE_RESPONSES: dict[int | str, dict[str, Any]] = {
+    200: {
+        "description": "The pruned skeleton, in the format chosen by `Accept`.",
+        "content": {
+            "application/json": {"schema": {"$ref": REF + "PruneDocument"},
+                                 "example": DOCUMENT_EXAMPLE},
+            "image/png": {"schema": {"type": "string", "format": "binary"}},
+            "application/geo+json": {"schema": {"$ref": REF + "SkeletonGeoJSON"},
+                                     "example": GEOJSON_EXAMPLE},
+        },
+    },
+    400: problem_response(400, "invalid-image", "Invalid image",
+                          "truncated PNG: file ends at byte 60 before the IEND chunk"),
+    406: problem_response(406, "not-acceptable", "Not acceptable",
+                          "cannot produce any of 'text/html'; available: application/json, "
+                          "image/png, application/geo+json"),
+    413: problem_response(413, "image-too-large", "Image too large",
+                          "image has 100000000 pixels (10000×10000), the limit is 16777216"),
+    415: problem_response(415, "unsupported-media-type", "Unsupported media type",
+                          "Content-Type 'text/plain' is not supported; send image/png, "
+                          "multipart/form-data (field 'file') or application/json (GeoJSON)"),
+    422: problem_response(422, "invalid-polygon", "Invalid polygon",
+                          "$.coordinates[0]: ring is not closed, first position [0.0, 0.0] "
+                          "differs from last [0.0, 20.0]"),
+    500: problem_response(500, "worker-crashed", "Worker crashed",
+                          "the worker process died while running this job (killed by signal "
+                          "SIGKILL); it has been replaced"),
+    503: problem_response(503, "queue-full", "Service busy",
+                          "all 4 workers are busy and 16 jobs are already waiting"),
+    504: problem_response(504, "job-timeout", "Job timed out",
+                          "job exceeded the time limit of 30 s and was stopped"),
+}
+
+PRUNE_REQUEST_BODY: dict[str, Any] = {
+    "required": True,
+    "content": {
+        "image/png": {"schema": {"type": "string", "format": "binary"}},
+        "multipart/form-data": {
+            "schema": {
+                "type": "object",
+                "required": ["file"],
+                "properties": {"file": {"type": "string", "format": "binary",
+                                        "description": "The PNG mask."}},
+            },
+            "encoding": {"file": {"contentType": "image/png"}},
+        },
+        "application/json": {
+            "schema": {"$ref": REF + "PolygonRequest"},
+            "examples": {
+                "polygon": {"summary": "A bare GeoJSON Polygon", "value": SQUARE_POLYGON},
+                "with-options": {
+                    "summary": "GeoJSON with options in the body",
+                    "value": {"geojson": SQUARE_POLYGON, "beta": 9.0, "pixel_size": 0.1},
+                },
+            },
+        },
+        "application/geo+json": {"schema": {"$ref": REF + "PolygonRequest"},
+                                 "example": SQUARE_POLYGON},
+    },
+}

@@ -1,0 +1,99 @@
+"""Code that runs inside the worker processes: decode, prune, render.
+
+Everything CPU-bound happens here, so the server's event loop only moves bytes:
+the worker returns the response body already serialised.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from skelprune.frame import PixelFrame
+from skelprune.io import read_mask
+from skelprune.polygon import polygon_mask
+
+__all__ = ["Job", "JobResult", "run_job", "warmup"]
+
+Output = Literal["json", "png", "geojson"]
+
+MEDIA_TYPES: dict[str, str] = {
+    "json": "application/json",
+    "png": "image/png",
+    "geojson": "application/geo+json",
+}
+
+
+@dataclass(frozen=True)
+class Job:
+    """One pruning request, as sent to a worker (picklable).
+
+    Exactly one of ``png`` (PNG bytes) and ``geojson`` (a GeoJSON mapping) is set.
+    ``prune_options`` go to :func:`skelprune.prune` unchanged; ``raster`` to
+    :func:`skelprune.polygon.polygon_mask`.
+    """
+
+    output: Output
+    png: bytes | None = None
+    geojson: dict[str, Any] | None = None
+    prune_options: dict[str, Any] = field(default_factory=dict)
+    raster: dict[str, Any] = field(default_factory=dict)
+    curve: bool = True
+    overlay: bool = False
+    max_pixels: int | None = None
+
+
+@dataclass(frozen=True)
+class JobResult:
+    """Serialised response body and the time spent in the library."""
+
+    body: bytes
+    media_type: str
+    prune_seconds: float
+
+
+def warmup() -> None:
+    """Worker initialiser: import the library and run it once so the JIT is compiled."""
+    import skelprune
+
+    mask = np.zeros((24, 32), dtype=bool)
+    mask[4:20, 4:28] = True
+    mask[8:16, 12:20] = False  # a hole, so the loop code paths compile too
+    res = skelprune.prune(mask)
+    res.to_dict()
+    res.to_geojson()
+    res.overlay_png()
+
+
+def _mask(job: Job) -> tuple[np.ndarray, PixelFrame | None]:
+    if job.png is not None:
+        return read_mask(job.png, max_pixels=job.max_pixels), None
+    assert job.geojson is not None
+    return polygon_mask(job.geojson, max_pixels=job.max_pixels, **job.raster)
+
+
+def run_job(job: Job) -> JobResult:
+    """Decode the input, prune it and serialise the requested output."""
+    import skelprune
+
+    mask, frame = _mask(job)
+    t0 = time.perf_counter()
+    res = skelprune.prune(mask, **job.prune_options)
+    elapsed = time.perf_counter() - t0
+    framing = {} if frame is None else {"frame": frame}  # None: the image's own pixel frame
+    if job.output == "png":
+        body = res.overlay_png()
+    elif job.output == "geojson":
+        body = _dumps(res.to_geojson(**framing))
+    else:
+        body = _dumps(res.to_dict(curve=job.curve, overlay=job.overlay, **framing))
+    return JobResult(body=body, media_type=MEDIA_TYPES[job.output], prune_seconds=elapsed)
+
+
+def _dumps(doc: Any) -> bytes:
+    # allow_nan=False: a NaN would be invalid JSON; better a loud failure than a bad body.
+    return json.dumps(doc, separators=(",", ":"), allow_nan=False).encode()

@@ -1,0 +1,333 @@
+"""A small pool of worker processes whose jobs can be killed.
+
+``concurrent.futures.ProcessPoolExecutor`` cannot stop a job that hangs, and a crashed
+worker breaks the whole executor. Here every worker is one process with one pipe:
+
+- a job that runs past ``job_timeout`` gets its process killed and replaced
+  (:class:`JobTimeoutError`);
+- a worker that dies mid-job (EOF on the pipe) is replaced and that job fails with
+  :class:`WorkerCrashedError`; the pool keeps serving;
+- at most ``queue_size`` jobs wait for a free worker; one more raises
+  :class:`QueueFullError` at once.
+
+The event loop never blocks: each job's pipe wait runs in a thread of a private
+executor (one thread per worker), and that thread hands the worker back to the pool
+itself, so a cancelled request cannot leak a worker.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import multiprocessing as mp
+import signal
+import threading
+import time
+import traceback
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from multiprocessing.connection import Connection
+from typing import Any
+
+from skelprune.errors import SkelpruneError
+
+__all__ = [
+    "JobFailedError",
+    "JobTimeoutError",
+    "PoolClosedError",
+    "PoolError",
+    "QueueFullError",
+    "WorkerCrashedError",
+    "WorkerPool",
+]
+
+log = logging.getLogger("service.pool")
+
+
+class PoolError(Exception):
+    """Base class of pool failures (never the caller's input)."""
+
+
+class QueueFullError(PoolError):
+    """All workers are busy and the wait queue is full."""
+
+
+class PoolClosedError(PoolError):
+    """The pool is not started or is shutting down."""
+
+
+class JobTimeoutError(PoolError):
+    """The job ran over its time limit; its worker was killed and replaced."""
+
+
+class WorkerCrashedError(PoolError):
+    """The worker process died while running the job; it was replaced."""
+
+
+class JobFailedError(PoolError):
+    """The job raised an unexpected exception inside the worker (a bug, not bad input)."""
+
+
+def _worker_main(conn: Connection, initializer: Callable[[], None] | None) -> None:
+    """Worker process: warm up, say ready, then run ``(fn, args)`` jobs until told to stop."""
+    # Ctrl-C in a terminal reaches the whole process group; the parent decides when we stop.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        if initializer is not None:
+            initializer()
+    except BaseException as exc:  # report, then exit: the parent replaces us
+        conn.send(("init-failed", f"{type(exc).__name__}: {exc}"))
+        return
+    conn.send(("ready", None))
+    while True:
+        try:
+            msg = conn.recv()
+        except (EOFError, OSError):
+            return
+        if msg is None:
+            return
+        fn, args = msg
+        try:
+            reply: tuple[str, Any] = ("ok", fn(*args))
+        except SkelpruneError as exc:  # the caller's fault: travels back as itself
+            reply = ("error", exc)
+        except Exception as exc:
+            reply = ("failed", (f"{type(exc).__name__}: {exc}", traceback.format_exc()))
+        try:
+            conn.send(reply)
+        except Exception as exc:  # unpicklable result or exception
+            conn.send(("failed", (f"cannot send result: {exc}", traceback.format_exc())))
+
+
+def _exit_reason(code: int | None) -> str:
+    if code is None:
+        return "did not exit"
+    if code < 0:
+        try:
+            return f"killed by signal {signal.Signals(-code).name}"
+        except ValueError:
+            return f"killed by signal {-code}"
+    return f"exit code {code}"
+
+
+class _Worker:
+    """One worker process and the parent's end of its pipe."""
+
+    def __init__(self, ctx: Any, initializer: Callable[[], None] | None) -> None:
+        self.conn, child = ctx.Pipe(duplex=True)
+        self.proc = ctx.Process(
+            target=_worker_main, args=(child, initializer), daemon=True, name="skelprune-worker"
+        )
+        self.proc.start()
+        child.close()
+        self.ready = False
+
+    def wait_ready(self, timeout: float) -> None:
+        if self.ready:
+            return
+        if not self.conn.poll(timeout):
+            raise WorkerCrashedError(f"worker did not start within {timeout:g} s")
+        try:
+            tag, info = self.conn.recv()
+        except (EOFError, OSError):
+            self.proc.join(1)
+            raise WorkerCrashedError(
+                f"worker died while starting ({_exit_reason(self.proc.exitcode)})"
+            ) from None
+        if tag != "ready":
+            raise WorkerCrashedError(f"worker failed to start: {info}")
+        self.ready = True
+
+    def call(self, fn: Callable[..., Any], args: tuple[Any, ...], timeout: float) -> Any:
+        self.conn.send((fn, args))
+        if not self.conn.poll(timeout):
+            raise JobTimeoutError(f"job exceeded the time limit of {timeout:g} s and was stopped")
+        try:
+            tag, payload = self.conn.recv()
+        except (EOFError, OSError):
+            self.proc.join(1)
+            raise WorkerCrashedError(
+                f"the worker process died while running this job "
+                f"({_exit_reason(self.proc.exitcode)}); it has been replaced"
+            ) from None
+        if tag == "ok":
+            return payload
+        if tag == "error":
+            raise payload
+        message, trace = payload
+        log.error("job failed in worker: %s\n%s", message, trace)
+        raise JobFailedError("the job failed with an internal error")
+
+    def stop(self, grace: float = 1.0) -> None:
+        with contextlib.suppress(OSError):
+            self.conn.send(None)
+        self.proc.join(grace)
+        self.kill()
+
+    def kill(self) -> None:
+        if self.proc.is_alive():
+            self.proc.kill()
+        self.proc.join(5)
+        self.conn.close()
+
+
+class WorkerPool:
+    """Fixed-size pool of killable worker processes, used from asyncio.
+
+    Parameters
+    ----------
+    size : int
+        Number of worker processes.
+    queue_size : int
+        Jobs allowed to wait for a free worker.
+    job_timeout : float
+        Seconds a job may run before its worker is killed.
+    initializer : callable, optional
+        Module-level function run once in every new worker (warm-up).
+    startup_timeout : float
+        Seconds a new worker may take to run ``initializer``.
+    context : str
+        multiprocessing start method, ``"spawn"`` or ``"forkserver"``.
+    """
+
+    def __init__(
+        self,
+        size: int,
+        *,
+        queue_size: int,
+        job_timeout: float,
+        initializer: Callable[[], None] | None = None,
+        startup_timeout: float = 300.0,
+        context: str = "spawn",
+    ) -> None:
+        self.size = size
+        self.queue_size = queue_size
+        self.job_timeout = job_timeout
+        self.startup_timeout = startup_timeout
+        self._initializer = initializer
+        self._ctx = mp.get_context(context)
+        self._idle: asyncio.Queue[_Worker] | None = None
+        self._workers: set[_Worker] = set()
+        self._lock = threading.Lock()
+        self._executor: ThreadPoolExecutor | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self.waiting = 0
+        self.busy = 0
+        self.restarts = 0
+        self.started = False
+        self.closed = False
+        self.on_restart: Callable[[str], None] | None = None
+        self.on_job_done: Callable[[float], None] | None = None
+
+    # -- lifecycle -----------------------------------------------------------------
+    async def start(self) -> None:
+        """Start every worker and wait until all have warmed up."""
+        self._loop = asyncio.get_running_loop()
+        self._idle = asyncio.Queue()
+        self._executor = ThreadPoolExecutor(self.size, thread_name_prefix="skelprune-pool")
+        workers = [self._spawn() for _ in range(self.size)]
+        await asyncio.gather(
+            *(self._loop.run_in_executor(self._executor, w.wait_ready, self.startup_timeout)
+              for w in workers)
+        )
+        for w in workers:
+            self._idle.put_nowait(w)
+        self.started = True
+
+    async def close(self) -> None:
+        """Stop all workers (running jobs are killed)."""
+        self.closed = True
+        with self._lock:
+            workers = list(self._workers)
+            self._workers.clear()
+        await asyncio.gather(*(asyncio.to_thread(w.stop) for w in workers))
+        if self._executor is not None:
+            self._executor.shutdown(wait=False, cancel_futures=True)
+
+    def _spawn(self) -> _Worker:
+        worker = _Worker(self._ctx, self._initializer)
+        with self._lock:
+            self._workers.add(worker)
+        return worker
+
+    def _replace(self, worker: _Worker, reason: str) -> _Worker:
+        worker.kill()
+        with self._lock:
+            self._workers.discard(worker)
+        self.restarts += 1
+        log.warning("worker replaced: %s", reason)
+        if self.on_restart is not None:
+            self.on_restart(reason)
+        return self._spawn()
+
+    # -- state ---------------------------------------------------------------------
+    @property
+    def ready(self) -> bool:
+        """Started, not closing, and a new job would not be refused."""
+        if not self.started or self.closed or self._idle is None:
+            return False
+        return not self._idle.empty() or self.waiting < self.queue_size
+
+    def alive(self) -> int:
+        """Number of worker processes currently alive."""
+        with self._lock:
+            return sum(w.proc.is_alive() for w in self._workers)
+
+    # -- jobs ----------------------------------------------------------------------
+    async def run(self, fn: Callable[..., Any], *args: Any) -> Any:
+        """Run ``fn(*args)`` in a worker and return its result.
+
+        ``fn`` and its arguments must be picklable (module-level function).
+        Domain errors (:class:`SkelpruneError`) raised by ``fn`` are re-raised here.
+        """
+        if not self.started or self.closed or self._idle is None or self._loop is None:
+            raise PoolClosedError("the worker pool is not running")
+        if self._idle.empty() and self.waiting >= self.queue_size:
+            raise QueueFullError(
+                f"all {self.size} workers are busy and {self.waiting} jobs are already waiting"
+            )
+        self.waiting += 1
+        try:
+            worker = await self._idle.get()
+        finally:
+            self.waiting -= 1
+        self.busy += 1
+        assert self._executor is not None
+        fut = self._loop.run_in_executor(self._executor, self._run_on, worker, fn, args)
+        return await fut
+
+    def _release(self, worker: _Worker) -> None:
+        self.busy -= 1
+        if self.closed:
+            worker.stop(0.1)
+        elif self._idle is not None:
+            self._idle.put_nowait(worker)
+
+    def _run_on(self, worker: _Worker, fn: Callable[..., Any], args: tuple[Any, ...]) -> Any:
+        """Thread body: run one job, replace the worker on timeout/crash, always hand it back."""
+        assert self._loop is not None
+        try:
+            if not worker.proc.is_alive():  # died while idle (e.g. OOM killer): no job lost
+                worker = self._replace(worker, f"found dead ({_exit_reason(worker.proc.exitcode)})")
+            try:
+                worker.wait_ready(self.startup_timeout)
+            except WorkerCrashedError as exc:
+                worker = self._replace(worker, str(exc))
+                raise
+            t0 = time.perf_counter()
+            try:
+                result = worker.call(fn, args, self.job_timeout)
+            except (JobTimeoutError, WorkerCrashedError) as exc:
+                worker = self._replace(worker, str(exc))
+                raise
+            except OSError as exc:  # broken pipe on send: the worker is gone
+                worker = self._replace(worker, f"pipe error: {exc}")
+                raise WorkerCrashedError(
+                    "the worker process died before it took this job; it has been replaced"
+                ) from None
+            if self.on_job_done is not None:
+                self.on_job_done(time.perf_counter() - t0)
+            return result
+        finally:
+            self._loop.call_soon_threadsafe(self._release, worker)

@@ -1,0 +1,245 @@
+"""HTTP endpoints: ``POST /v1/prune``, ``/healthz``, ``/readyz``, ``/metrics``."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Depends, Query, Request, Response
+from fastapi.exceptions import RequestValidationError
+from prometheus_client import CONTENT_TYPE_LATEST, generate_latest
+from pydantic import ValidationError
+from starlette.datastructures import UploadFile
+
+from service import examples
+from service.errors import NotAcceptableError, UnsupportedMediaTypeError
+from service.jobs import Job, Output, run_job
+from service.pool import PoolClosedError, QueueFullError, WorkerPool
+from service.schemas import Health, PolygonJob, PruneQuery, Readiness, polygon_request_adapter
+from service.settings import Settings
+from skelprune.errors import ImageTooLargeError, InvalidOptionError
+from skelprune.io import png_size
+
+__all__ = ["job_function", "negotiate", "router"]
+
+router = APIRouter()
+
+#: Media types ``POST /v1/prune`` can answer with, in the server's order of preference.
+PRODUCES: dict[str, Output] = {
+    "application/json": "json",
+    "image/png": "png",
+    "application/geo+json": "geojson",
+}
+JSON_TYPES = ("application/json", "application/geo+json")
+POLYGON_ONLY = ("pixel_size", "longest_side", "repair")
+
+
+def negotiate(accept: str | None) -> Output:
+    """Pick the output for an ``Accept`` header (q-values honoured; none means JSON).
+
+    Raises
+    ------
+    NotAcceptableError
+        When no producible type has q > 0.
+    """
+    if not accept or not accept.strip():
+        return "json"
+    ranges: list[tuple[str, float]] = []
+    for part in accept.split(","):
+        fields = [f.strip() for f in part.split(";")]
+        media = fields[0].lower()
+        if not media:
+            continue
+        q = 1.0
+        for param in fields[1:]:
+            key, _, value = param.partition("=")
+            if key.strip().lower() == "q":
+                try:
+                    q = float(value)
+                except ValueError:
+                    q = 0.0
+        ranges.append((media, q))
+
+    def quality(candidate: str) -> float:
+        main = candidate.split("/")[0]
+        best, best_rank = 0.0, -1
+        for media, q in ranges:
+            rank = 2 if media == candidate else 1 if media == f"{main}/*" else 0 if media == "*/*" \
+                else -1
+            if rank > best_rank:
+                best, best_rank = q, rank
+        return best if best_rank >= 0 else 0.0
+
+    scored = [(quality(m), -i, out) for i, (m, out) in enumerate(PRODUCES.items())]
+    q, _, out = max(scored)
+    if q <= 0:
+        raise NotAcceptableError(
+            f"cannot produce any of {accept!r}; available: {', '.join(PRODUCES)}"
+        )
+    return out
+
+
+def job_function() -> Callable[[Job], Any]:
+    """The worker-side function (a dependency, so that tests can swap in a faulty one)."""
+    return run_job
+
+
+def _validation(errors: list[dict[str, Any]], prefix: tuple[str, ...]) -> RequestValidationError:
+    return RequestValidationError(
+        [{**e, "loc": (*prefix, *e.get("loc", ()))} for e in errors]
+    )
+
+
+def _options(query: PruneQuery, body: PolygonJob | None, polygon: bool) -> dict[str, Any]:
+    opts = {k: v for k, v in query.model_dump().items() if v is not None}
+    if body is not None:
+        for key, value in body.model_dump(exclude={"geojson"}).items():
+            if value is None:
+                continue
+            if key in opts:
+                raise InvalidOptionError(f"option {key!r} is given both in the query and the body")
+            opts[key] = value
+    if not polygon:
+        misplaced = [k for k in POLYGON_ONLY if k in opts]
+        if misplaced:
+            raise InvalidOptionError(
+                f"option(s) {', '.join(misplaced)} only apply to polygon (JSON) input"
+            )
+    return opts
+
+
+async def _png_from_multipart(request: Request) -> bytes:
+    async with request.form(max_files=1, max_fields=16) as form:
+        upload = form.get("file")
+        if not isinstance(upload, UploadFile):
+            raise RequestValidationError([{
+                "loc": ("body", "file"), "type": "missing",
+                "msg": "multipart field 'file' with the PNG is required",
+            }])
+        return await upload.read()
+
+
+PRUNE_DESCRIPTION = """
+Compute the pruned skeleton of a shape.
+
+**Input** (by `Content-Type`):
+- `image/png`: the PNG itself as the body;
+- `multipart/form-data`: the PNG in the field `file`;
+- `application/json` (or `application/geo+json`): a GeoJSON `Polygon`, `MultiPolygon`,
+  `Feature` or `FeatureCollection` (holes allowed), or an object
+  `{"geojson": <GeoJSON>, <options>}`. The polygon is rasterised (default: longer side
+  512 px) and every coordinate, radius and length in the answer is in the polygon's
+  own frame and units.
+
+**Output** (by `Accept`): `application/json` (default) the document of SPEC §3,
+`image/png` the overlay image, `application/geo+json` the skeleton as GeoJSON.
+"""
+
+
+@router.post(
+    "/v1/prune",
+    summary="Prune the skeleton of a PNG mask or a GeoJSON polygon",
+    description=PRUNE_DESCRIPTION,
+    response_class=Response,
+    responses=examples.PRUNE_RESPONSES,
+    openapi_extra={"requestBody": examples.PRUNE_REQUEST_BODY},
+    tags=["prune"],
+)
+async def prune(
+    request: Request,
+    query: Annotated[PruneQuery, Query()],
+    fn: Annotated[Callable[[Job], Any], Depends(job_function)],
+) -> Response:
+    settings: Settings = request.app.state.settings
+    pool: WorkerPool = request.app.state.pool
+    output = negotiate(request.headers.get("accept"))
+    ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    body = await request.body()  # size-limited by BodyLimitMiddleware
+    envelope: PolygonJob | None = None
+    if ctype in ("image/png", "multipart/form-data"):
+        png = body if ctype == "image/png" else await _png_from_multipart(request)
+        width, height = png_size(png)
+        if width * height > settings.max_pixels:
+            raise ImageTooLargeError(
+                f"image has {width * height} pixels ({width}×{height}), "
+                f"the limit is {settings.max_pixels}"
+            )
+        geojson = None
+    elif ctype in JSON_TYPES:
+        try:
+            parsed = polygon_request_adapter.validate_json(body)
+        except ValidationError as exc:
+            raise _validation(exc.errors(include_url=False), ("body",)) from None
+        if isinstance(parsed, PolygonJob):
+            envelope, parsed = parsed, parsed.geojson
+        geojson = parsed.model_dump(mode="json", exclude_none=True)
+        png = None
+    else:
+        shown = ctype or "none"
+        raise UnsupportedMediaTypeError(
+            f"Content-Type {shown!r} is not supported; send image/png, multipart/form-data "
+            "(field 'file') or application/json (GeoJSON)"
+        )
+    opts = _options(query, envelope, polygon=geojson is not None)
+    prune_options = {k: opts[k] for k in ("beta", "method") if k in opts}
+    if "coarse" in opts:
+        prune_options["coarse"] = None if opts["coarse"] == "none" else opts["coarse"]
+    raster: dict[str, Any] = {}
+    if geojson is not None:
+        raster["repair"] = opts.get("repair", True)
+        raster["max_vertices"] = settings.max_vertices
+        if "pixel_size" in opts:
+            raster["pixel_size"] = opts["pixel_size"]
+            if "longest_side" in opts:
+                raise InvalidOptionError("give pixel_size or longest_side, not both")
+        else:
+            raster["longest_side"] = opts.get("longest_side", settings.polygon_longest_side)
+    job = Job(
+        output=output, png=png, geojson=geojson, prune_options=prune_options, raster=raster,
+        curve=opts.get("curve", True), overlay=opts.get("overlay", False),
+        max_pixels=settings.max_pixels,
+    )
+    result = await pool.run(fn, job)
+    request.app.state.metrics.prune_seconds.observe(result.prune_seconds)
+    return Response(result.body, media_type=result.media_type)
+
+
+@router.get(
+    "/healthz", response_model=Health, summary="Liveness: the process answers", tags=["ops"],
+)
+async def healthz() -> Health:
+    return Health(status="ok")
+
+
+@router.get(
+    "/readyz",
+    response_model=Readiness,
+    summary="Readiness: worker pool up and the queue not full",
+    responses={503: examples.problem_response(503, "queue-full", "Service busy",
+                                              "the queue is full (16 jobs waiting)")},
+    tags=["ops"],
+)
+async def readyz(request: Request) -> Readiness:
+    pool: WorkerPool = request.app.state.pool
+    if not pool.started or pool.closed:
+        raise PoolClosedError("the worker pool is not running")
+    if not pool.ready:
+        raise QueueFullError(f"the queue is full ({pool.waiting} jobs waiting)")
+    return Readiness(
+        status="ready", workers=pool.alive(), busy=pool.busy, queued=pool.waiting,
+        queue_size=pool.queue_size,
+    )
+
+
+@router.get(
+    "/metrics",
+    summary="Prometheus metrics",
+    response_class=Response,
+    responses={200: {"description": "Prometheus text exposition format.",
+                     "content": {"text/plain": {"schema": {"type": "string"},
+                                                "example": examples.METRICS_EXAMPLE}}}},
+    tags=["ops"],
+)
+async def metrics(request: Request) -> Response:
+    return Response(generate_latest(request.app.state.metrics.registry),
+                    media_type=CONTENT_TYPE_LATEST)

@@ -1,0 +1,315 @@
+"""Pydantic v2 models of everything the service reads and writes.
+
+Request bodies are validated strictly (no coercion; unknown fields refused). The
+response models describe the documents of SPEC §3 exactly (``extra="forbid"``), so the
+OpenAPI schema is a contract that tests and schemathesis check the answers against.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, TypeAdapter
+
+__all__ = [
+    "FiniteFloat",
+    "GeoJSONInput",
+    "Health",
+    "PolygonJob",
+    "PolygonRequest",
+    "Problem",
+    "PruneDocument",
+    "PruneQuery",
+    "Readiness",
+    "SkeletonGeoJSON",
+    "polygon_request_adapter",
+]
+
+STRICT = ConfigDict(strict=True, extra="forbid")
+FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
+
+
+# --------------------------------------------------------------------- input: options
+class PruneQuery(BaseModel):
+    """Options in the query string (all optional; unknown parameters are refused)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    beta: float | None = Field(
+        None, gt=0, allow_inf_nan=False,
+        description="Weight β of the reconstruction term, > 0. Default 9 (the paper's).",
+    )
+    method: Literal["bayesian", "dce"] | None = Field(
+        None, description="`bayesian` (the paper) or `dce` (its ref. [10]). Default `bayesian`."
+    )
+    coarse: Literal["dce", "none"] | None = Field(
+        None, description="Coarse DCE stage before Bayesian pruning, or `none`. "
+        "Default: the library's default.",
+    )
+    curve: bool | None = Field(None, description="Include the pruning curve. Default true.")
+    overlay: bool | None = Field(
+        None, description="Add the overlay image as base64 PNG (`overlay_png`). Default false."
+    )
+    pixel_size: float | None = Field(
+        None, gt=0, allow_inf_nan=False,
+        description="Polygon input only: raster pixel size in the polygon's units.",
+    )
+    longest_side: int | None = Field(
+        None, ge=8, le=16384,
+        description="Polygon input only: pixels across the longer side of the bounding box "
+        "(default `SKELPRUNE_POLYGON_LONGEST_SIDE`, 512).",
+    )
+    repair: bool | None = Field(
+        None, description="Polygon input only: repair self-intersections with "
+        "shapely `make_valid` (default true) or refuse them (false).",
+    )
+
+
+# ---------------------------------------------------------------- input: GeoJSON
+Position = Annotated[list[FiniteFloat], Field(min_length=2, max_length=3)]
+LinearRing = Annotated[list[Position], Field(min_length=4)]
+BBox = Annotated[list[FiniteFloat], Field(min_length=4, max_length=6)]
+
+
+class PolygonGeometry(BaseModel):
+    """GeoJSON Polygon: exterior ring first, then holes; rings closed."""
+
+    model_config = STRICT
+    type: Literal["Polygon"]
+    coordinates: Annotated[list[LinearRing], Field(min_length=1)]
+    bbox: BBox | None = None
+
+
+class MultiPolygonGeometry(BaseModel):
+    """GeoJSON MultiPolygon."""
+
+    model_config = STRICT
+    type: Literal["MultiPolygon"]
+    coordinates: Annotated[
+        list[Annotated[list[LinearRing], Field(min_length=1)]], Field(min_length=1)
+    ]
+    bbox: BBox | None = None
+
+
+Geometry = Annotated[PolygonGeometry | MultiPolygonGeometry, Field(discriminator="type")]
+
+
+class Feature(BaseModel):
+    """GeoJSON Feature holding a Polygon or MultiPolygon."""
+
+    model_config = STRICT
+    type: Literal["Feature"]
+    geometry: Geometry
+    properties: dict[str, Any] | None = None
+    id: str | int | None = None
+    bbox: BBox | None = None
+
+
+class FeatureCollection(BaseModel):
+    """GeoJSON FeatureCollection; the union of its polygons is the shape."""
+
+    model_config = STRICT
+    type: Literal["FeatureCollection"]
+    features: Annotated[list[Feature], Field(min_length=1)]
+    bbox: BBox | None = None
+
+
+GeoJSONInput = Annotated[
+    PolygonGeometry | MultiPolygonGeometry | Feature | FeatureCollection,
+    Field(discriminator="type"),
+]
+
+
+class PolygonJob(BaseModel):
+    """A GeoJSON shape with options in the body (each also allowed in the query, not both)."""
+
+    model_config = STRICT
+    geojson: GeoJSONInput
+    beta: FiniteFloat | None = Field(None, gt=0)
+    method: Literal["bayesian", "dce"] | None = None
+    coarse: Literal["dce"] | None = None
+    curve: bool | None = None
+    overlay: bool | None = None
+    pixel_size: FiniteFloat | None = Field(None, gt=0)
+    longest_side: int | None = Field(None, ge=8, le=16384)
+    repair: bool | None = None
+
+
+def _request_tag(value: Any) -> str:
+    kind = value.get("type") if isinstance(value, dict) else getattr(value, "type", None)
+    return kind if isinstance(kind, str) else "job"
+
+
+PolygonRequest = Annotated[
+    Annotated[PolygonGeometry, Tag("Polygon")]
+    | Annotated[MultiPolygonGeometry, Tag("MultiPolygon")]
+    | Annotated[Feature, Tag("Feature")]
+    | Annotated[FeatureCollection, Tag("FeatureCollection")]
+    | Annotated[PolygonJob, Tag("job")],
+    Discriminator(_request_tag),
+]
+polygon_request_adapter: TypeAdapter[Any] = TypeAdapter(PolygonRequest)
+
+
+# ----------------------------------------------------------------- output: document
+Point3 = Annotated[list[float], Field(min_length=3, max_length=3, description="[x, y, radius]")]
+
+
+class Node(BaseModel):
+    model_config = STRICT
+    id: int
+    x: float
+    y: float
+    radius: float
+    kind: Literal["endpoint", "junction", "loop"]
+    points: list[Point3] = Field(description="Pixels of a junction cluster; empty otherwise.")
+
+
+class Branch(BaseModel):
+    model_config = STRICT
+    id: int
+    source: int
+    target: int
+    length: float
+    points: list[Point3]
+
+
+class Skeleton(BaseModel):
+    model_config = STRICT
+    length: float
+    nodes: list[Node]
+    branches: list[Branch]
+    endpoints: list[int]
+
+
+class MedialAxisSummary(BaseModel):
+    model_config = STRICT
+    rer: float
+    length: float
+    endpoints: int
+    branches: int
+
+
+class CurveStep(BaseModel):
+    model_config = STRICT
+    step: int
+    length: float
+    ar: float
+    lr: float
+    objective: float
+
+
+class Component(BaseModel):
+    model_config = STRICT
+    area: int = Field(description="Λ(D) in pixels of the raster.")
+    alpha: float | None
+    rer: float
+    ss: float
+    objective: float
+    medial_axis: MedialAxisSummary
+    skeleton: Skeleton
+    curve: list[CurveStep] | None = Field(None, description="Absent when curve=false.")
+    chosen_step: int
+
+
+class PruneDocument(BaseModel):
+    """The output document of SPEC §3."""
+
+    model_config = STRICT
+    width: int
+    height: int
+    method: Literal["bayesian", "dce"]
+    beta: float
+    coarse: Literal["dce"] | None
+    components: list[Component]
+    overlay_png: str | None = Field(None, description="Base64 PNG; only with overlay=true.")
+
+
+# ------------------------------------------------------------------ output: GeoJSON
+class LineString(BaseModel):
+    model_config = STRICT
+    type: Literal["LineString"]
+    coordinates: Annotated[list[Annotated[list[float], Field(min_length=2, max_length=2)]],
+                           Field(min_length=2)]
+
+
+class PointGeometry(BaseModel):
+    model_config = STRICT
+    type: Literal["Point"]
+    coordinates: Annotated[list[float], Field(min_length=2, max_length=2)]
+
+
+class BranchProperties(BaseModel):
+    model_config = STRICT
+    component: int
+    kind: Literal["branch"]
+    id: int
+    source: int
+    target: int
+    length: float
+    radii: list[float]
+
+
+class NodeProperties(BaseModel):
+    model_config = STRICT
+    component: int
+    kind: Literal["endpoint", "junction", "loop"]
+    id: int
+    radius: float
+
+
+class BranchFeature(BaseModel):
+    model_config = STRICT
+    type: Literal["Feature"]
+    geometry: LineString
+    properties: BranchProperties
+
+
+class NodeFeature(BaseModel):
+    model_config = STRICT
+    type: Literal["Feature"]
+    geometry: PointGeometry
+    properties: NodeProperties
+
+
+class SkeletonGeoJSON(BaseModel):
+    """The skeleton as GeoJSON: branches as LineStrings, nodes as Points."""
+
+    model_config = STRICT
+    type: Literal["FeatureCollection"]
+    features: list[BranchFeature | NodeFeature]
+
+
+# ------------------------------------------------------------------- output: misc
+class ValidationItem(BaseModel):
+    model_config = STRICT
+    loc: list[str]
+    msg: str
+    type: str
+
+
+class Problem(BaseModel):
+    """RFC 9457 problem details."""
+
+    model_config = STRICT
+    type: str = Field(description="Problem type URI: `urn:skelprune:problem:<slug>` or "
+                      "`about:blank` for plain HTTP errors.")
+    title: str
+    status: int
+    detail: str
+    instance: str | None = None
+    errors: list[ValidationItem] | None = Field(None, description="Validation errors (422).")
+
+
+class Health(BaseModel):
+    model_config = STRICT
+    status: Literal["ok"]
+
+
+class Readiness(BaseModel):
+    model_config = STRICT
+    status: Literal["ready"]
+    workers: int = Field(description="Worker processes alive.")
+    busy: int = Field(description="Workers running a job.")
+    queued: int = Field(description="Jobs waiting for a worker.")
+    queue_size: int = Field(description="Most jobs that may wait.")

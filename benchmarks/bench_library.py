@@ -1,0 +1,77 @@
+"""Speed of the full pipeline (SPEC §5), one core, medians a shape.
+
+Beside it, in the same run: bare ``skimage.morphology.skeletonize`` plus a distance
+transform on the same masks, and the naive from-scratch oracle on a few small shapes.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from scipy import ndimage
+from skimage.morphology import skeletonize
+
+import skelprune
+from skelprune.api import components
+from skelprune.graph import BranchGraph
+from skelprune.medial_axis import medial_axis, squared_distance
+from skelprune.pruning import bayesian_sequence, normalisation
+
+from .common import dataset, table, upscale
+
+
+def _each(masks, fn) -> list[float]:
+    out = []
+    for m in masks:
+        t = time.perf_counter()
+        fn(m)
+        out.append(1000 * (time.perf_counter() - t))
+    return out
+
+
+def bare(m: np.ndarray) -> None:
+    skeletonize(m)
+    ndimage.distance_transform_edt(m)
+
+
+def full(m: np.ndarray) -> None:
+    skelprune.prune(m).to_dict()
+
+
+def _sequence_only(crop, naive: bool) -> float:
+    from tests.oracle import naive_sequence
+
+    ma = medial_axis(crop, squared_distance(crop))
+    g = BranchGraph(ma.rows, ma.cols, crop.shape)
+    norm = normalisation(g, ma.r2, 9.0)
+    t = time.perf_counter()
+    if naive:
+        naive_sequence(g, crop, ma.r2, norm.alpha, norm.lbar)
+    else:
+        bayesian_sequence(g, crop, ma.r2, norm.alpha, norm.lbar)
+    return 1000 * (time.perf_counter() - t)
+
+
+def main() -> None:
+    sets = {"kimia216": dataset("kimia216"), "kimia99": dataset("kimia99")}
+    sets["512x512"] = [upscale(m, 512) for m in sets["kimia216"][::17]]
+    full(sets["kimia216"][0])  # JIT warm-up (cached on disk after the first run)
+    rows = []
+    for name, masks in sets.items():
+        ours = _each(masks, full)
+        ref = _each(masks, bare)
+        rows.append([name, len(masks), float(np.median(ours)), float(np.median(ref)),
+                     float(np.median(ours) / np.median(ref))])
+    print(table(["shapes", "n", "pipeline ms (median)", "skeletonize+EDT ms (median)",
+                 "ratio"], rows))
+    small = [crop for m in sets["kimia216"][::34] for crop, _ in components(m)]
+    speed = []
+    for crop in small:
+        fast = min(_sequence_only(crop, False) for _ in range(3))
+        slow = _sequence_only(crop, True)
+        speed.append(slow / fast)
+    print()
+    print(table(["oracle comparison", "shapes", "naive/fast (median)", "min", "max"],
+                [["pruning sequence, kimia216", len(small), float(np.median(speed)),
+                  float(np.min(speed)), float(np.max(speed))]]))

@@ -1,0 +1,105 @@
+"""Command line: ``skelprune prune FILE.png [--beta B] [--overlay OUT.png]``.
+
+One file prints the output document (SPEC §3) as JSON. Several files, or a folder,
+are pruned in a pool of worker processes with a progress bar on stderr and print one
+JSON line per file: ``{"file": ..., "result": {...}}`` or ``{"file": ..., "error": ...}``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from .errors import SkelpruneError
+
+app = typer.Typer(add_completion=False, no_args_is_help=True,
+                  help="Parameter-free Bayesian skeleton pruning.")
+
+
+def _prune_file(path: str, beta: float, method: str, coarse: str | None,
+                curve: bool) -> dict[str, Any]:
+    from .api import prune
+    from .io import read_mask
+
+    try:
+        doc = prune(read_mask(path), beta=beta, method=method, coarse=coarse).to_dict(curve=curve)
+        return {"file": path, "result": doc}
+    except (SkelpruneError, OSError) as exc:
+        return {"file": path, "error": f"{type(exc).__name__}: {exc}"}
+
+
+def _expand(paths: list[Path]) -> list[Path]:
+    files: list[Path] = []
+    for p in paths:
+        files.extend(sorted(p.glob("*.png")) if p.is_dir() else [p])
+    return files
+
+
+@app.command("prune")
+def prune_command(
+    files: Annotated[list[Path], typer.Argument(help="PNG masks, or folders of them.")],
+    beta: Annotated[float, typer.Option(help="Weight of the reconstruction term.")] = 9.0,
+    method: Annotated[str, typer.Option(help="bayesian or dce.")] = "bayesian",
+    coarse: Annotated[str | None, typer.Option(help="Coarse stage: dce, or none.")] = None,
+    overlay: Annotated[Path | None, typer.Option(help="Write the overlay PNG here "
+                                                 "(one input file only).")] = None,
+    curve: Annotated[bool, typer.Option(help="Include the pruning curve.")] = True,
+    workers: Annotated[int, typer.Option(help="Worker processes for several files.")] = 0,
+) -> None:
+    """Prune the skeleton of each shape and print the result as JSON."""
+    from .api import prune
+    from .io import read_mask
+
+    coarse = None if coarse in (None, "", "none", "null") else coarse
+    inputs = _expand(files)
+    if not inputs:
+        typer.echo("error: no PNG file given", err=True)
+        raise typer.Exit(2)
+    if len(inputs) == 1 and not files[0].is_dir():
+        try:
+            res = prune(read_mask(str(inputs[0])), beta=beta, method=method, coarse=coarse)
+        except (SkelpruneError, OSError) as exc:
+            typer.echo(f"error: {inputs[0]}: {exc}", err=True)
+            raise typer.Exit(1) from None
+        if overlay is not None:
+            overlay.write_bytes(res.overlay_png())
+        json.dump(res.to_dict(curve=curve), sys.stdout)
+        sys.stdout.write("\n")
+        return
+    if overlay is not None:
+        typer.echo("error: --overlay takes one input file", err=True)
+        raise typer.Exit(2)
+    from tqdm import tqdm
+
+    n = workers or os.cpu_count() or 1
+    failed = 0
+    with ProcessPoolExecutor(max_workers=n) as pool:
+        jobs = pool.map(_prune_file, [str(p) for p in inputs], [beta] * len(inputs),
+                        [method] * len(inputs), [coarse] * len(inputs), [curve] * len(inputs))
+        for line in tqdm(jobs, total=len(inputs), file=sys.stderr, unit="shape"):
+            failed += "error" in line
+            sys.stdout.write(json.dumps(line) + "\n")
+    if failed:
+        raise typer.Exit(1)
+
+
+@app.command("version")
+def version() -> None:
+    """Print the version."""
+    from . import __version__
+
+    typer.echo(__version__)
+
+
+def main() -> None:  # console-script entry point
+    app()
+
+
+if __name__ == "__main__":
+    main()

@@ -15,7 +15,7 @@ from prometheus_fastapi_instrumentator import Instrumentator
 from pydantic.json_schema import models_json_schema
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from service import __version__
+from service import __version__, examples
 from service.errors import BodyTooLargeError, install_error_handlers, problem_response
 from service.jobs import warmup
 from service.pool import WorkerPool
@@ -119,6 +119,11 @@ def _openapi(app: FastAPI) -> Callable[[], dict[str, Any]]:
                 routes=app.routes,
             )
             _simplify_query_params(schema)
+            # get_openapi drops None values from examples; put the 200 examples back whole.
+            ok = schema["paths"]["/v1/prune"]["post"]["responses"]["200"]["content"]
+            for media, content in examples.PRUNE_RESPONSES[200]["content"].items():
+                if "example" in content:
+                    ok[media]["example"] = content["example"]
             components = schema.setdefault("components", {}).setdefault("schemas", {})
             _, defs = models_json_schema(
                 [(m, "validation") for m in (Problem, PruneDocument, SkeletonGeoJSON)],
@@ -148,6 +153,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         settings.workers, queue_size=settings.queue_size, job_timeout=settings.job_timeout,
         initializer=warmup if settings.warmup else None,
         startup_timeout=settings.startup_timeout, context=settings.mp_context,
+        preload=("skelprune", "service.jobs"),
     )
 
     @asynccontextmanager

@@ -67,11 +67,13 @@ METRICS_EXAMPLE = (
 )
 
 
-def problem_response(status: int, slug: str | None, title: str, detail: str) -> dict[str, Any]:
+def problem_response(
+    status: int, slug: str | None, title: str, detail: str, instance: str = "/v1/prune"
+) -> dict[str, Any]:
     """A documented problem+json response with one example."""
     example = {
         "type": f"urn:skelprune:problem:{slug}" if slug else "about:blank",
-        "title": title, "status": status, "detail": detail, "instance": "/v1/prune",
+        "title": title, "status": status, "detail": detail, "instance": instance,
     }
     response: dict[str, Any] = {
         "description": title,

@@ -216,7 +216,7 @@ async def healthz() -> Health:
     response_model=Readiness,
     summary="Readiness: worker pool up and the queue not full",
     responses={503: examples.problem_response(503, "queue-full", "Service busy",
-                                              "the queue is full (16 jobs waiting)")},
+                                              "the queue is full (16 jobs waiting)", "/readyz")},
     tags=["ops"],
 )
 async def readyz(request: Request) -> Readiness:

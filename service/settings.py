@@ -58,8 +58,9 @@ class Settings(BaseSettings):
     polygon_longest_side: int = Field(
         512, ge=8, le=16384, description="Default raster size of a polygon's longer side, px."
     )
-    mp_context: Literal["spawn", "forkserver"] = Field(
-        "spawn", description="multiprocessing start method for workers."
+    mp_context: Literal["forkserver", "spawn"] = Field(
+        "forkserver",
+        description="multiprocessing start method for workers (forkserver: fast restarts).",
     )
     log_level: Literal["critical", "error", "warning", "info", "debug"] = Field(
         "info", description="uvicorn log level."

@@ -97,6 +97,15 @@ def _ring(ring: Any, where: str) -> np.ndarray:
     return out
 
 
+def _count(coords: Any, multi: bool) -> int:
+    """Positions in a (Multi)Polygon's coordinates; malformed parts count as 0 here."""
+    if not isinstance(coords, list | tuple):
+        return 0
+    polys = coords if multi else [coords]
+    return sum(len(r) for p in polys if isinstance(p, list | tuple)
+               for r in p if isinstance(r, list | tuple))
+
+
 def _polygons(coords: Any, where: str, multi: bool) -> Iterator[tuple[str, list[np.ndarray]]]:
     if not isinstance(coords, list | tuple) or not coords:
         raise InvalidPolygonError(f"{where}: coordinates must be a non-empty array")
@@ -132,16 +141,19 @@ def parse_geojson(
     InvalidPolygonError
         With the reason and the JSON location of the offending part.
     """
+    geometries = list(_geometries(obj, "$"))
+    if max_vertices is not None:
+        # Counted before any position is looked at, so a huge input is refused cheaply.
+        n_vertices = sum(_count(g.get("coordinates"), g["type"] == "MultiPolygon")
+                         for _, g in geometries)
+        if n_vertices > max_vertices:
+            raise InvalidPolygonError(
+                f"too many vertices: {n_vertices} positions, more than {max_vertices} allowed"
+            )
     parts: list[Polygon] = []
-    n_vertices = 0
-    for where, geometry in _geometries(obj, "$"):
+    for where, geometry in geometries:
         multi = geometry["type"] == "MultiPolygon"
         for pwhere, rings in _polygons(geometry.get("coordinates"), f"{where}.coordinates", multi):
-            n_vertices += sum(len(r) for r in rings)
-            if max_vertices is not None and n_vertices > max_vertices:
-                raise InvalidPolygonError(
-                    f"too many vertices: more than {max_vertices} positions in the input"
-                )
             poly = Polygon(rings[0], rings[1:])
             if not poly.is_valid and not repair:
                 reason = shapely.is_valid_reason(poly)

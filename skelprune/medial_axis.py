@@ -113,15 +113,18 @@ def disk_offsets(max_r2: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _domination_table(values: np.ndarray) -> np.ndarray:
-    """For each squared radius in ``values``: the smallest neighbour ``r2`` whose disk
-    contains it, for an axial (column 0) and a diagonal (column 1) neighbour."""
+    """For each squared radius up to ``values.max()``: the smallest neighbour ``r2``
+    whose disk contains it, for an axial (column 0) and a diagonal (column 1) neighbour.
+
+    Offsets are sorted by length, so the farthest point of a disk from the neighbour
+    is a running maximum over the sorted offsets.
+    """
     max_r2 = int(values.max()) if values.size else 1
     offsets, count = disk_offsets(max_r2)
     need = np.zeros((max_r2 + 1, 2), dtype=np.int64)
-    for r2 in np.unique(values):
-        o = offsets[: count[r2]]
-        for j, v in enumerate(((0, 1), (1, 1))):
-            need[r2, j] = int(((o[:, 0] - v[0]) ** 2 + (o[:, 1] - v[1]) ** 2).max()) + 1
+    for j, v in enumerate(((0, 1), (1, 1))):
+        far = np.maximum.accumulate((offsets[:, 0] - v[0]) ** 2 + (offsets[:, 1] - v[1]) ** 2)
+        need[1:, j] = far[count[1:] - 1] + 1
     return need
 
 
@@ -220,65 +223,101 @@ def _paint(cover: np.ndarray, rows, cols, r2s, offsets, count, delta: int) -> No
 
 
 @njit(cache=True)
-def _lossless(cover, r, c, v, offsets, count) -> bool:
-    for j in range(count[v]):  # noqa: SIM110 (numba compiles loops, not generators)
-        if cover[r + offsets[j, 0], c + offsets[j, 1]] < 2:
-            return False
-    return True
+def _loss(cover, r, c, v, offsets, count) -> int:
+    """Pixels only the disk at (r, c) covers: what removing it would lose."""
+    n = 0
+    for j in range(count[v]):
+        if cover[r + offsets[j, 0], c + offsets[j, 1]] == 1:
+            n += 1
+    return n
+
+
+@njit(cache=True)
+def _heap_push(heap, size, key):
+    i = size
+    heap[i] = key
+    while i > 0:
+        parent = (i - 1) // 2
+        if heap[parent] <= heap[i]:
+            break
+        heap[parent], heap[i] = heap[i], heap[parent]
+        i = parent
+    return size + 1
+
+
+@njit(cache=True)
+def _heap_pop(heap, size):
+    top = heap[0]
+    size -= 1
+    heap[0] = heap[size]
+    i = 0
+    while True:
+        a, b, m = 2 * i + 1, 2 * i + 2, i
+        if a < size and heap[a] < heap[m]:
+            m = a
+        if b < size and heap[b] < heap[m]:
+            m = b
+        if m == i:
+            break
+        heap[m], heap[i] = heap[i], heap[m]
+        i = m
+    return top, size
 
 
 @njit(cache=True)
 def _thin(fg, r2, rows, cols, offsets, count, simple, degree) -> None:
     """Make the anchored skeleton one pixel thin.
 
-    Removes simple pixels that are not endpoints, in the given order (smallest
-    radius first). Lossless removals are taken first; a lossy one only when no
-    lossless one is left, one at a time, since it may make others lossless.
+    Removes simple pixels that are not endpoints, the one losing the fewest
+    reconstructed pixels first (ties: smaller radius, then the given order). Removals
+    only lower the coverage, so a pixel's loss never decreases: a min-heap with lazy
+    re-evaluation of the popped key gives exactly that greedy order.
     """
     cover = np.zeros(fg.shape, dtype=np.int32)
     _paint(cover, rows, cols, r2[rows, cols], offsets, count, 1)
     n = rows.size
-    while True:
-        changed = True
-        while changed:
-            changed = False
-            for k in range(n):
-                r, c = rows[k], cols[k]
-                if not fg[r, c]:
-                    continue
-                code = _code(fg, r, c)
-                if degree[code] < 2 or not simple[code]:
-                    continue
-                v = r2[r, c]
-                if not _lossless(cover, r, c, v, offsets, count):
-                    continue
-                fg[r, c] = False
-                for j in range(count[v]):
-                    cover[r + offsets[j, 0], c + offsets[j, 1]] -= 1
-                changed = True
-        # No lossless removal left: take the one that loses the fewest pixels.
-        best, best_loss = -1, 1 << 60
-        for k in range(n):
-            r, c = rows[k], cols[k]
-            if not fg[r, c]:
-                continue
-            code = _code(fg, r, c)
-            if degree[code] < 2 or not simple[code]:
-                continue
-            v = r2[r, c]
-            loss = 0
-            for j in range(count[v]):
-                if cover[r + offsets[j, 0], c + offsets[j, 1]] == 1:
-                    loss += 1
-            if loss < best_loss:
-                best, best_loss = k, loss
-        if best < 0:
-            return
-        r, c = rows[best], cols[best]
+    rank = np.full(fg.shape, -1, dtype=np.int64)
+    for k in range(n):
+        rank[rows[k], cols[k]] = k
+    big = n + 1
+    heap = np.empty(9 * n + 1, dtype=np.int64)
+    size = 0
+    inheap = np.zeros(n, dtype=np.bool_)
+    for k in range(n):
+        code = _code(fg, rows[k], cols[k])
+        if degree[code] >= 2 and simple[code]:
+            loss = _loss(cover, rows[k], cols[k], r2[rows[k], cols[k]], offsets, count)
+            size = _heap_push(heap, size, loss * big + k)
+            inheap[k] = True
+    while size > 0:
+        key, size = _heap_pop(heap, size)
+        k = key % big
+        inheap[k] = False
+        r, c = rows[k], cols[k]
+        if not fg[r, c]:
+            continue
+        code = _code(fg, r, c)
+        if degree[code] < 2 or not simple[code]:
+            continue  # comes back when a neighbour changes
         v = r2[r, c]
+        loss = _loss(cover, r, c, v, offsets, count)
+        if loss > key // big:
+            size = _heap_push(heap, size, loss * big + k)
+            inheap[k] = True
+            continue
         fg[r, c] = False
         for j in range(count[v]):
             cover[r + offsets[j, 0], c + offsets[j, 1]] -= 1
+        for i in range(8):
+            rr, cc = r + NEIGHBOURS[i, 0], c + NEIGHBOURS[i, 1]
+            q = rank[rr, cc]
+            if q < 0 or not fg[rr, cc] or inheap[q]:
+                continue
+            qcode = _code(fg, rr, cc)
+            if degree[qcode] >= 2 and simple[qcode]:
+                qloss = _loss(cover, rr, cc, r2[rr, cc], offsets, count)
+                size = _heap_push(heap, size, qloss * big + q)
+                inheap[q] = True
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
@@ -162,24 +163,56 @@ def bayesian_sequence(
     seq = PruningSequence([], [cov.lost], [graph.na], [graph.nd], area, alpha, lbar)
     if alpha is None:
         return seq
+    # Per-branch arrays, so that one compiled call ranks all candidates of a step.
+    is_end = np.zeros(nb, np.bool_)
+    bna = np.array([br.na for br in graph.branches], np.int64)
+    bnd = np.array([br.nd for br in graph.branches], np.int64)
+    ep = np.zeros((nb, 2), np.int64)
+
+    def mark_end(b: int) -> None:
+        is_end[b] = graph.is_end_branch(b)
+        if is_end[b]:
+            p = graph.endpoint(b)
+            ep[b] = graph.rows[p], graph.cols[p]
+
+    for b in graph.ends:
+        mark_end(b)
     while graph.ends:
-        best = None
-        for b in graph.ends:
-            d_area = int(cov.exclusive[b + 1])
-            br = graph.branches[b]
-            lam = objective(cov.lost + d_area, area, graph.na - br.na, graph.nd - br.nd,
-                            alpha, lbar)
-            key = candidate_key(graph, b, lam, d_area)
-            if best is None or key < best:
-                best, pick = key, b
-        points = graph.branches[pick].points
-        cov.remove(np.asarray(points, np.int64))
+        pick = _pick(is_end, cov.exclusive, bna, bnd, ep, cov.lost, area, graph.na, graph.nd,
+                     alpha, lbar)
+        cov.remove(np.asarray(graph.branches[pick].points, np.int64))
         merged = graph.remove_end_branch(pick)
+        is_end[pick] = False
         if merged is not None:
-            kept, _, _, moved = merged
+            kept, absorbed, _, moved = merged
             cov.relabel(np.asarray(moved, np.int64), kept + 1)
+            is_end[absorbed] = False
+            bna[kept], bnd[kept] = graph.branches[kept].na, graph.branches[kept].nd
+            mark_end(kept)
         seq.removed.append(pick)
         seq.lost.append(cov.lost)
         seq.na.append(graph.na)
         seq.nd.append(graph.nd)
     return seq
+
+
+@njit(cache=True)
+def _pick(is_end, exclusive, bna, bnd, ep, lost, area, na, nd, alpha, lbar):
+    """The end branch to remove: smallest (λ, lost area, length, endpoint row, col).
+
+    λ is computed with exactly the operations of :func:`objective`, so that the
+    choice is bit-identical to the oracle's.
+    """
+    best = -1
+    b_lam = b_len = 0.0
+    b_d = b_r = b_c = 0
+    for b in range(is_end.size):
+        if not is_end[b]:
+            continue
+        d = exclusive[b + 1]
+        lam = alpha * (lost + d) / area + math.log(((na - bna[b]) + (nd - bnd[b]) * SQRT2)
+                                                   / lbar + 1.0)
+        length = bna[b] + bnd[b] * SQRT2
+        if best < 0 or (lam, d, length, ep[b, 0], ep[b, 1]) < (b_lam, b_d, b_len, b_r, b_c):
+            best, b_lam, b_d, b_len, b_r, b_c = b, lam, d, length, ep[b, 0], ep[b, 1]
+    return best

@@ -230,7 +230,9 @@ class WorkerPool:
 
     # -- lifecycle -----------------------------------------------------------------
     async def start(self) -> None:
-        """Start every worker and wait until all have warmed up."""
+        """Start every worker and wait until all have warmed up (again, after a close)."""
+        self.closed = False
+        self.waiting = self.busy = 0
         self._loop = asyncio.get_running_loop()
         self._idle = asyncio.Queue()
         self._executor = ThreadPoolExecutor(self.size, thread_name_prefix="skelprune-pool")

@@ -47,6 +47,7 @@ __all__ = [
 DEFAULT_LONGEST_SIDE = 512
 DEFAULT_MARGIN = 2
 _SHIFT = 8  # fractional bits for cv2.fillPoly: sub-pixel vertex positions
+_MAX_SIDE = 1 << 20  # keeps fixed-point vertex coordinates inside int32
 
 
 def _geometries(obj: Any, where: str) -> Iterator[tuple[str, Mapping[str, Any]]]:
@@ -204,6 +205,8 @@ def rasterize(
         raise InvalidOptionError("give pixel_size or longest_side, not both")
     minx, miny, maxx, maxy = geom.bounds
     extent = max(maxx - minx, maxy - miny)
+    if not math.isfinite(extent):
+        raise InvalidPolygonError("coordinates span too large a range to rasterise")
     if pixel_size is None:
         side = DEFAULT_LONGEST_SIDE if longest_side is None else longest_side
         if isinstance(side, bool) or not isinstance(side, int) or side < 1:
@@ -211,10 +214,19 @@ def rasterize(
         pixel_size = extent / side
     elif not (math.isfinite(pixel_size) and pixel_size > 0):
         raise InvalidOptionError(f"pixel_size must be a positive finite number, got {pixel_size}")
-    if not pixel_size > 0:
-        raise InvalidPolygonError("polygon has zero extent")
-    width = math.ceil((maxx - minx) / pixel_size - 1e-9) + 2 * margin
-    height = math.ceil((maxy - miny) / pixel_size - 1e-9) + 2 * margin
+    cols_f = (maxx - minx) / pixel_size
+    rows_f = (maxy - miny) / pixel_size
+    if not (cols_f <= _MAX_SIDE and rows_f <= _MAX_SIDE):  # also catches inf / nan
+        raise ImageTooLargeError(
+            f"raster of {cols_f:.3g}×{rows_f:.3g} pixels is too large; use a larger pixel_size"
+        )
+    scale = (1 << _SHIFT) / pixel_size if pixel_size > 0 else math.inf
+    if not math.isfinite(scale):
+        raise InvalidPolygonError(
+            f"polygon extent {extent:.3g} or pixel size {pixel_size:.3g} is too small to rasterise"
+        )
+    width = math.ceil(cols_f - 1e-9) + 2 * margin
+    height = math.ceil(rows_f - 1e-9) + 2 * margin
     if max_pixels is not None and width * height > max_pixels:
         raise ImageTooLargeError(
             f"raster of {width}×{height} = {width * height} pixels exceeds the limit of "
@@ -227,7 +239,6 @@ def rasterize(
         pixel_size=pixel_size,
         flip_y=True,
     )
-    scale = (1 << _SHIFT) / pixel_size
     canvas = np.zeros((height, width), dtype=np.uint8)
     band = np.zeros_like(canvas)
     for poly in geom.geoms:

@@ -14,6 +14,7 @@ pixels is then exactly the shape.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,6 +27,28 @@ __all__ = ["MedialAxis", "disk_offsets", "medial_axis", "squared_distance"]
 NEIGHBOURS = np.array(
     [(-1, -1), (-1, 0), (-1, 1), (0, 1), (1, 1), (1, 0), (1, -1), (0, -1)], dtype=np.int64
 )
+
+
+@njit(cache=True, inline="always")
+def isqrt(x: int) -> int:
+    """Integer square root (floor) of a non-negative integer."""
+    s = int(math.sqrt(x))
+    while s * s > x:
+        s -= 1
+    while (s + 1) * (s + 1) <= x:
+        s += 1
+    return s
+
+
+@njit(cache=True, inline="always")
+def disk_half_width(r2: int, dy: int) -> int:
+    """Half width of row ``dy`` of the disk ``dy² + dx² < r2`` (-1 if the row is empty).
+
+    Disk kernels walk rows of the disk, contiguous in memory, instead of a list of
+    offsets: the same pixels, several times faster on large radii.
+    """
+    rest = r2 - 1 - dy * dy
+    return isqrt(rest) if rest >= 0 else -1
 
 
 def _build_tables() -> tuple[np.ndarray, np.ndarray]:
@@ -216,19 +239,25 @@ def _ordered_thinning(fg, r2, anchor, simple) -> None:
 
 
 @njit(cache=True)
-def _paint(cover: np.ndarray, rows, cols, r2s, offsets, count, delta: int) -> None:
+def _paint(cover, rows, cols, r2s, delta: int) -> None:
     for k in range(rows.size):
-        for j in range(count[r2s[k]]):
-            cover[rows[k] + offsets[j, 0], cols[k] + offsets[j, 1]] += delta
+        v = r2s[k]
+        h = isqrt(v - 1)
+        for dy in range(-h, h + 1):
+            w = disk_half_width(v, dy)
+            cover[rows[k] + dy, cols[k] - w : cols[k] + w + 1] += delta
 
 
 @njit(cache=True)
-def _loss(cover, r, c, v, offsets, count) -> int:
+def _loss(cover, r, c, v) -> int:
     """Pixels only the disk at (r, c) covers: what removing it would lose."""
     n = 0
-    for j in range(count[v]):
-        if cover[r + offsets[j, 0], c + offsets[j, 1]] == 1:
-            n += 1
+    h = isqrt(v - 1)
+    for dy in range(-h, h + 1):
+        w = disk_half_width(v, dy)
+        for x in range(c - w, c + w + 1):
+            if cover[r + dy, x] == 1:
+                n += 1
     return n
 
 
@@ -265,7 +294,7 @@ def _heap_pop(heap, size):
 
 
 @njit(cache=True)
-def _thin(fg, r2, rows, cols, offsets, count, simple, degree) -> None:
+def _thin(fg, r2, rows, cols, simple, degree) -> None:
     """Make the anchored skeleton one pixel thin.
 
     Removes simple pixels that are not endpoints, the one losing the fewest
@@ -274,7 +303,10 @@ def _thin(fg, r2, rows, cols, offsets, count, simple, degree) -> None:
     re-evaluation of the popped key gives exactly that greedy order.
     """
     cover = np.zeros(fg.shape, dtype=np.int32)
-    _paint(cover, rows, cols, r2[rows, cols], offsets, count, 1)
+    r2s = np.empty(rows.size, dtype=np.int64)
+    for k in range(rows.size):
+        r2s[k] = r2[rows[k], cols[k]]
+    _paint(cover, rows, cols, r2s, 1)
     n = rows.size
     rank = np.full(fg.shape, -1, dtype=np.int64)
     for k in range(n):
@@ -286,7 +318,7 @@ def _thin(fg, r2, rows, cols, offsets, count, simple, degree) -> None:
     for k in range(n):
         code = _code(fg, rows[k], cols[k])
         if degree[code] >= 2 and simple[code]:
-            loss = _loss(cover, rows[k], cols[k], r2[rows[k], cols[k]], offsets, count)
+            loss = _loss(cover, rows[k], cols[k], r2[rows[k], cols[k]])
             size = _heap_push(heap, size, loss * big + k)
             inheap[k] = True
     while size > 0:
@@ -300,14 +332,16 @@ def _thin(fg, r2, rows, cols, offsets, count, simple, degree) -> None:
         if degree[code] < 2 or not simple[code]:
             continue  # comes back when a neighbour changes
         v = r2[r, c]
-        loss = _loss(cover, r, c, v, offsets, count)
+        loss = _loss(cover, r, c, v)
         if loss > key // big:
             size = _heap_push(heap, size, loss * big + k)
             inheap[k] = True
             continue
         fg[r, c] = False
-        for j in range(count[v]):
-            cover[r + offsets[j, 0], c + offsets[j, 1]] -= 1
+        h = isqrt(v - 1)
+        for dy in range(-h, h + 1):
+            w = disk_half_width(v, dy)
+            cover[r + dy, c - w : c + w + 1] -= 1
         for i in range(8):
             rr, cc = r + NEIGHBOURS[i, 0], c + NEIGHBOURS[i, 1]
             q = rank[rr, cc]
@@ -315,7 +349,7 @@ def _thin(fg, r2, rows, cols, offsets, count, simple, degree) -> None:
                 continue
             qcode = _code(fg, rr, cc)
             if degree[qcode] >= 2 and simple[qcode]:
-                qloss = _loss(cover, rr, cc, r2[rr, cc], offsets, count)
+                qloss = _loss(cover, rr, cc, r2[rr, cc])
                 size = _heap_push(heap, size, qloss * big + q)
                 inheap[q] = True
 
@@ -373,8 +407,6 @@ def medial_axis(padded: np.ndarray, r2: np.ndarray | None = None) -> MedialAxis:
     _ordered_thinning(fg, r2, anchor, SIMPLE)
     rows, cols = np.nonzero(fg)
     order = np.lexsort((cols, rows, r2[rows, cols]))  # smallest radius first
-    offsets, count = disk_offsets(int(r2.max()))
-    _thin(fg, r2, rows[order].astype(np.int64), cols[order].astype(np.int64), offsets, count,
-          SIMPLE, DEGREE)
+    _thin(fg, r2, rows[order].astype(np.int64), cols[order].astype(np.int64), SIMPLE, DEGREE)
     rows, cols = np.nonzero(fg)
     return MedialAxis(rows.astype(np.int64), cols.astype(np.int64), r2[rows, cols])

@@ -13,16 +13,19 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .medial_axis import disk_offsets
+from .medial_axis import disk_half_width, isqrt
 
 __all__ = ["Coverage", "reconstruction", "reconstruction_error"]
 
 
 @njit(cache=True)
-def _paint_bool(out, rows, cols, r2, offsets, count):
+def _paint_bool(out, rows, cols, r2):
     for k in range(rows.size):
-        for j in range(count[r2[k]]):
-            out[rows[k] + offsets[j, 0], cols[k] + offsets[j, 1]] = True
+        v = r2[k]
+        h = isqrt(v - 1)
+        for dy in range(-h, h + 1):
+            w = disk_half_width(v, dy)
+            out[rows[k] + dy, cols[k] - w : cols[k] + w + 1] = True
 
 
 def reconstruction(
@@ -40,9 +43,8 @@ def reconstruction(
     """
     out = np.zeros(shape, dtype=np.bool_)
     if len(rows):
-        offsets, count = disk_offsets(int(np.max(r2)))
         _paint_bool(out, np.asarray(rows, np.int64), np.asarray(cols, np.int64),
-                    np.asarray(r2, np.int64), offsets, count)
+                    np.asarray(r2, np.int64))
     return out
 
 
@@ -58,15 +60,18 @@ def reconstruction_error(
 
 
 @njit(cache=True)
-def _paint_labels(c, s1, s2, rows, cols, r2, lab, offsets, count):
+def _paint_labels(c, s1, s2, rows, cols, r2, lab):
     for k in range(rows.size):
         lb = lab[k]
-        for j in range(count[r2[k]]):
-            r = rows[k] + offsets[j, 0]
-            q = cols[k] + offsets[j, 1]
-            c[r, q] += 1
-            s1[r, q] += lb
-            s2[r, q] += lb * lb
+        v = r2[k]
+        h = isqrt(v - 1)
+        for dy in range(-h, h + 1):
+            w = disk_half_width(v, dy)
+            r = rows[k] + dy
+            for q in range(cols[k] - w, cols[k] + w + 1):
+                c[r, q] += 1
+                s1[r, q] += lb
+                s2[r, q] += lb * lb
 
 
 @njit(cache=True)
@@ -82,53 +87,65 @@ def _owner(c, s1, s2, r, q):
 
 
 @njit(cache=True)
-def _remove(c, s1, s2, stamp, tick, excl, pts, rows, cols, r2, lab, offsets, count):
+def _remove(c, s1, s2, stamp, tick, excl, pts, rows, cols, r2, lab):
     """Remove the disks of ``pts``; return the pixels left uncovered."""
     for k in pts:
         lb = lab[k]
-        for j in range(count[r2[k]]):
-            r = rows[k] + offsets[j, 0]
-            q = cols[k] + offsets[j, 1]
-            c[r, q] -= 1
-            s1[r, q] -= lb
-            s2[r, q] -= lb * lb
+        v = r2[k]
+        h = isqrt(v - 1)
+        for dy in range(-h, h + 1):
+            w = disk_half_width(v, dy)
+            r = rows[k] + dy
+            for q in range(cols[k] - w, cols[k] + w + 1):
+                c[r, q] -= 1
+                s1[r, q] -= lb
+                s2[r, q] -= lb * lb
     lost = 0
     for k in pts:
-        for j in range(count[r2[k]]):
-            r = rows[k] + offsets[j, 0]
-            q = cols[k] + offsets[j, 1]
-            if stamp[r, q] == tick:
-                continue
-            stamp[r, q] = tick
-            if c[r, q] == 0:
-                lost += 1
-            else:
-                b = _owner(c, s1, s2, r, q)
-                if b >= 0:
-                    excl[b] += 1
+        v = r2[k]
+        h = isqrt(v - 1)
+        for dy in range(-h, h + 1):
+            w = disk_half_width(v, dy)
+            r = rows[k] + dy
+            for q in range(cols[k] - w, cols[k] + w + 1):
+                if stamp[r, q] == tick:
+                    continue
+                stamp[r, q] = tick
+                if c[r, q] == 0:
+                    lost += 1
+                else:
+                    b = _owner(c, s1, s2, r, q)
+                    if b >= 0:
+                        excl[b] += 1
     return lost
 
 
 @njit(cache=True)
-def _relabel(c, s1, s2, stamp, tick, excl, pts, rows, cols, r2, lab, new, offsets, count):
+def _relabel(c, s1, s2, stamp, tick, excl, pts, rows, cols, r2, lab, new):
     """Give the points ``pts`` the label ``new``, updating single-owner areas."""
     for k in pts:
         old = lab[k]
-        for j in range(count[r2[k]]):
-            r = rows[k] + offsets[j, 0]
-            q = cols[k] + offsets[j, 1]
-            s1[r, q] += new - old
-            s2[r, q] += new * new - old * old
+        v = r2[k]
+        h = isqrt(v - 1)
+        for dy in range(-h, h + 1):
+            w = disk_half_width(v, dy)
+            r = rows[k] + dy
+            for q in range(cols[k] - w, cols[k] + w + 1):
+                s1[r, q] += new - old
+                s2[r, q] += new * new - old * old
         lab[k] = new
     for k in pts:
-        for j in range(count[r2[k]]):
-            r = rows[k] + offsets[j, 0]
-            q = cols[k] + offsets[j, 1]
-            if stamp[r, q] == tick:
-                continue
-            stamp[r, q] = tick
-            if _owner(c, s1, s2, r, q) == new:
-                excl[new] += 1
+        v = r2[k]
+        h = isqrt(v - 1)
+        for dy in range(-h, h + 1):
+            w = disk_half_width(v, dy)
+            r = rows[k] + dy
+            for q in range(cols[k] - w, cols[k] + w + 1):
+                if stamp[r, q] == tick:
+                    continue
+                stamp[r, q] = tick
+                if _owner(c, s1, s2, r, q) == new:
+                    excl[new] += 1
 
 
 class Coverage:
@@ -158,15 +175,13 @@ class Coverage:
         self.cols = np.asarray(cols, np.int64)
         self.r2 = np.asarray(r2, np.int64)
         self.labels = np.asarray(labels, np.int64).copy()
-        self.offsets, self.count = disk_offsets(int(self.r2.max()) if self.r2.size else 1)
         shape = mask.shape
         self.c = np.zeros(shape, np.int32)
         self.s1 = np.zeros(shape, np.int64)
         self.s2 = np.zeros(shape, np.int64)
         self.stamp = np.zeros(shape, np.int32)
         self.tick = 0
-        _paint_labels(self.c, self.s1, self.s2, self.rows, self.cols, self.r2, self.labels,
-                      self.offsets, self.count)
+        _paint_labels(self.c, self.s1, self.s2, self.rows, self.cols, self.r2, self.labels)
         n = self.c.astype(np.int64)
         covered = n > 0
         owner = np.where(covered, self.s1 // np.maximum(n, 1), -1)
@@ -179,7 +194,7 @@ class Coverage:
         self.tick += 1
         lost = _remove(self.c, self.s1, self.s2, self.stamp, self.tick, self.exclusive,
                        np.asarray(points, np.int64), self.rows, self.cols, self.r2,
-                       self.labels, self.offsets, self.count)
+                       self.labels)
         self.lost += lost
         return lost
 
@@ -188,4 +203,4 @@ class Coverage:
         self.tick += 1
         _relabel(self.c, self.s1, self.s2, self.stamp, self.tick, self.exclusive,
                  np.asarray(points, np.int64), self.rows, self.cols, self.r2, self.labels,
-                 new, self.offsets, self.count)
+                 new)

@@ -51,3 +51,20 @@ schema.app = APP
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 def test_api_conforms_to_its_schema(case) -> None:  # type: ignore[no-untyped-def]
     case.call_and_validate(checks=CHECKS)
+
+
+def test_every_setting_is_documented() -> None:
+    doc = (REPO / "docs" / "service.md").read_text(encoding="utf-8")
+    for name in Settings.model_fields:
+        assert f"`SKELPRUNE_{name.upper()}`" in doc, name
+
+
+def test_settings_come_from_the_environment(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("SKELPRUNE_PORT", "9123")
+    monkeypatch.setenv("SKELPRUNE_WORKERS", "3")
+    monkeypatch.setenv("SKELPRUNE_JOB_TIMEOUT", "2.5")
+    s = Settings()
+    assert (s.port, s.workers, s.job_timeout, s.host) == (9123, 3, 2.5, "127.0.0.1")
+    monkeypatch.setenv("SKELPRUNE_WORKERS", "0")
+    with pytest.raises(ValueError, match="workers"):
+        Settings()

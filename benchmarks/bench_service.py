@@ -1,0 +1,184 @@
+"""HTTP service vs the library, on loopback (SPEC §5 targets).
+
+1. Round trip: one client, sequential ``POST /v1/prune`` of a 256 × 256 PNG to a real
+   ``python -m service`` process, against the direct library call on the same PNG in
+   this process (decode + prune + document, the same work the service does).
+   Target: ratio of medians ≤ 1.2.
+2. Throughput: the same requests from ``2 × workers`` concurrent clients, to a server
+   with 1 worker and then with 2 workers. Target: ≥ 1.8× jobs/s.
+
+Run: ``python -m benchmarks service`` (or ``python -m benchmarks.bench_service``).
+Bounded: fixed request counts, every request with a timeout.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import signal
+import socket
+import statistics
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import httpx
+import numpy as np
+from PIL import Image
+
+import skelprune
+from skelprune.io import read_mask
+
+from .common import DATA, table, upscale
+
+REPO = Path(__file__).resolve().parents[1]
+ROUND_TRIPS = 20
+THROUGHPUT_JOBS = 24
+SHAPE = "kimia216/elephant-1.png"
+
+
+def shape_png(side: int = 256) -> bytes:
+    """A kimia shape rescaled to fit a ``side`` × ``side`` image with a small border."""
+    mask = np.asarray(Image.open(DATA / SHAPE)) > 0
+    inner = upscale(mask, side - 8)
+    canvas = np.zeros((side, side), dtype=np.uint8)
+    r0 = (side - inner.shape[0]) // 2
+    c0 = (side - inner.shape[1]) // 2
+    canvas[r0:r0 + inner.shape[0], c0:c0 + inner.shape[1]] = inner * 255
+    buf = io.BytesIO()
+    Image.fromarray(canvas).save(buf, "PNG")
+    return buf.getvalue()
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@contextmanager
+def server(workers: int) -> Iterator[str]:
+    """A real ``python -m service`` on a free loopback port; stopped on exit."""
+    port = _free_port()
+    env = {**os.environ, "SKELPRUNE_PORT": str(port), "SKELPRUNE_HOST": "127.0.0.1",
+           "SKELPRUNE_WORKERS": str(workers), "SKELPRUNE_QUEUE_SIZE": "256",
+           "SKELPRUNE_LOG_LEVEL": "warning",
+           # one thread per worker process: the pool is the parallelism
+           "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
+    proc = subprocess.Popen([sys.executable, "-m", "service"], cwd=REPO, env=env)
+    base = f"http://127.0.0.1:{port}"
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            if proc.poll() is not None:
+                raise RuntimeError("server exited during start")
+            try:
+                if httpx.get(f"{base}/readyz", timeout=1).status_code == 200:
+                    break
+            except httpx.TransportError:
+                pass
+            time.sleep(0.2)
+        else:
+            raise RuntimeError("server did not become ready")
+        yield base
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(30)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(10)
+
+
+def _post(client: httpx.Client, png: bytes) -> None:
+    resp = client.post("/v1/prune", content=png, headers={"content-type": "image/png"})
+    resp.raise_for_status()
+
+
+def paired_ms(base: str, png: bytes, n: int) -> tuple[list[float], list[float], list[float]]:
+    """Interleaved timings, so that a noisy machine hits both sides alike.
+
+    Returns HTTP round trips, direct library calls (decode + prune + to_dict + JSON, the
+    work the service does) and library calls on a decoded mask (prune + to_dict).
+    """
+    mask = read_mask(png)
+    http, full, core = [], [], []
+    with httpx.Client(base_url=base, timeout=60) as client:
+        for _ in range(3):  # warm the connection, the worker and this process's JIT
+            _post(client, png)
+            skelprune.prune(mask).to_dict()
+        for _ in range(n):
+            t = time.perf_counter()
+            _post(client, png)
+            http.append(1000 * (time.perf_counter() - t))
+            t = time.perf_counter()
+            json.dumps(skelprune.prune(read_mask(png)).to_dict())
+            full.append(1000 * (time.perf_counter() - t))
+            t = time.perf_counter()
+            skelprune.prune(mask).to_dict()
+            core.append(1000 * (time.perf_counter() - t))
+    return http, full, core
+
+
+def throughput(base: str, png: bytes, jobs: int, concurrency: int) -> float:
+    """Jobs per second with ``concurrency`` clients sharing ``jobs`` requests."""
+    remaining = list(range(jobs))
+    lock = threading.Lock()
+    errors: list[BaseException] = []
+
+    def client_loop() -> None:
+        with httpx.Client(base_url=base, timeout=120) as client:
+            _post(client, png)  # each client's first request is counted too (see return)
+            while True:
+                with lock:
+                    if not remaining:
+                        return
+                    remaining.pop()
+                try:
+                    _post(client, png)
+                except BaseException as exc:  # reported after the run
+                    errors.append(exc)
+                    return
+
+    threads = [threading.Thread(target=client_loop) for _ in range(concurrency)]
+    t = time.perf_counter()
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join(600)
+    elapsed = time.perf_counter() - t
+    if errors:
+        raise RuntimeError(f"throughput run failed: {errors[0]!r}")
+    return (jobs + concurrency) / elapsed
+
+
+def main() -> None:
+    png = shape_png()
+    with server(1) as base:
+        http, lib_full, lib_core = paired_ms(base, png, ROUND_TRIPS)
+        tput1 = throughput(base, png, THROUGHPUT_JOBS, concurrency=2)
+    with server(2) as base:
+        tput2 = throughput(base, png, THROUGHPUT_JOBS, concurrency=4)
+    med = statistics.median
+    rows: list[list[object]] = [
+        ["library: decode + prune + to_dict + json (ms)", med(lib_full), ""],
+        ["library: prune + to_dict (ms)", med(lib_core), ""],
+        ["HTTP round trip, 1 worker (ms)", med(http), ""],
+        ["ratio HTTP / library (decode..json)", med(http) / med(lib_full), "≤ 1.2"],
+        ["ratio HTTP / library (prune + to_dict)", med(http) / med(lib_core), ""],
+        ["throughput 1 worker (jobs/s)", tput1, ""],
+        ["throughput 2 workers (jobs/s)", tput2, ""],
+        ["ratio 2 / 1 workers", tput2 / tput1, "≥ 1.8"],
+    ]
+    print(f"shape: {SHAPE} in 256×256, {ROUND_TRIPS} round trips, "
+          f"{THROUGHPUT_JOBS} jobs per throughput run, {os.cpu_count()} CPUs\n")
+    print(table(["measure", "median / value", "target"], rows))
+
+
+if __name__ == "__main__":
+    main()

@@ -82,7 +82,7 @@ USER 10001:10001
 EXPOSE 8000
 
 # No curl in the image: the health check is a python one-liner (exit 1 on any failure).
-HEALTHCHECK --interval=30s --timeout=5s --start-period=60s --retries=3 \
+HEALTHCHECK --interval=30s --timeout=5s --start-period=120s --retries=3 \
     CMD ["python", "-c", "import os, urllib.request as u; u.urlopen('http://127.0.0.1:%s/healthz' % os.environ.get('SKELPRUNE_PORT', '8000'), timeout=4)"]
 
 # SIGTERM: stop accepting, finish the requests in flight, exit 0.

@@ -2,16 +2,29 @@
 
 from __future__ import annotations
 
+import signal
+import sys
+from types import FrameType
+
 import uvicorn
 
 from service.app import create_app
 from service.settings import Settings
 
 
+def _exit_cleanly(signum: int, frame: FrameType | None) -> None:
+    sys.exit(0)
+
+
 def main() -> None:
     """Read the settings from the environment and run uvicorn (one process; the
     pruning work is spread over the app's own worker pool)."""
     settings = Settings()
+    # uvicorn drains in-flight requests and closes the pool on SIGTERM/SIGINT, then
+    # re-raises the signal under the handlers it found. These make that final step a
+    # clean exit 0 (what `docker stop` and Kubernetes expect) instead of death by signal.
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(sig, _exit_cleanly)
     uvicorn.run(
         create_app(settings), host=settings.host, port=settings.port,
         log_level=settings.log_level,

@@ -262,6 +262,38 @@ def _loss(cover, r, c, v) -> int:
 
 
 @njit(cache=True)
+def _drop_redundant_anchors(anchor, r2, rows, cols) -> None:
+    """Un-anchor centres whose disk the other anchors' disks already cover.
+
+    Visited smallest radius first (boundary noise makes many small, redundant
+    maximal disks, each of which would otherwise pull a spur into the axis). The union
+    of the remaining anchors' disks is unchanged: still the whole shape.
+    """
+    cover = np.zeros(anchor.shape, dtype=np.int32)
+    r2s = np.empty(rows.size, dtype=np.int64)
+    for k in range(rows.size):
+        r2s[k] = r2[rows[k], cols[k]]
+    _paint(cover, rows, cols, r2s, 1)
+    for k in range(rows.size):
+        r, c, v = rows[k], cols[k], r2s[k]
+        redundant = True
+        h = isqrt(v - 1)
+        for dy in range(-h, h + 1):
+            w = disk_half_width(v, dy)
+            for x in range(c - w, c + w + 1):
+                if cover[r + dy, x] < 2:
+                    redundant = False
+                    break
+            if not redundant:
+                break
+        if redundant:
+            anchor[r, c] = False
+            for dy in range(-h, h + 1):
+                w = disk_half_width(v, dy)
+                cover[r + dy, c - w : c + w + 1] -= 1
+
+
+@njit(cache=True)
 def _heap_push(heap, size, key):
     i = size
     heap[i] = key
@@ -403,6 +435,9 @@ def medial_axis(padded: np.ndarray, r2: np.ndarray | None = None) -> MedialAxis:
         r2 = squared_distance(padded)
     need = _domination_table(r2[r2 > 0])
     anchor = _anchors(r2, need)
+    ar, ac = np.nonzero(anchor)
+    order = np.lexsort((ac, ar, r2[ar, ac]))
+    _drop_redundant_anchors(anchor, r2, ar[order].astype(np.int64), ac[order].astype(np.int64))
     fg = padded.astype(np.bool_).copy()
     _ordered_thinning(fg, r2, anchor, SIMPLE)
     rows, cols = np.nonzero(fg)

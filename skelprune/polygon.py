@@ -155,6 +155,10 @@ def parse_geojson(
     for where, geometry in geometries:
         multi = geometry["type"] == "MultiPolygon"
         for pwhere, rings in _polygons(geometry.get("coordinates"), f"{where}.coordinates", multi):
+            spans = [r.max(axis=0) / 2 - r.min(axis=0) / 2 for r in rings]  # halves: no overflow
+            if not all(np.all(sp < np.finfo(float).max / 2) for sp in spans):
+                # Spans beyond float range: GEOS would overflow on them.
+                raise InvalidPolygonError("coordinates span too large a range to rasterise")
             poly = Polygon(rings[0], rings[1:])
             if not poly.is_valid and not repair:
                 reason = shapely.is_valid_reason(poly)

@@ -136,19 +136,25 @@ def bayesian_sequence(
     r2: np.ndarray,
     alpha: float | None,
     lbar: float,
+    supported: np.ndarray | None = None,
 ) -> PruningSequence:
-    """Remove end branches greedily until none is left; record every step.
+    """Remove end branches until none is left; record every step.
 
     Parameters
     ----------
     graph : BranchGraph
-        The skeleton to prune; modified in place (it ends as ``S(n)``).
+        The skeleton to prune, from its current state; modified in place.
     mask : (H, W) bool array
         The shape ``D`` in the graph's frame.
     r2 : (n,) int array
         Squared radius of each graph point.
     alpha, lbar : float
-        ``α`` and ``ℓ̄`` of the medial axis; with ``alpha=None`` nothing is removed.
+        ``α`` and ``ℓ̄`` of the medial axis. Bayesian order (eqs. 9–11); with
+        ``alpha=None`` (degenerate shapes) nothing is removed.
+    supported : (n,) bool array, optional
+        Instead of the Bayesian order, DCE pruning (SPEC §2.5): remove, smallest
+        endpoint (row, col) first, every end branch none of whose points is
+        supported, until every end branch has one.
     """
     area = int(mask.sum())
     nb = len(graph.branches)
@@ -159,10 +165,15 @@ def bayesian_sequence(
     for j, junc in enumerate(graph.junctions):
         if junc.alive:
             labels[junc.points] = nb + 1 + j
-    cov = Coverage(mask, graph.rows, graph.cols, r2, labels, nb + len(graph.junctions) + 1)
+    alive = graph.alive_points()
+    cov = Coverage(mask, graph.rows[alive], graph.cols[alive], r2[alive], labels[alive],
+                   nb + len(graph.junctions) + 1)
     seq = PruningSequence([], [cov.lost], [graph.na], [graph.nd], area, alpha, lbar)
-    if alpha is None:
+    if alpha is None and supported is None:
         return seq
+    # Coverage numbers points by their rank among the alive ones.
+    rank = np.full(graph.rows.size, -1, np.int64)
+    rank[alive] = np.arange(alive.size)
     # Per-branch arrays, so that one compiled call ranks all candidates of a step.
     is_end = np.zeros(nb, np.bool_)
     bna = np.array([br.na for br in graph.branches], np.int64)
@@ -175,17 +186,26 @@ def bayesian_sequence(
             p = graph.endpoint(b)
             ep[b] = graph.rows[p], graph.cols[p]
 
+    def unsupported() -> int:
+        cands = [b for b in graph.ends if not supported[graph.branches[b].points].any()]
+        return min(cands, key=lambda b: (ep[b, 0], ep[b, 1], b)) if cands else -1
+
     for b in graph.ends:
         mark_end(b)
     while graph.ends:
-        pick = _pick(is_end, cov.exclusive, bna, bnd, ep, cov.lost, area, graph.na, graph.nd,
-                     alpha, lbar)
-        cov.remove(np.asarray(graph.branches[pick].points, np.int64))
+        if supported is None:
+            pick = _pick(is_end, cov.exclusive, bna, bnd, ep, cov.lost, area, graph.na,
+                         graph.nd, alpha, lbar)
+        else:
+            pick = unsupported()
+            if pick < 0:
+                break
+        cov.remove(rank[graph.branches[pick].points])
         merged = graph.remove_end_branch(pick)
         is_end[pick] = False
         if merged is not None:
             kept, absorbed, _, moved = merged
-            cov.relabel(np.asarray(moved, np.int64), kept + 1)
+            cov.relabel(rank[moved], kept + 1)
             is_end[absorbed] = False
             bna[kept], bnd[kept] = graph.branches[kept].na, graph.branches[kept].nd
             mark_end(kept)

@@ -19,6 +19,20 @@ from .pruning import PruningSequence
 __all__ = ["ComponentResult", "PruneResult"]
 
 
+@dataclass(frozen=True)
+class GraphSummary:
+    """Size of a skeleton graph, kept for the medial axis once pruning has begun."""
+
+    length: float
+    endpoints: int
+    branches: int
+
+    @classmethod
+    def of(cls, graph: BranchGraph) -> GraphSummary:
+        return cls(graph.na + graph.nd * 2**0.5, graph.n_endpoints(),
+                   sum(1 for b in graph.branches if b.alive))
+
+
 @dataclass
 class ComponentResult:
     """Pruned skeleton of one 8-connected component.
@@ -30,12 +44,12 @@ class ComponentResult:
     origin: tuple[int, int]
     area: int
     r2: np.ndarray
-    medial_axis: BranchGraph
+    medial_axis: GraphSummary
     graph: BranchGraph
     sequence: PruningSequence
     chosen_step: int
     ma_rer: float
-    first_step: int = 0  # steps of a coarse stage before the Bayesian sequence
+    coarse_removed: list[int] = field(default_factory=list)  # the coarse stage's removals
 
     @property
     def alpha(self) -> float | None:
@@ -128,9 +142,9 @@ class ComponentResult:
             "objective": self.objective,
             "medial_axis": {
                 "rer": float(self.ma_rer),
-                "length": frame.distance(ma.na + ma.nd * 2**0.5),
-                "endpoints": ma.n_endpoints(),
-                "branches": sum(1 for b in ma.branches if b.alive),
+                "length": frame.distance(ma.length),
+                "endpoints": ma.endpoints,
+                "branches": ma.branches,
             },
             "skeleton": {
                 "length": frame.distance(float(seq.length[self.chosen_step])),

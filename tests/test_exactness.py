@@ -64,3 +64,44 @@ def test_fast_equals_naive(case):
         np.testing.assert_allclose(fast.objective, lams, rtol=0, atol=1e-9)
         steps += len(removed)
     assert steps > 0  # the case really exercised pruning
+
+
+@pytest.mark.parametrize("case", CASES[::3])
+def test_fast_equals_naive_from_the_coarse_dce_skeleton(case):
+    """``coarse="dce"``: the Bayesian stage, started from the DCE-pruned skeleton."""
+    from skelprune.api import dce_support
+    from skelprune.dce import COARSE_THRESHOLD, COARSE_VERTICES
+
+    steps = 0
+    for crop, _ in components(make(case)):
+        ma = medial_axis(crop, squared_distance(crop))
+        graphs = [BranchGraph(ma.rows, ma.cols, crop.shape) for _ in range(2)]
+        norm = normalisation(graphs[0], ma.r2, 9.0)
+        if norm.alpha is None:
+            continue
+        keep = dce_support(crop, ma.rows, ma.cols, ma.r2, COARSE_VERTICES, COARSE_THRESHOLD)
+        coarse = bayesian_sequence(graphs[0], crop, ma.r2, norm.alpha, norm.lbar, supported=keep)
+        for b in coarse.removed:
+            graphs[1].remove_end_branch(b)
+        fast = bayesian_sequence(graphs[0], crop, ma.r2, norm.alpha, norm.lbar)
+        removed, lams = naive_sequence(graphs[1], crop, ma.r2, norm.alpha, norm.lbar)
+        assert fast.removed == removed
+        np.testing.assert_allclose(fast.objective, lams, rtol=0, atol=1e-9)
+        steps += len(removed) + len(coarse.removed)
+    assert steps > 0
+
+
+@pytest.mark.parametrize("kw", [{"coarse": "dce"}, {"method": "dce"}])
+@pytest.mark.parametrize("case", CASES[1::4])
+def test_dce_pruning_never_changes_topology(case, kw):
+    from skimage.measure import euler_number, label
+
+    import skelprune
+
+    mask = make(case)
+    res = skelprune.prune(mask, **kw)
+    rows, cols, _ = res.skeleton_points()
+    skel = np.zeros(mask.shape, bool)
+    skel[rows, cols] = True
+    assert label(skel, connectivity=2).max() == label(mask, connectivity=2).max()
+    assert euler_number(skel, connectivity=2) == euler_number(mask, connectivity=2)

@@ -344,3 +344,15 @@ def test_openapi_lists_every_response_with_examples(client: TestClient) -> None:
     for status in ("400", "413", "422", "503", "504"):
         Problem.model_validate(
             op["responses"][status]["content"]["application/problem+json"]["example"])
+
+
+def test_malformed_multipart_is_a_400_problem(client: TestClient) -> None:
+    resp = client.post("/v1/prune", content=b"--x\r\nnot a part",
+                       headers={"content-type": "multipart/form-data"})
+    body = assert_problem(resp, 400)
+    assert "boundary" in body["detail"].lower()
+
+
+def test_errors_are_problems_whatever_the_accept_header(client: TestClient) -> None:
+    resp = post_png(client, b"\x89PNG\r\n\x1a\n", accept="image/png")
+    assert_problem(resp, 400, "truncated PNG")

@@ -166,8 +166,8 @@ CA_BUNDLE=${SKELPRUNE_CA_BUNDLE:-/etc/ssl/certs/ca-certificates.crt}
 log "building $IMAGE from $REPO/Dockerfile"
 buildah bud --isolation=chroot "${STORE[@]}" --format docker --layers=false \
     "${build_args[@]}" "${secret_args[@]}" \
-    -f "$REPO/Dockerfile" -t "$IMAGE" "$REPO" >"$WORK/build.log" 2>&1 \
-    || { tail -n 40 "$WORK/build.log" >&2; die "image build failed"; }
+    -f "$REPO/Dockerfile" -t "$IMAGE" "$REPO" >"$BASE_CACHE/last-build.log" 2>&1 \
+    || { tail -n 40 "$BASE_CACHE/last-build.log" >&2; die "image build failed"; }
 log "built $IMAGE"
 
 # --- run ---------------------------------------------------------------------------------
@@ -175,22 +175,23 @@ PORT=$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0));
 log "starting container on port $PORT"
 "${PODMAN[@]}" run -d --name "$CONTAINER" \
     --ulimit nofile=1024:1024 --ulimit nproc=1024:1024 \
-    --network=host -e "SKELPRUNE_PORT=$PORT" "$IMAGE" >/dev/null \
-    || die "podman run failed"
+    --network=host -e "SKELPRUNE_PORT=$PORT" "$IMAGE" >/dev/null 2>"$WORK/run.err" \
+    || { cat "$WORK/run.err" >&2; die "podman run failed"; }
 
 show_logs() { "${PODMAN[@]}" logs "$CONTAINER" 2>&1 | tail -n 40 >&2 || true; }
 
-deadline=$(($(date +%s) + 120))
+# the first start compiles the numba kernels in every worker (no cache in a new container)
+deadline=$(($(date +%s) + 300))
 until curl -fsS -m 2 "http://127.0.0.1:$PORT/healthz" >/dev/null 2>&1; do
     state=$("${PODMAN[@]}" inspect -f '{{.State.Status}}' "$CONTAINER" 2>/dev/null || echo gone)
     [[ $state == running ]] || { show_logs; die "container is $state before becoming healthy"; }
-    (($(date +%s) < deadline)) || { show_logs; die "no /healthz within 120 s"; }
+    (($(date +%s) < deadline)) || { show_logs; die "no /healthz within 300 s"; }
     sleep 1
 done
 log "/healthz answers"
 
 # The image's own HEALTHCHECK command must pass too (it is what docker/podman will run).
-health=$("${PODMAN[@]}" inspect -f '{{json .Config.Healthcheck}}' "$IMAGE" 2>/dev/null || true)
+health=$("${PODMAN[@]}" image inspect --format '{{json .HealthCheck}}' "$IMAGE" 2>/dev/null || true)
 [[ $health == *healthz* ]] || die "image has no HEALTHCHECK on /healthz (got: $health)"
 "${PODMAN[@]}" healthcheck run "$CONTAINER" >/dev/null 2>&1 \
     || { show_logs; die "the image's HEALTHCHECK command fails in the running container"; }

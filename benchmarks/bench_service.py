@@ -175,8 +175,10 @@ def main() -> None:
         ["throughput 2 workers (jobs/s)", tput2, ""],
         ["ratio 2 / 1 workers", tput2 / tput1, "≥ 1.8"],
     ]
+    load = ", ".join(f"{x:.2f}" for x in os.getloadavg())
     print(f"shape: {SHAPE} in 256×256, {ROUND_TRIPS} round trips, "
-          f"{THROUGHPUT_JOBS} jobs per throughput run, {os.cpu_count()} CPUs\n")
+          f"{THROUGHPUT_JOBS} jobs per throughput run, {os.cpu_count()} CPUs, "
+          f"load average {load} (other processes on the machine cap the 2-worker gain)\n")
     print(table(["measure", "median / value", "target"], rows))
 
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
+from scipy import ndimage
 
 from .medial_axis import NEIGHBOURS
 
@@ -52,7 +53,7 @@ def _neighbours(rows, cols, index):
 
 
 @njit(cache=True)
-def _trace(nbr, deg):
+def _trace(nbr, deg, rows, cols):
     """Trace all branches.
 
     Returns the concatenated point lists (``pts``, split at ``starts``) and, per
@@ -133,7 +134,26 @@ def _trace(nbr, deg):
         att[nb, 1] = -2
         nb += 1
         starts[nb] = used
-    return pts[:used], starts[: nb + 1], att[:nb]
+    # Step counts of each branch, including the steps into its junction pixels and,
+    # for a cycle, the closing step.
+    counts = np.zeros((nb, 2), dtype=np.int64)
+    for b in range(nb):
+        s0, s1 = starts[b], starts[b + 1]
+        prev = att[b, 0] if att[b, 0] >= 0 else (pts[s1 - 1] if att[b, 0] == -2 else -1)
+        for i in range(s0, s1 + 1):
+            if i < s1:
+                cur = pts[i]
+            elif att[b, 1] >= 0:
+                cur = att[b, 1]
+            else:
+                break
+            if prev >= 0 and not (att[b, 0] == -2 and i == s0 and s1 - s0 < 2):
+                if rows[prev] != rows[cur] and cols[prev] != cols[cur]:
+                    counts[b, 1] += 1
+                else:
+                    counts[b, 0] += 1
+            prev = cur
+    return pts[:used], starts[: nb + 1], att[:nb], counts
 
 
 def step_counts(rows: np.ndarray, cols: np.ndarray) -> tuple[int, int]:
@@ -201,40 +221,41 @@ class BranchGraph:
         self.extra_nd = 0
         self.branches: list[Branch] = []
         self.junctions: list[Junction] = []
-        self._build()
+        self._build(shape)
 
     # -- construction -------------------------------------------------------------
     def _step(self, a: int, b: int) -> tuple[int, int]:
         diag = self.rows[a] != self.rows[b] and self.cols[a] != self.cols[b]
         return (0, 1) if diag else (1, 0)
 
-    def _build(self) -> None:
-        pts, starts, att = _trace(self.nbr, self.degree)
+    def _build(self, shape: tuple[int, int]) -> None:
+        pts, starts, att, counts = _trace(self.nbr, self.degree, self.rows, self.cols)
+        # Junction nodes: 8-connected clusters of junction pixels, numbered in the order
+        # of their first pixel.
+        jpix = np.flatnonzero(self.degree >= 3)
         junction_of = np.full(self.rows.size, -1, dtype=np.int64)
-        for j in np.flatnonzero(self.degree >= 3):
-            if junction_of[j] >= 0:
-                continue
-            jid = len(self.junctions)
-            stack, members = [int(j)], []
-            junction_of[j] = jid
-            while stack:
-                a = stack.pop()
-                members.append(a)
-                for q in self.nbr[a]:
-                    if q >= 0 and self.degree[q] >= 3 and junction_of[q] < 0:
-                        junction_of[q] = jid
-                        stack.append(int(q))
-            self.junctions.append(Junction(sorted(members)))
-        for b in range(att.shape[0]):
-            seg = pts[starts[b] : starts[b + 1]].tolist()
-            a0, a1 = int(att[b, 0]), int(att[b, 1])
+        if jpix.size:
+            img = np.zeros(shape, bool)
+            img[self.rows[jpix], self.cols[jpix]] = True
+            lab, _ = ndimage.label(img, structure=np.ones((3, 3), bool))
+            raw = lab[self.rows[jpix], self.cols[jpix]]
+            _, first, inverse = np.unique(raw, return_index=True, return_inverse=True)
+            order = np.argsort(np.argsort(first))
+            junction_of[jpix] = order[inverse]
+            members: list[list[int]] = [[] for _ in range(len(first))]
+            for p, j in zip(jpix.tolist(), junction_of[jpix].tolist(), strict=True):
+                members[j].append(p)
+            self.junctions = [Junction(m) for m in members]
+        jof = junction_of.tolist()
+        starts_l = starts.tolist()
+        pts_l = pts.tolist()
+        for b, ((a0, a1), (na, nd)) in enumerate(zip(att.tolist(), counts.tolist(),
+                                                      strict=True)):
+            seg = pts_l[starts_l[b] : starts_l[b + 1]]
             if a0 == -2:
-                na, nd = step_counts(self.rows[seg + seg[:1]], self.cols[seg + seg[:1]])
                 self.branches.append(Branch(seg, [None, None], [-1, -1], na, nd, loop=True))
                 continue
-            chain = ([a0] if a0 >= 0 else []) + seg + ([a1] if a1 >= 0 else [])
-            na, nd = step_counts(self.rows[chain], self.cols[chain])
-            nodes = [int(junction_of[a]) if a >= 0 else None for a in (a0, a1)]
+            nodes = [jof[a0] if a0 >= 0 else None, jof[a1] if a1 >= 0 else None]
             self.branches.append(Branch(seg, nodes, [a0, a1], na, nd))
             for e in (0, 1):
                 if nodes[e] is not None:

@@ -14,6 +14,7 @@ pixels is then exactly the shape.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -136,13 +137,20 @@ def disk_offsets(max_r2: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _domination_table(values: np.ndarray) -> np.ndarray:
+    """:func:`_cached_domination_table` sized for the largest of ``values``."""
+    max_r2 = int(values.max()) if values.size else 1
+    return _cached_domination_table(1 << max(max_r2, 1).bit_length())
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_domination_table(max_r2: int) -> np.ndarray:
     """For each squared radius up to ``values.max()``: the smallest neighbour ``r2``
     whose disk contains it, for an axial (column 0) and a diagonal (column 1) neighbour.
 
     Offsets are sorted by length, so the farthest point of a disk from the neighbour
-    is a running maximum over the sorted offsets.
+    is a running maximum over the sorted offsets. Entries depend on ``r2`` only, so a
+    table sized by a power of two serves every smaller shape.
     """
-    max_r2 = int(values.max()) if values.size else 1
     offsets, count = disk_offsets(max_r2)
     need = np.zeros((max_r2 + 1, 2), dtype=np.int64)
     for j, v in enumerate(((0, 1), (1, 1))):

@@ -12,13 +12,12 @@ scratch and must agree exactly.
 
 from __future__ import annotations
 
+import heapq
 import math
 from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from .graph import SQRT2, BranchGraph
 from .reconstruction import Coverage
@@ -58,23 +57,37 @@ def normalisation(graph: BranchGraph, r2: np.ndarray, beta: float) -> Normalisat
                    if graph.is_end_branch(b)})
     if not ends:
         return Normalisation(seed, 0.0, None)
-    n = rows.size
-    src, dst, w = [], [], []
-    for i in range(8):
-        q = graph.nbr[:, i]
-        ok = q >= 0
-        src.append(np.flatnonzero(ok))
-        dst.append(q[ok])
-        diag = (rows[ok] != rows[q[ok]]) & (cols[ok] != cols[q[ok]])
-        w.append(np.where(diag, SQRT2, 1.0))
-    adj = csr_matrix((np.concatenate(w), (np.concatenate(src), np.concatenate(dst))),
-                     shape=(n, n))
-    dist = dijkstra(adj, indices=seed)
+    dist = _path_lengths(graph.nbr, seed)
     lbar = float(np.mean(dist[ends]))
     length = graph.na + graph.nd * SQRT2
     if not lbar > 0 or not length > 0:
         return Normalisation(seed, lbar, None)
     return Normalisation(seed, lbar, beta * math.log(length / lbar))
+
+
+@njit(cache=True)
+def _path_lengths(nbr, seed):
+    """Shortest path lengths along the skeleton from ``seed`` (Dijkstra; steps 1, √2).
+
+    Neighbour slots follow :data:`skelprune.medial_axis.NEIGHBOURS`: even slots are
+    diagonal.
+    """
+    dist = np.full(nbr.shape[0], np.inf)
+    dist[seed] = 0.0
+    heap = [(0.0, seed)]
+    while heap:
+        d, u = heapq.heappop(heap)
+        if d > dist[u]:
+            continue
+        for i in range(8):
+            q = nbr[u, i]
+            if q < 0:
+                continue
+            nd = d + (SQRT2 if i % 2 == 0 else 1.0)
+            if nd < dist[q]:
+                dist[q] = nd
+                heapq.heappush(heap, (nd, q))
+    return dist
 
 
 @dataclass

@@ -78,8 +78,12 @@ class ComponentResult:
         g, r2 = self.graph, self.r2
         oy, ox = self.origin
 
+        xs = (g.cols + ox).astype(float).tolist()
+        ys = (g.rows + oy).astype(float).tolist()
+        rs = np.sqrt(r2.astype(float)).tolist()
+
         def xyr(p: int) -> list[float]:
-            return [float(g.cols[p] + ox), float(g.rows[p] + oy), float(np.sqrt(r2[p]))]
+            return [xs[p], ys[p], rs[p]]
 
         nodes: list[dict[str, Any]] = []
         junction_node: dict[int, int] = {}

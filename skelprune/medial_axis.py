@@ -136,6 +136,18 @@ def disk_offsets(max_r2: int) -> tuple[np.ndarray, np.ndarray]:
     return offsets, count.astype(np.int64)
 
 
+# Test vectors of the domination test: every offset in a 7 x 7 window. Eight
+# neighbours alone see domination only where the distance gradient is axial or
+# diagonal; elsewhere nearly every pixel would pass for a centre of a maximal disk.
+REACH = 3
+VECTORS = np.array([(dy, dx) for dy in range(-REACH, REACH + 1) for dx in range(-REACH, REACH + 1)
+                    if (dy, dx) != (0, 0)], dtype=np.int64)
+# Disks are symmetric, so the table depends on (min, max) of |dy|, |dx| only.
+_KINDS = sorted({tuple(sorted((abs(int(a)), abs(int(b))))) for a, b in VECTORS})
+VECTOR_KIND = np.array([_KINDS.index(tuple(sorted((abs(int(a)), abs(int(b))))))
+                        for a, b in VECTORS], dtype=np.int64)
+
+
 def _domination_table(values: np.ndarray) -> np.ndarray:
     """:func:`_cached_domination_table` sized for the largest of ``values``."""
     max_r2 = int(values.max()) if values.size else 1
@@ -144,16 +156,16 @@ def _domination_table(values: np.ndarray) -> np.ndarray:
 
 @functools.lru_cache(maxsize=8)
 def _cached_domination_table(max_r2: int) -> np.ndarray:
-    """For each squared radius up to ``values.max()``: the smallest neighbour ``r2``
-    whose disk contains it, for an axial (column 0) and a diagonal (column 1) neighbour.
+    """For each squared radius ``R`` and each vector kind ``v``: the smallest ``r2`` a
+    pixel at offset ``v`` needs for its disk to contain the disk of radius² ``R``.
 
-    Offsets are sorted by length, so the farthest point of a disk from the neighbour
-    is a running maximum over the sorted offsets. Entries depend on ``r2`` only, so a
-    table sized by a power of two serves every smaller shape.
+    Offsets are sorted by length, so the farthest point of a disk from ``v`` is a
+    running maximum over the sorted offsets. Entries depend on ``R`` only, so a table
+    sized by a power of two serves every smaller shape.
     """
     offsets, count = disk_offsets(max_r2)
-    need = np.zeros((max_r2 + 1, 2), dtype=np.int64)
-    for j, v in enumerate(((0, 1), (1, 1))):
+    need = np.zeros((max_r2 + 1, len(_KINDS)), dtype=np.int64)
+    for j, v in enumerate(_KINDS):
         far = np.maximum.accumulate((offsets[:, 0] - v[0]) ** 2 + (offsets[:, 1] - v[1]) ** 2)
         need[1:, j] = far[count[1:] - 1] + 1
     return need
@@ -169,8 +181,13 @@ def _code(fg: np.ndarray, r: int, c: int) -> int:
 
 
 @njit(cache=True)
-def _anchors(r2: np.ndarray, need: np.ndarray) -> np.ndarray:
-    """Centres of maximal disks: pixels whose disk no 8-neighbour's disk contains."""
+def _anchors(r2: np.ndarray, need: np.ndarray, vectors: np.ndarray, kind: np.ndarray) -> np.ndarray:
+    """Centres of maximal disks: pixels whose disk no nearby pixel's disk contains.
+
+    Exact on the discrete disks, within the window of ``vectors``; a pixel whose
+    disk is contained only by a farther one stays an anchor, which costs a spur the
+    redundancy pass removes, never reconstruction.
+    """
     h, w = r2.shape
     anchor = np.zeros((h, w), dtype=np.bool_)
     for r in range(1, h - 1):
@@ -179,10 +196,11 @@ def _anchors(r2: np.ndarray, need: np.ndarray) -> np.ndarray:
             if v == 0:
                 continue
             dominated = False
-            for i in range(8):
-                q = r2[r + NEIGHBOURS[i, 0], c + NEIGHBOURS[i, 1]]
-                diag = 1 if NEIGHBOURS[i, 0] != 0 and NEIGHBOURS[i, 1] != 0 else 0
-                if q >= need[v, diag]:
+            for i in range(vectors.shape[0]):
+                rr, cc = r + vectors[i, 0], c + vectors[i, 1]
+                if rr < 0 or cc < 0 or rr >= h or cc >= w:
+                    continue
+                if r2[rr, cc] >= need[v, kind[i]]:
                     dominated = True
                     break
             anchor[r, c] = not dominated
@@ -288,11 +306,8 @@ def _drop_redundant_anchors(anchor, r2, rows, cols) -> None:
         h = isqrt(v - 1)
         for dy in range(-h, h + 1):
             w = disk_half_width(v, dy)
-            for x in range(c - w, c + w + 1):
-                if cover[r + dy, x] < 2:
-                    redundant = False
-                    break
-            if not redundant:
+            if cover[r + dy, c - w : c + w + 1].min() < 2:
+                redundant = False
                 break
         if redundant:
             anchor[r, c] = False
@@ -442,7 +457,7 @@ def medial_axis(padded: np.ndarray, r2: np.ndarray | None = None) -> MedialAxis:
     if r2 is None:
         r2 = squared_distance(padded)
     need = _domination_table(r2[r2 > 0])
-    anchor = _anchors(r2, need)
+    anchor = _anchors(r2, need, VECTORS, VECTOR_KIND)
     ar, ac = np.nonzero(anchor)
     order = np.lexsort((ac, ar, r2[ar, ac]))
     _drop_redundant_anchors(anchor, r2, ar[order].astype(np.int64), ac[order].astype(np.int64))

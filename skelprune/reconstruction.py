@@ -63,27 +63,30 @@ def reconstruction_error(
 def _paint_labels(c, s1, s2, rows, cols, r2, lab):
     for k in range(rows.size):
         lb = lab[k]
+        lb2 = lb * lb
         v = r2[k]
         h = isqrt(v - 1)
         for dy in range(-h, h + 1):
             w = disk_half_width(v, dy)
             r = rows[k] + dy
-            for q in range(cols[k] - w, cols[k] + w + 1):
-                c[r, q] += 1
-                s1[r, q] += lb
-                s2[r, q] += lb * lb
+            a, b = cols[k] - w, cols[k] + w + 1
+            c[r, a:b] += 1
+            s1[r, a:b] += lb
+            s2[r, a:b] += lb2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _owner(c, s1, s2, r, q):
-    """Label of the single owner covering pixel (r, q), or -1."""
+    """Label of the single owner covering pixel (r, q), or -1.
+
+    All covering labels are equal iff ``c·s2 == s1²`` (Cauchy–Schwarz), a test
+    without division; labels and counts stay far below 2**31, so no overflow.
+    """
     n = c[r, q]
-    if n == 0 or s1[r, q] % n != 0:
+    a = s1[r, q]
+    if n == 0 or n * s2[r, q] != a * a:
         return -1
-    b = s1[r, q] // n
-    if s2[r, q] != n * b * b:
-        return -1
-    return b
+    return a // n
 
 
 @njit(cache=True)
@@ -91,15 +94,16 @@ def _remove(c, s1, s2, stamp, tick, excl, pts, rows, cols, r2, lab):
     """Remove the disks of ``pts``; return the pixels left uncovered."""
     for k in pts:
         lb = lab[k]
+        lb2 = lb * lb
         v = r2[k]
         h = isqrt(v - 1)
         for dy in range(-h, h + 1):
             w = disk_half_width(v, dy)
             r = rows[k] + dy
-            for q in range(cols[k] - w, cols[k] + w + 1):
-                c[r, q] -= 1
-                s1[r, q] -= lb
-                s2[r, q] -= lb * lb
+            a, b = cols[k] - w, cols[k] + w + 1
+            c[r, a:b] -= 1
+            s1[r, a:b] -= lb
+            s2[r, a:b] -= lb2
     lost = 0
     for k in pts:
         v = r2[k]
@@ -108,15 +112,16 @@ def _remove(c, s1, s2, stamp, tick, excl, pts, rows, cols, r2, lab):
             w = disk_half_width(v, dy)
             r = rows[k] + dy
             for q in range(cols[k] - w, cols[k] + w + 1):
-                if stamp[r, q] == tick:
-                    continue
-                stamp[r, q] = tick
-                if c[r, q] == 0:
-                    lost += 1
-                else:
-                    b = _owner(c, s1, s2, r, q)
-                    if b >= 0:
-                        excl[b] += 1
+                # The cheap owner test first: most pixels keep several owners.
+                n = c[r, q]
+                x = s1[r, q]
+                if n == 0:
+                    if stamp[r, q] != tick:
+                        stamp[r, q] = tick
+                        lost += 1
+                elif n * s2[r, q] == x * x and stamp[r, q] != tick:
+                    stamp[r, q] = tick
+                    excl[x // n] += 1
     return lost
 
 
@@ -125,15 +130,18 @@ def _relabel(c, s1, s2, stamp, tick, excl, pts, rows, cols, r2, lab, new):
     """Give the points ``pts`` the label ``new``, updating single-owner areas."""
     for k in pts:
         old = lab[k]
+        d1 = new - old
+        d2 = new * new - old * old
         v = r2[k]
         h = isqrt(v - 1)
         for dy in range(-h, h + 1):
             w = disk_half_width(v, dy)
             r = rows[k] + dy
-            for q in range(cols[k] - w, cols[k] + w + 1):
-                s1[r, q] += new - old
-                s2[r, q] += new * new - old * old
+            a, b = cols[k] - w, cols[k] + w + 1
+            s1[r, a:b] += d1
+            s2[r, a:b] += d2
         lab[k] = new
+    nn = new * new
     for k in pts:
         v = r2[k]
         h = isqrt(v - 1)
@@ -141,10 +149,9 @@ def _relabel(c, s1, s2, stamp, tick, excl, pts, rows, cols, r2, lab, new):
             w = disk_half_width(v, dy)
             r = rows[k] + dy
             for q in range(cols[k] - w, cols[k] + w + 1):
-                if stamp[r, q] == tick:
-                    continue
-                stamp[r, q] = tick
-                if _owner(c, s1, s2, r, q) == new:
+                n = c[r, q]
+                if s1[r, q] == n * new and s2[r, q] == n * nn and stamp[r, q] != tick:
+                    stamp[r, q] = tick
                     excl[new] += 1
 
 

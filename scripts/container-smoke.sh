@@ -189,6 +189,9 @@ until curl -fsS -m 2 "http://127.0.0.1:$PORT/healthz" >/dev/null 2>&1; do
     sleep 1
 done
 log "/healthz answers"
+code=$(curl -sS -m 5 -o /dev/null -w '%{http_code}' "http://127.0.0.1:$PORT/readyz") || true
+[[ $code == 200 ]] || { show_logs; die "/readyz answers $code, not 200 (pool not up?)"; }
+log "/readyz answers 200"
 
 # The image's own HEALTHCHECK command must pass too (it is what docker/podman will run).
 health=$("${PODMAN[@]}" image inspect --format '{{json .HealthCheck}}' "$IMAGE" 2>/dev/null || true)
@@ -226,7 +229,9 @@ log "prune response is a skeleton document"
 
 # --- graceful stop -----------------------------------------------------------------------
 log "SIGTERM"
-"${PODMAN[@]}" stop -t 30 "$CONTAINER" >/dev/null || die "podman stop failed"
+# (podman without systemd logs an error about its healthcheck timer here: harmless)
+"${PODMAN[@]}" stop -t 30 "$CONTAINER" >/dev/null 2>"$WORK/stop.err" \
+    || { cat "$WORK/stop.err" >&2; die "podman stop failed"; }
 state=$("${PODMAN[@]}" inspect -f '{{.State.Status}} {{.State.ExitCode}}' "$CONTAINER")
 [[ $state == "exited 0" ]] || { show_logs; die "container did not exit cleanly on SIGTERM: $state"; }
 log "container exited with code 0 on SIGTERM"

@@ -17,7 +17,7 @@ class PixelFrame:
 
     Examples
     --------
-    >>> f = PixelFrame(x0=10.0, y0=5.0, pixel_size=0.5)
+    >>> f = PixelFrame(x0=10.0, y0=5.0, pixel_size=0.5, flip_y=True)
     >>> f.point(2, 4)
     (11.0, 3.0)
     >>> f.distance(3.0)

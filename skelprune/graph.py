@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 from scipy import ndimage
 
-from .medial_axis import NEIGHBOURS
+from ._digital import NEIGHBOURS
 
 __all__ = ["SQRT2", "Branch", "BranchGraph", "step_counts"]
 

@@ -15,88 +15,25 @@ pixels is then exactly the shape.
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
 from scipy import ndimage
 
-__all__ = ["MedialAxis", "disk_offsets", "medial_axis", "squared_distance"]
-
-# Neighbour order used by every lookup table: clockwise from the top-left.
-NEIGHBOURS = np.array(
-    [(-1, -1), (-1, 0), (-1, 1), (0, 1), (1, 1), (1, 0), (1, -1), (0, -1)], dtype=np.int64
+from ._digital import (
+    DEGREE,
+    NEIGHBOURS,
+    SIMPLE,
+    disk_half_width,
+    disk_offsets,
+    heap_pop,
+    heap_push,
+    isqrt,
+    neighbourhood_code,
 )
 
-
-@njit(cache=True, inline="always")
-def isqrt(x: int) -> int:
-    """Integer square root (floor) of a non-negative integer."""
-    s = int(math.sqrt(x))
-    while s * s > x:
-        s -= 1
-    while (s + 1) * (s + 1) <= x:
-        s += 1
-    return s
-
-
-@njit(cache=True, inline="always")
-def disk_half_width(r2: int, dy: int) -> int:
-    """Half width of row ``dy`` of the disk ``dy² + dx² < r2`` (-1 if the row is empty).
-
-    Disk kernels walk rows of the disk, contiguous in memory, instead of a list of
-    offsets: the same pixels, several times faster on large radii.
-    """
-    rest = r2 - 1 - dy * dy
-    return isqrt(rest) if rest >= 0 else -1
-
-
-def _build_tables() -> tuple[np.ndarray, np.ndarray]:
-    """Simple-point and degree tables over the 256 neighbourhood configurations."""
-    simple = np.zeros(256, dtype=np.bool_)
-    degree = np.zeros(256, dtype=np.int64)
-    nb = [tuple(v) for v in NEIGHBOURS]
-    for code in range(256):
-        fg = [i for i in range(8) if code >> i & 1]
-        bg = [i for i in range(8) if not code >> i & 1]
-        degree[code] = len(fg)
-
-        def components(members: list[int], adjacent) -> list[set[int]]:
-            seen: set[int] = set()
-            comps = []
-            for m in members:
-                if m in seen:
-                    continue
-                stack, comp = [m], {m}
-                seen.add(m)
-                while stack:
-                    a = stack.pop()
-                    for b in members:
-                        if b not in seen and adjacent(nb[a], nb[b]):
-                            seen.add(b)
-                            comp.add(b)
-                            stack.append(b)
-                comps.append(comp)
-            return comps
-
-        def adj8(a, b):
-            return max(abs(a[0] - b[0]), abs(a[1] - b[1])) == 1
-
-        def adj4(a, b):
-            return abs(a[0] - b[0]) + abs(a[1] - b[1]) == 1
-
-        fg_comps = components(fg, adj8)
-        # Background components count only where 4-adjacent to the centre pixel.
-        bg_comps = [
-            c for c in components(bg, adj4) if any(abs(nb[i][0]) + abs(nb[i][1]) == 1 for i in c)
-        ]
-        simple[code] = len(fg_comps) == 1 and len(bg_comps) == 1
-    return simple, degree
-
-
-SIMPLE, DEGREE = _build_tables()
-
+__all__ = ["DEGREE", "SIMPLE", "MedialAxis", "medial_axis", "squared_distance"]
 
 def squared_distance(padded: np.ndarray) -> np.ndarray:
     """Exact squared Euclidean distance of each pixel to the nearest background pixel.
@@ -118,22 +55,6 @@ def squared_distance(padded: np.ndarray) -> np.ndarray:
     """
     d = ndimage.distance_transform_edt(padded)
     return np.rint(d * d).astype(np.int64)
-
-
-def disk_offsets(max_r2: int) -> tuple[np.ndarray, np.ndarray]:
-    """Integer offsets sorted by squared length, and the disk size for each ``r2``.
-
-    ``offsets[:count[r2]]`` are exactly the offsets ``o`` with ``|o|**2 < r2``.
-    """
-    r = int(np.ceil(np.sqrt(max(max_r2, 1)))) + 1
-    dy, dx = np.mgrid[-r : r + 1, -r : r + 1]
-    d2 = (dy * dy + dx * dx).ravel()
-    keep = d2 < max(max_r2, 1)
-    d2, dy, dx = d2[keep], dy.ravel()[keep], dx.ravel()[keep]
-    order = np.lexsort((dx, dy, d2))
-    offsets = np.stack([dy[order], dx[order]], axis=1).astype(np.int64)
-    count = np.searchsorted(d2[order], np.arange(max(max_r2, 1) + 1), side="left")
-    return offsets, count.astype(np.int64)
 
 
 # Test vectors of the domination test: every offset in a 7 x 7 window. Eight
@@ -169,15 +90,6 @@ def _cached_domination_table(max_r2: int) -> np.ndarray:
         far = np.maximum.accumulate((offsets[:, 0] - v[0]) ** 2 + (offsets[:, 1] - v[1]) ** 2)
         need[1:, j] = far[count[1:] - 1] + 1
     return need
-
-
-@njit(cache=True)
-def _code(fg: np.ndarray, r: int, c: int) -> int:
-    code = 0
-    for i in range(8):
-        if fg[r + NEIGHBOURS[i, 0], c + NEIGHBOURS[i, 1]]:
-            code |= 1 << i
-    return code
 
 
 @njit(cache=True)
@@ -245,7 +157,7 @@ def _ordered_thinning(fg, r2, anchor, simple) -> None:
             p = item[slot]
             queued[p] = False
             r, c = p // w, p % w
-            if not fg[r, c] or not simple[_code(fg, r, c)]:
+            if not fg[r, c] or not simple[neighbourhood_code(fg, r, c)]:
                 continue
             fg[r, c] = False
             for i in range(8):
@@ -317,38 +229,6 @@ def _drop_redundant_anchors(anchor, r2, rows, cols) -> None:
 
 
 @njit(cache=True)
-def _heap_push(heap, size, key):
-    i = size
-    heap[i] = key
-    while i > 0:
-        parent = (i - 1) // 2
-        if heap[parent] <= heap[i]:
-            break
-        heap[parent], heap[i] = heap[i], heap[parent]
-        i = parent
-    return size + 1
-
-
-@njit(cache=True)
-def _heap_pop(heap, size):
-    top = heap[0]
-    size -= 1
-    heap[0] = heap[size]
-    i = 0
-    while True:
-        a, b, m = 2 * i + 1, 2 * i + 2, i
-        if a < size and heap[a] < heap[m]:
-            m = a
-        if b < size and heap[b] < heap[m]:
-            m = b
-        if m == i:
-            break
-        heap[m], heap[i] = heap[i], heap[m]
-        i = m
-    return top, size
-
-
-@njit(cache=True)
 def _thin(fg, r2, rows, cols, simple, degree) -> None:
     """Make the anchored skeleton one pixel thin.
 
@@ -371,25 +251,25 @@ def _thin(fg, r2, rows, cols, simple, degree) -> None:
     size = 0
     inheap = np.zeros(n, dtype=np.bool_)
     for k in range(n):
-        code = _code(fg, rows[k], cols[k])
+        code = neighbourhood_code(fg, rows[k], cols[k])
         if degree[code] >= 2 and simple[code]:
             loss = _loss(cover, rows[k], cols[k], r2[rows[k], cols[k]])
-            size = _heap_push(heap, size, loss * big + k)
+            size = heap_push(heap, size, loss * big + k)
             inheap[k] = True
     while size > 0:
-        key, size = _heap_pop(heap, size)
+        key, size = heap_pop(heap, size)
         k = key % big
         inheap[k] = False
         r, c = rows[k], cols[k]
         if not fg[r, c]:
             continue
-        code = _code(fg, r, c)
+        code = neighbourhood_code(fg, r, c)
         if degree[code] < 2 or not simple[code]:
             continue  # comes back when a neighbour changes
         v = r2[r, c]
         loss = _loss(cover, r, c, v)
         if loss > key // big:
-            size = _heap_push(heap, size, loss * big + k)
+            size = heap_push(heap, size, loss * big + k)
             inheap[k] = True
             continue
         fg[r, c] = False
@@ -402,10 +282,10 @@ def _thin(fg, r2, rows, cols, simple, degree) -> None:
             q = rank[rr, cc]
             if q < 0 or not fg[rr, cc] or inheap[q]:
                 continue
-            qcode = _code(fg, rr, cc)
+            qcode = neighbourhood_code(fg, rr, cc)
             if degree[qcode] >= 2 and simple[qcode]:
                 qloss = _loss(cover, rr, cc, r2[rr, cc])
-                size = _heap_push(heap, size, qloss * big + q)
+                size = heap_push(heap, size, qloss * big + q)
                 inheap[q] = True
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .medial_axis import disk_half_width, isqrt
+from ._digital import disk_half_width, isqrt
 
 __all__ = ["Coverage", "reconstruction", "reconstruction_error"]
 

@@ -60,10 +60,14 @@ def get(port: int, path: str, timeout: float = 2.0) -> int:
         conn.close()
 
 
-def post_png(port: int, body: bytes) -> tuple[int, bytes]:
+def post_png(
+    port: int, body: bytes, sent: threading.Event | None = None
+) -> tuple[int, bytes]:
     conn = http.client.HTTPConnection("127.0.0.1", port, timeout=120)
     try:
         conn.request("POST", "/v1/prune", body=body, headers={"Content-Type": "image/png"})
+        if sent is not None:
+            sent.set()
         resp = conn.getresponse()
         return resp.status, resp.read()
     finally:
@@ -116,10 +120,11 @@ class InFlight(threading.Thread):
         self.payload = b""
         self.error: BaseException | None = None
         self.done_at: float | None = None
+        self.sent = threading.Event()
 
     def run(self) -> None:
         try:
-            self.status, self.payload = post_png(self.port, self.body)
+            self.status, self.payload = post_png(self.port, self.body, self.sent)
         except BaseException as exc:
             self.error = exc
         self.done_at = time.monotonic()
@@ -189,7 +194,11 @@ def test_sigterm_drains_in_flight_requests_then_exits_cleanly(server):
     requests = [InFlight(port, body) for _ in range(n)]
     for r in requests:
         r.start()
-    time.sleep(min(0.3, took / 3))  # all are sent; the first is running, the rest queue
+    for r in requests:
+        assert r.sent.wait(timeout=30), f"request not sent: {r.error!r}"
+    # give the server's event loop a moment to read them all: the first one is running,
+    # the others wait in the queue
+    time.sleep(min(0.3, took / 3))
 
     proc.send_signal(signal.SIGTERM)
     signalled = time.monotonic()

@@ -215,7 +215,7 @@ class WorkerPool:
         if context == "forkserver":
             # Only takes effect before the (process-wide) fork server first starts.
             self._ctx.set_forkserver_preload(["service.pool", *preload])
-        self._idle: asyncio.Queue[_Worker] | None = None
+        self._idle: asyncio.Queue[_Worker | None] | None = None  # None: "pool closed"
         self._workers: set[_Worker] = set()
         self._lock = threading.Lock()
         self._executor: ThreadPoolExecutor | None = None
@@ -246,8 +246,11 @@ class WorkerPool:
         self.started = True
 
     async def close(self) -> None:
-        """Stop all workers (running jobs are killed)."""
+        """Stop all workers (running jobs are killed, waiting ones get PoolClosedError)."""
         self.closed = True
+        if self._idle is not None:
+            for _ in range(self.waiting):
+                self._idle.put_nowait(None)
         with self._lock:
             workers = list(self._workers)
             self._workers.clear()
@@ -265,6 +268,8 @@ class WorkerPool:
         worker.kill()
         with self._lock:
             self._workers.discard(worker)
+        if self.closed:  # shutting down: nothing to replace it for
+            return worker
         self.restarts += 1
         log.warning("worker replaced: %s", reason)
         if self.on_restart is not None:
@@ -302,6 +307,8 @@ class WorkerPool:
             worker = await self._idle.get()
         finally:
             self.waiting -= 1
+        if worker is None:
+            raise PoolClosedError("the worker pool shut down while this job was waiting")
         self.busy += 1
         assert self._executor is not None
         fut = self._loop.run_in_executor(self._executor, self._run_on, worker, fn, args)
@@ -311,6 +318,8 @@ class WorkerPool:
         self.busy -= 1
         if self.closed:
             worker.stop(0.1)
+            if self._idle is not None and self.waiting:
+                self._idle.put_nowait(None)
         elif self._idle is not None:
             self._idle.put_nowait(worker)
 

@@ -193,3 +193,32 @@ def test_closed_pool_refuses_jobs() -> None:
         assert not pool.ready
 
     asyncio.run(main())
+
+
+def test_close_fails_waiting_jobs_instead_of_hanging() -> None:
+    async def main() -> None:
+        pool = WorkerPool(1, queue_size=4, job_timeout=20)
+        await pool.start()
+        running = asyncio.create_task(pool.run(pid_after, 0.5))
+        while pool.busy == 0:
+            await asyncio.sleep(0.01)
+        waiting = asyncio.create_task(pool.run(add, 1, 1))
+        while pool.waiting == 0:
+            await asyncio.sleep(0.01)
+        await pool.close()
+        with pytest.raises(PoolClosedError, match="shut down while this job was waiting"):
+            await waiting
+        # The running job either finished inside the stop grace period or lost its
+        # worker; what matters is that it answers instead of hanging.
+        (outcome,) = await asyncio.gather(running, return_exceptions=True)
+        assert isinstance(outcome, int | WorkerCrashedError | PoolClosedError), outcome
+        assert pool.alive() == 0
+
+    asyncio.run(main())
+
+
+def test_spawn_context_works_too() -> None:
+    async def body(pool: WorkerPool) -> None:
+        assert await pool.run(add, 2, 2) == 4
+
+    run(body, context="spawn")

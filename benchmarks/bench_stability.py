@@ -1,0 +1,60 @@
+"""Stability benchmark (SPEC §5, issue #3 part 2): which pruning variant keeps its endpoints.
+
+On kimia216 and kimia99, every perturbation of ``skelprune.perturb.PERTURBATIONS``: share
+of shapes whose endpoint count is unchanged, for ``coarse=None``, ``coarse="dce"``,
+``method="dce"`` and the ``skeletonize`` + branch-cut baseline; the noisy rectangles of
+the paper's Table 2; median RER and ms a shape. The computation lives in
+``skelprune.eval_stability`` (``skelprune eval`` reports the same numbers).
+
+``python -m benchmarks stability`` runs everything (2 worker processes) and rewrites
+``docs/stability.md``; ``python -m benchmarks.bench_stability --quick`` runs 20 shapes a
+dataset and 3 rectangles a noise kind and only prints.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from skelprune.eval_report import (
+    agreement_table,
+    clean_table,
+    rectangle_table,
+    stability_markdown,
+    targets_table,
+)
+from skelprune.eval_stability import load_dataset, run_stability
+
+from .common import DATA
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+COMMAND = "python -m benchmarks stability"
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.bench_stability")
+    parser.add_argument("--quick", action="store_true",
+                        help="20 shapes a dataset, 3 rectangles a kind; print only")
+    parser.add_argument("--limit", type=int, default=None, help="shapes per dataset")
+    parser.add_argument("--workers", type=int, default=2)
+    args = parser.parse_args(argv or [])
+    limit = 20 if args.quick and args.limit is None else args.limit
+    sets = {name: load_dataset(DATA / name, limit) for name in ("kimia216", "kimia99")}
+    run = run_stability(sets, rect_seeds=3 if args.quick else 10, workers=args.workers)
+    print(targets_table(run))
+    for d in run.datasets:
+        print(f"\nendpoint agreement, {d}\n")
+        print(agreement_table(run, d))
+    print("\nnoisy rectangles\n")
+    print(rectangle_table(run))
+    print()
+    print(clean_table(run))
+    print(f"\n{run.seconds:.0f} s")
+    if not args.quick and args.limit is None:
+        (DOCS / "stability.md").write_text(stability_markdown(run, COMMAND))
+        print(f"wrote {DOCS / 'stability.md'}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

@@ -72,10 +72,26 @@ apt_proxy() {
 }
 
 # --- base image --------------------------------------------------------------------------
+# Remove a (possibly half-made) root filesystem: unmount whatever an interrupted debootstrap
+# left mounted inside it (proc, sys, ...) and never cross into another file system.
+remove_rootfs() {
+    local dir=$1 mnt
+    [[ -e $dir ]] || return 0
+    findmnt -rn -o TARGET 2>/dev/null | grep -F "$dir/" | sort -r | while read -r mnt; do
+        umount -l "$mnt" || true
+    done
+    rm -rf --one-file-system "${dir:?}"
+}
+
 make_base() {
     local tarball=$BASE_CACHE/$BASE_RECIPE.tar
+    # one base build at a time (parallel CI jobs on one machine share the cache)
+    mkdir -p "$BASE_CACHE"
+    exec 9>"$BASE_CACHE/.lock"
+    flock -w 900 9 || die "timed out waiting for $BASE_CACHE/.lock"
     if "${PODMAN[@]}" image exists "$BASE_IMAGE"; then
         log "base image $BASE_IMAGE present"
+        exec 9>&-
         return
     fi
     if [[ ! -s $tarball ]]; then
@@ -83,8 +99,7 @@ make_base() {
         mirror=$(debian_mirror)
         proxy=$(apt_proxy)
         rootfs=$BASE_CACHE/rootfs.tmp
-        mkdir -p "$BASE_CACHE"
-        rm -rf "$rootfs"
+        remove_rootfs "$rootfs"
         log "debootstrap bookworm (minbase + python3, python3-venv) from $mirror"
         http_proxy=${proxy:-${http_proxy:-}} debootstrap --variant=minbase \
             --include=python3,python3-venv,ca-certificates \
@@ -100,7 +115,7 @@ make_base() {
             || die "base root filesystem has no working python3 venv"
         tar --numeric-owner -C "$rootfs" -cf "$tarball.tmp" .
         mv "$tarball.tmp" "$tarball"
-        rm -rf "$rootfs"
+        remove_rootfs "$rootfs"
     else
         log "using cached base root filesystem $tarball"
     fi
@@ -110,6 +125,7 @@ make_base() {
         --change 'ENV LANG=C.UTF-8' \
         --change 'CMD ["/usr/bin/python3"]' \
         "$tarball" "$BASE_IMAGE" >/dev/null
+    exec 9>&-
 }
 
 # --- pip settings passed into the build --------------------------------------------------

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import Callable
 from typing import Annotated, Any
 
@@ -32,6 +33,7 @@ PRODUCES: dict[str, Output] = {
 }
 JSON_TYPES = ("application/json", "application/geo+json")
 POLYGON_ONLY = ("pixel_size", "longest_side", "repair")
+BIG_JSON = 256 * 1024  # bytes of JSON above which validation moves to a thread
 
 
 def negotiate(accept: str | None) -> Output:
@@ -108,6 +110,17 @@ def _options(query: PruneQuery, body: PolygonJob | None, polygon: bool) -> dict[
     return opts
 
 
+def _parse_polygon(body: bytes) -> tuple[PolygonJob | None, dict[str, Any]]:
+    """Validate a JSON body: (envelope with options or None, GeoJSON as plain data)."""
+    try:
+        parsed = polygon_request_adapter.validate_json(body)
+    except ValidationError as exc:
+        raise _validation(exc.errors(include_url=False), ("body",)) from None
+    envelope = parsed if isinstance(parsed, PolygonJob) else None
+    shape = parsed.geojson if envelope is not None else parsed
+    return envelope, shape.model_dump(mode="json", exclude_none=True)
+
+
 async def _png_from_multipart(request: Request) -> bytes:
     async with request.form(max_files=1, max_fields=16) as form:
         upload = form.get("file")
@@ -155,7 +168,6 @@ async def prune(
     output = negotiate(request.headers.get("accept"))
     ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
     body = await request.body()  # size-limited by BodyLimitMiddleware
-    envelope: PolygonJob | None = None
     if ctype in ("image/png", "multipart/form-data"):
         png = body if ctype == "image/png" else await _png_from_multipart(request)
         width, height = png_size(png)
@@ -164,15 +176,14 @@ async def prune(
                 f"image has {width * height} pixels ({width}×{height}), "
                 f"the limit is {settings.max_pixels}"
             )
-        geojson = None
+        geojson, envelope = None, None
     elif ctype in JSON_TYPES:
-        try:
-            parsed = polygon_request_adapter.validate_json(body)
-        except ValidationError as exc:
-            raise _validation(exc.errors(include_url=False), ("body",)) from None
-        if isinstance(parsed, PolygonJob):
-            envelope, parsed = parsed, parsed.geojson
-        geojson = parsed.model_dump(mode="json", exclude_none=True)
+        # A big polygon takes a while to validate: off the event loop, so that other
+        # requests (health checks included) keep being served meanwhile.
+        if len(body) > BIG_JSON:
+            envelope, geojson = await asyncio.to_thread(_parse_polygon, body)
+        else:
+            envelope, geojson = _parse_polygon(body)
         png = None
     else:
         shown = ctype or "none"

@@ -28,7 +28,7 @@ DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 BIRD = (DATA / "kimia216" / "bird-10.png").read_bytes()
 RECT = [[0.0, 0.0], [40.0, 0.0], [40.0, 20.0], [0.0, 20.0], [0.0, 0.0]]
 HOLE = [[10.0, 5.0], [10.0, 15.0], [30.0, 15.0], [30.0, 5.0], [10.0, 5.0]]
-LIMITS = {"max_pixels": 1_000_000, "max_body_bytes": 200_000, "max_vertices": 2000}
+LIMITS = {"max_pixels": 1_000_000, "max_body_bytes": 400_000, "max_vertices": 2000}
 
 
 @pytest.fixture(scope="module")
@@ -246,7 +246,7 @@ def _header_only_png(width: int, height: int) -> bytes:
         ({"content": BIRD, "params": {"betta": "9"}}, 422, "betta"),
         ({"content": BIRD, "params": {"pixel_size": "2"}}, 422, "only apply to polygon"),
         ({"content": BIRD, "headers": {"accept": "text/html"}}, 406, "text/html"),
-        ({"content": b"x" * 300_000}, 413, "exceeds the limit of 200000 bytes"),
+        ({"content": b"x" * 500_000}, 413, "exceeds the limit of 400000 bytes"),
     ],
 )
 def test_png_errors(client: TestClient, kwargs: dict, status: int, fragment: str) -> None:
@@ -257,11 +257,11 @@ def test_png_errors(client: TestClient, kwargs: dict, status: int, fragment: str
 
 def test_chunked_body_over_the_limit(client: TestClient) -> None:
     def chunks() -> Iterator[bytes]:
-        for _ in range(30):
+        for _ in range(50):
             yield b"\x00" * 10_000
 
     resp = client.post("/v1/prune", content=chunks(), headers={"content-type": "image/png"})
-    assert_problem(resp, 413, "exceeds the limit of 200000 bytes")
+    assert_problem(resp, 413, "exceeds the limit of 400000 bytes")
 
 
 @pytest.mark.parametrize(
@@ -356,3 +356,17 @@ def test_malformed_multipart_is_a_400_problem(client: TestClient) -> None:
 def test_errors_are_problems_whatever_the_accept_header(client: TestClient) -> None:
     resp = post_png(client, b"\x89PNG\r\n\x1a\n", accept="image/png")
     assert_problem(resp, 400, "truncated PNG")
+
+
+def test_big_polygon_body(client: TestClient) -> None:
+    """A polygon large enough to be validated off the event loop (> 256 KiB of JSON)."""
+    t = np.linspace(0, 2 * np.pi, 1999, endpoint=False)
+    ring = [[float(100 * np.cos(a)) + 0.123456789, float(50 * np.sin(a)) + 0.123456789]
+            for a in t]
+    body = json.dumps({"geojson": {"type": "Polygon", "coordinates": [[*ring, ring[0]]]},
+                       "longest_side": 64, "curve": False}, indent=8)
+    assert 256 * 1024 < len(body) < 400_000
+    resp = client.post("/v1/prune", content=body, headers={"content-type": "application/json"})
+    assert resp.status_code == 200, resp.text
+    doc = resp.json()
+    assert doc["width"] == 68 and len(doc["components"][0]["skeleton"]["endpoints"]) >= 2

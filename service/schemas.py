@@ -46,6 +46,11 @@ class PruneQuery(BaseModel):
         None, description="Coarse DCE stage before Bayesian pruning, or `none`. "
         "Default: the library's default.",
     )
+    dce_threshold: float | None = Field(
+        None, ge=0, allow_inf_nan=False,
+        description="For `method=dce`: the DCE stop threshold on relevance (scale-free). "
+        "Default: the library's (0.01).",
+    )
     curve: bool | None = Field(None, description="Include the pruning curve. Default true.")
     overlay: bool | None = Field(
         None, description="Add the overlay image as base64 PNG (`overlay_png`). Default false."
@@ -128,6 +133,7 @@ class PolygonJob(BaseModel):
     beta: FiniteFloat | None = Field(None, gt=0)
     method: Literal["bayesian", "dce"] | None = None
     coarse: Literal["dce"] | None = None
+    dce_threshold: FiniteFloat | None = Field(None, ge=0)
     curve: bool | None = None
     overlay: bool | None = None
     pixel_size: FiniteFloat | None = Field(None, gt=0)

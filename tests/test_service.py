@@ -210,6 +210,18 @@ def test_beta_and_coarse_none(client: TestClient) -> None:
 
 
 @pytest.mark.parametrize(
+    "opts",
+    [{"method": "dce"}, {"method": "dce", "dce_threshold": 0.05}, {"coarse": "dce"}],
+)
+def test_dce_method_and_coarse_stage(client: TestClient, opts: dict) -> None:
+    doc = post_png(client, BIRD, {k: str(v) for k, v in opts.items()}).json()
+    PruneDocument.model_validate(doc)
+    assert doc["method"] == opts.get("method", "bayesian")
+    assert doc["coarse"] == opts.get("coarse")
+    assert doc == library_document(BIRD, **opts)
+
+
+@pytest.mark.parametrize(
     ("accept", "expected"),
     [
         ("*/*", "application/json"),

@@ -217,6 +217,7 @@ async def prune(
 
 @router.get(
     "/healthz", response_model=Health, summary="Liveness: the process answers", tags=["ops"],
+    responses={200: {"content": {"application/json": {"example": {"status": "ok"}}}}},
 )
 async def healthz() -> Health:
     return Health(status="ok")
@@ -226,8 +227,12 @@ async def healthz() -> Health:
     "/readyz",
     response_model=Readiness,
     summary="Readiness: worker pool up and the queue not full",
-    responses={503: examples.problem_response(503, "queue-full", "Service busy",
-                                              "the queue is full (16 jobs waiting)", "/readyz")},
+    responses={
+        200: {"content": {"application/json": {"example": {
+            "status": "ready", "workers": 4, "busy": 1, "queued": 0, "queue_size": 16}}}},
+        503: examples.problem_response(503, "queue-full", "Service busy",
+                                       "the queue is full (16 jobs waiting)", "/readyz"),
+    },
     tags=["ops"],
 )
 async def readyz(request: Request) -> Readiness:

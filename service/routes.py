@@ -212,7 +212,8 @@ async def prune(
     )
     result = await pool.run(fn, job)
     request.app.state.metrics.prune_seconds.observe(result.prune_seconds)
-    return Response(result.body, media_type=result.media_type)
+    # The same URL answers in three formats: caches must key on Accept.
+    return Response(result.body, media_type=result.media_type, headers={"Vary": "Accept"})
 
 
 @router.get(

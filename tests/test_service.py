@@ -234,6 +234,7 @@ def test_dce_method_and_coarse_stage(client: TestClient, opts: dict) -> None:
 def test_accept_negotiation(client: TestClient, accept: str, expected: str) -> None:
     resp = post_png(client, BIRD, accept=accept)
     assert resp.status_code == 200 and resp.headers["content-type"] == expected
+    assert resp.headers["vary"] == "Accept"
 
 
 # ----------------------------------------------------------------------- errors

@@ -179,11 +179,17 @@ def _ordered_thinning(fg, r2, anchor, simple) -> None:
 @njit(cache=True)
 def _paint(cover, rows, cols, r2s, delta: int) -> None:
     for k in range(rows.size):
-        v = r2s[k]
-        h = isqrt(v - 1)
-        for dy in range(-h, h + 1):
-            w = disk_half_width(v, dy)
-            cover[rows[k] + dy, cols[k] - w : cols[k] + w + 1] += delta
+        _paint_one(cover, rows[k], cols[k], r2s[k], delta)
+
+
+@njit(cache=True, inline="always")
+def _paint_one(cover, r, c, v, delta) -> None:
+    h = isqrt(v - 1)
+    for dy in range(-h, h + 1):
+        w = disk_half_width(v, dy)
+        row = cover[r + dy]
+        for x in range(c - w, c + w + 1):
+            row[x] += delta
 
 
 @njit(cache=True)
@@ -193,10 +199,24 @@ def _loss(cover, r, c, v) -> int:
     h = isqrt(v - 1)
     for dy in range(-h, h + 1):
         w = disk_half_width(v, dy)
+        row = cover[r + dy]
         for x in range(c - w, c + w + 1):
-            if cover[r + dy, x] == 1:
+            if row[x] == 1:
                 n += 1
     return n
+
+
+@njit(cache=True)
+def _covered_twice(cover, r, c, v) -> bool:
+    """Whether every pixel of the disk at (r, c) is covered at least twice."""
+    h = isqrt(v - 1)
+    for dy in range(-h, h + 1):
+        w = disk_half_width(v, dy)
+        row = cover[r + dy]
+        for x in range(c - w, c + w + 1):
+            if row[x] < 2:
+                return False
+    return True
 
 
 @njit(cache=True)
@@ -214,18 +234,9 @@ def _drop_redundant_anchors(anchor, r2, rows, cols) -> None:
     _paint(cover, rows, cols, r2s, 1)
     for k in range(rows.size):
         r, c, v = rows[k], cols[k], r2s[k]
-        redundant = True
-        h = isqrt(v - 1)
-        for dy in range(-h, h + 1):
-            w = disk_half_width(v, dy)
-            if cover[r + dy, c - w : c + w + 1].min() < 2:
-                redundant = False
-                break
-        if redundant:
+        if _covered_twice(cover, r, c, v):
             anchor[r, c] = False
-            for dy in range(-h, h + 1):
-                w = disk_half_width(v, dy)
-                cover[r + dy, c - w : c + w + 1] -= 1
+            _paint_one(cover, r, c, v, -1)
 
 
 @njit(cache=True)
@@ -273,10 +284,7 @@ def _thin(fg, r2, rows, cols, simple, degree) -> None:
             inheap[k] = True
             continue
         fg[r, c] = False
-        h = isqrt(v - 1)
-        for dy in range(-h, h + 1):
-            w = disk_half_width(v, dy)
-            cover[r + dy, c - w : c + w + 1] -= 1
+        _paint_one(cover, r, c, v, -1)
         for i in range(8):
             rr, cc = r + NEIGHBOURS[i, 0], c + NEIGHBOURS[i, 1]
             q = rank[rr, cc]

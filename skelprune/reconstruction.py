@@ -25,7 +25,9 @@ def _paint_bool(out, rows, cols, r2):
         h = isqrt(v - 1)
         for dy in range(-h, h + 1):
             w = disk_half_width(v, dy)
-            out[rows[k] + dy, cols[k] - w : cols[k] + w + 1] = True
+            row = out[rows[k] + dy]
+            for q in range(cols[k] - w, cols[k] + w + 1):
+                row[q] = True
 
 
 def reconstruction(
@@ -59,6 +61,10 @@ def reconstruction_error(
     return float((mask & ~rec).sum()) / area
 
 
+# Kernels index a 1-D view of each disk row: measured faster than both slice updates
+# and 2-D indexing (no per-row slice objects, no 2-D address arithmetic).
+
+
 @njit(cache=True)
 def _paint_labels(c, s1, s2, rows, cols, r2, lab):
     for k in range(rows.size):
@@ -69,29 +75,21 @@ def _paint_labels(c, s1, s2, rows, cols, r2, lab):
         for dy in range(-h, h + 1):
             w = disk_half_width(v, dy)
             r = rows[k] + dy
-            a, b = cols[k] - w, cols[k] + w + 1
-            c[r, a:b] += 1
-            s1[r, a:b] += lb
-            s2[r, a:b] += lb2
-
-
-@njit(cache=True, inline="always")
-def _owner(c, s1, s2, r, q):
-    """Label of the single owner covering pixel (r, q), or -1.
-
-    All covering labels are equal iff ``c·s2 == s1²`` (Cauchy–Schwarz), a test
-    without division; labels and counts stay far below 2**31, so no overflow.
-    """
-    n = c[r, q]
-    a = s1[r, q]
-    if n == 0 or n * s2[r, q] != a * a:
-        return -1
-    return a // n
+            cr, s1r, s2r = c[r], s1[r], s2[r]
+            for q in range(cols[k] - w, cols[k] + w + 1):
+                cr[q] += 1
+                s1r[q] += lb
+                s2r[q] += lb2
 
 
 @njit(cache=True)
 def _remove(c, s1, s2, stamp, tick, excl, pts, rows, cols, r2, lab):
-    """Remove the disks of ``pts``; return the pixels left uncovered."""
+    """Remove the disks of ``pts``; return the pixels left uncovered.
+
+    A pixel's remaining owners are all one label ``b`` iff ``c·s2 == s1²``
+    (Cauchy–Schwarz), a test without division; labels and counts stay far below
+    2**31, so the products cannot overflow.
+    """
     for k in pts:
         lb = lab[k]
         lb2 = lb * lb
@@ -100,10 +98,11 @@ def _remove(c, s1, s2, stamp, tick, excl, pts, rows, cols, r2, lab):
         for dy in range(-h, h + 1):
             w = disk_half_width(v, dy)
             r = rows[k] + dy
-            a, b = cols[k] - w, cols[k] + w + 1
-            c[r, a:b] -= 1
-            s1[r, a:b] -= lb
-            s2[r, a:b] -= lb2
+            cr, s1r, s2r = c[r], s1[r], s2[r]
+            for q in range(cols[k] - w, cols[k] + w + 1):
+                cr[q] -= 1
+                s1r[q] -= lb
+                s2r[q] -= lb2
     lost = 0
     for k in pts:
         v = r2[k]
@@ -111,16 +110,17 @@ def _remove(c, s1, s2, stamp, tick, excl, pts, rows, cols, r2, lab):
         for dy in range(-h, h + 1):
             w = disk_half_width(v, dy)
             r = rows[k] + dy
+            cr, s1r, s2r, st = c[r], s1[r], s2[r], stamp[r]
             for q in range(cols[k] - w, cols[k] + w + 1):
                 # The cheap owner test first: most pixels keep several owners.
-                n = c[r, q]
-                x = s1[r, q]
+                n = cr[q]
+                x = s1r[q]
                 if n == 0:
-                    if stamp[r, q] != tick:
-                        stamp[r, q] = tick
+                    if st[q] != tick:
+                        st[q] = tick
                         lost += 1
-                elif n * s2[r, q] == x * x and stamp[r, q] != tick:
-                    stamp[r, q] = tick
+                elif n * s2r[q] == x * x and st[q] != tick:
+                    st[q] = tick
                     excl[x // n] += 1
     return lost
 
@@ -137,9 +137,10 @@ def _relabel(c, s1, s2, stamp, tick, excl, pts, rows, cols, r2, lab, new):
         for dy in range(-h, h + 1):
             w = disk_half_width(v, dy)
             r = rows[k] + dy
-            a, b = cols[k] - w, cols[k] + w + 1
-            s1[r, a:b] += d1
-            s2[r, a:b] += d2
+            s1r, s2r = s1[r], s2[r]
+            for q in range(cols[k] - w, cols[k] + w + 1):
+                s1r[q] += d1
+                s2r[q] += d2
         lab[k] = new
     nn = new * new
     for k in pts:
@@ -148,10 +149,11 @@ def _relabel(c, s1, s2, stamp, tick, excl, pts, rows, cols, r2, lab, new):
         for dy in range(-h, h + 1):
             w = disk_half_width(v, dy)
             r = rows[k] + dy
+            cr, s1r, s2r, st = c[r], s1[r], s2[r], stamp[r]
             for q in range(cols[k] - w, cols[k] + w + 1):
-                n = c[r, q]
-                if s1[r, q] == n * new and s2[r, q] == n * nn and stamp[r, q] != tick:
-                    stamp[r, q] = tick
+                n = cr[q]
+                if s1r[q] == n * new and s2r[q] == n * nn and st[q] != tick:
+                    st[q] = tick
                     excl[new] += 1
 
 

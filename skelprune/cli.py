@@ -1,8 +1,11 @@
-"""Command line: ``skelprune prune FILE.png [--beta B] [--overlay OUT.png]``.
+"""Command line: ``skelprune prune FILE.png [--beta B] [--overlay OUT.png]``, ``skelprune eval``.
 
 One file prints the output document (SPEC §3) as JSON. Several files, or a folder,
 are pruned in a pool of worker processes with a progress bar on stderr and print one
 JSON line per file: ``{"file": ..., "result": {...}}`` or ``{"file": ..., "error": ...}``.
+
+``skelprune eval --out docs`` regenerates the evaluation report, ``stability.md`` and the
+figures from the benchmark data (``skelprune.evaluation``; needs the ``bench`` extra).
 """
 
 from __future__ import annotations
@@ -87,6 +90,32 @@ def prune_command(
             sys.stdout.write(json.dumps(line) + "\n")
     if failed:
         raise typer.Exit(1)
+
+
+@app.command("eval")
+def eval_command(
+    out: Annotated[Path, typer.Option(help="Folder for evaluation.md, stability.md "
+                                      "and figures/.")] = Path("docs"),
+    data: Annotated[Path | None, typer.Option(help="Folder with kimia216/ and kimia99/ "
+                                              "(default: $SKELPRUNE_DATA or "
+                                              "../shared/data).")] = None,
+    workers: Annotated[int, typer.Option(help="Processes of the stability run.")] = 2,
+    limit: Annotated[int | None, typer.Option(hidden=True,
+                                              help="First N shapes a dataset.")] = None,
+    rect_seeds: Annotated[int, typer.Option(hidden=True,
+                                            help="Noisy rectangles a noise kind.")] = 10,
+) -> None:
+    """Regenerate the evaluation report and figures (needs the bench extra: matplotlib)."""
+    from .evaluation import run_evaluation
+
+    try:
+        written = run_evaluation(out, data=data, limit=limit, workers=workers,
+                                 rect_seeds=rect_seeds)
+    except (FileNotFoundError, ImportError) as exc:
+        typer.echo(f"error: {exc}", err=True)
+        raise typer.Exit(1) from None
+    for path in written.values():
+        typer.echo(str(path))
 
 
 @app.command("version")

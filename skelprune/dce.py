@@ -223,6 +223,7 @@ def boundary_partition(
     mask: np.ndarray,
     n_vertices: int | None = None,
     threshold: float | None = None,
+    pixel_threshold: float | None = None,
 ) -> BoundaryPartition:
     """Cut every boundary of a shape at the convex vertices of its evolved polygon.
 
@@ -237,6 +238,11 @@ def boundary_partition(
         The shape (one 8-connected component; several are handled the same way).
     n_vertices, threshold
         DCE stop rules, per boundary polygon.
+    pixel_threshold : float, optional
+        Instead of ``threshold``: a stop on relevance in pixels, ``β·l1·l2/(l1 + l2)``
+        with the edge lengths in pixels (the threshold of each polygon is this over its
+        perimeter). Digitisation noise has a relevance of about a pixel whatever the
+        size of the shape, so this removes noise vertices at every scale.
 
     Returns
     -------
@@ -253,6 +259,9 @@ def boundary_partition(
     pts, seg, pid, verts, convex = [], [], [], [], []
     next_id = 0
     for k, (poly, bg) in enumerate(_boundary_polygons(mask)):
+        if pixel_threshold is not None:
+            perimeter = float(np.hypot(*(np.roll(poly, -1, axis=0) - poly).T).sum())
+            threshold = pixel_threshold / max(perimeter, 1.0)
         idx = evolve_polygon(poly, n_vertices=n_vertices, threshold=threshold)
         v = poly[idx]
         d_in = v - np.roll(v, 1, axis=0)

@@ -113,7 +113,7 @@ class ComponentResult:
                 for e, p in ((0, br.points[0]), (1, br.points[-1])):
                     if br.node[e] is not None:
                         ends.append(junction_node[br.node[e]])
-                    elif e == 1 and len(br.points) == 1:
+                    elif e == 1 and len(br.points) == 1 and br.node[0] is None:
                         ends.append(ends[0])  # a single point: one node
                     else:
                         ends.append(new_node(p, "endpoint"))

@@ -78,6 +78,16 @@ def test_disks_of_all_shape_pixels_reconstruct_the_shape():
 
 # -- results ----------------------------------------------------------------------------
 
+def test_one_pixel_end_branches_keep_their_endpoint_nodes():
+    m = np.zeros((12, 12), bool)
+    m[5, 2:10] = True  # a plus: four one-pixel arms around a junction
+    m[2:10, 5] = True
+    comp = skelprune.prune(m).components[0]
+    sk = comp.to_dict()["skeleton"]
+    assert len(sk["endpoints"]) == comp.graph.n_endpoints() >= 2
+    assert all(b["source"] != b["target"] for b in sk["branches"])
+
+
 def test_rectangle_has_four_endpoints_and_small_error():
     m = np.zeros((40, 90), bool)
     m[5:35, 5:85] = True
@@ -189,6 +199,8 @@ def test_pruned_skeleton_properties(mask):
     assert topology(skel) == topology(mask)
     # the reported RER is what the returned points and radii reconstruct
     doc = res.to_dict(curve=False)
+    for comp, cdoc in zip(res.components, doc["components"], strict=True):
+        assert len(cdoc["skeleton"]["endpoints"]) == comp.graph.n_endpoints()
     for cdoc in doc["components"]:
         pts = [p for b in cdoc["skeleton"]["branches"] for p in b["points"]]
         pts += [p for n in cdoc["skeleton"]["nodes"] for p in n["points"]]

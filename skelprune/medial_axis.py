@@ -297,6 +297,51 @@ def _thin(fg, r2, rows, cols, simple, degree) -> None:
                 inheap[q] = True
 
 
+@njit(cache=True)
+def _extend_ends(fg, r2, degree) -> None:
+    """Extend every endpoint down the distance map until it reaches the boundary.
+
+    SPEC §2.1: end branches of ``M`` reach the boundary. A discrete centre of maximal
+    disk can sit a few pixels inside (a rounded end has several); its branch then
+    stops short. Each step goes to the neighbour of least ``r2`` (axial first on
+    ties) that touches no other axis pixel, so topology and thinness are kept and
+    reconstruction can only grow. Axes without a junction (a single path) are left
+    alone: their ends are the shape's own, not branches to prune.
+    """
+    rows, cols = np.nonzero(fg)
+    has_junction = False
+    for k in range(rows.size):
+        if degree[neighbourhood_code(fg, rows[k], cols[k])] >= 3:
+            has_junction = True
+            break
+    if not has_junction:
+        return
+    for k in range(rows.size):
+        r, c = rows[k], cols[k]
+        if degree[neighbourhood_code(fg, r, c)] != 1:
+            continue
+        while r2[r, c] > 2:
+            best_r, best_c, best_v = -1, -1, r2[r, c]
+            for i in (1, 3, 5, 7, 0, 2, 4, 6):  # axial neighbours first
+                rr, cc = r + NEIGHBOURS[i, 0], c + NEIGHBOURS[i, 1]
+                v = r2[rr, cc]
+                if fg[rr, cc] or v == 0 or v >= best_v:
+                    continue
+                # the new pixel may touch the current end only
+                alone = True
+                for j in range(8):
+                    qr, qc = rr + NEIGHBOURS[j, 0], cc + NEIGHBOURS[j, 1]
+                    if (qr != r or qc != c) and fg[qr, qc]:
+                        alone = False
+                        break
+                if alone:
+                    best_r, best_c, best_v = rr, cc, v
+            if best_r < 0:
+                break
+            fg[best_r, best_c] = True
+            r, c = best_r, best_c
+
+
 @dataclass(frozen=True)
 class MedialAxis:
     """Medial axis of one shape, in the frame of the padded array it was computed in.
@@ -354,5 +399,6 @@ def medial_axis(padded: np.ndarray, r2: np.ndarray | None = None) -> MedialAxis:
     rows, cols = np.nonzero(fg)
     order = np.lexsort((cols, rows, r2[rows, cols]))  # smallest radius first
     _thin(fg, r2, rows[order].astype(np.int64), cols[order].astype(np.int64), SIMPLE, DEGREE)
+    _extend_ends(fg, r2, DEGREE)
     rows, cols = np.nonzero(fg)
     return MedialAxis(rows.astype(np.int64), cols.astype(np.int64), r2[rows, cols])

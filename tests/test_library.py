@@ -69,6 +69,21 @@ def test_medial_axis_is_thin_homotopic_and_exact_radii(make):
             assert ma.r2[k] == d2
 
 
+@pytest.mark.parametrize("name", ["kimia216", "kimia99"])
+def test_medial_axis_end_branches_reach_the_boundary(name):
+    """SPEC §2.1: every end branch of M ends within a pixel or two of the boundary."""
+    from skelprune.graph import BranchGraph
+
+    tips = []
+    for path in dataset(name)[::3]:
+        for crop, _ in components(load(path)):
+            ma = medial_axis(crop)
+            g = BranchGraph(ma.rows, ma.cols, crop.shape)
+            tips += [int(ma.r2[g.endpoint(b)]) for b in g.end_branches()]
+    assert len(tips) > 300
+    assert max(tips) <= 2  # squared distance to the background: 1 or 2
+
+
 def test_disks_of_all_shape_pixels_reconstruct_the_shape():
     crop = np.pad(blobs(3, holes=2), 1)
     r2 = squared_distance(crop)

@@ -31,10 +31,10 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
-from scipy.spatial import cKDTree
 from skimage.measure import find_contours
 
 __all__ = [
+    "COARSE_PIXEL_THRESHOLD",
     "COARSE_THRESHOLD",
     "COARSE_VERTICES",
     "DCE_THRESHOLD",
@@ -57,6 +57,10 @@ DCE_VERTICES: int = 16
 #: the authors' 50 vertices, the floor only deletes nearly collinear vertices.
 COARSE_THRESHOLD: float = 0.003
 COARSE_VERTICES: int = 50
+#: The coarse stage of ``prune(coarse="dce")``: DCE stops when the least relevance,
+#: measured in pixels (``β·l1·l2/(l1 + l2)``, lengths in pixels), exceeds this. Boundary
+#: digitisation noise stays below it at every scale; see docs/stability-findings.md.
+COARSE_PIXEL_THRESHOLD: float = 3.0
 #: A boundary point generates skeleton point ``s`` iff its distance to ``s`` is at most
 #: ``r(s) + TOUCH_TOLERANCE`` pixels (about one pixel of digitisation slack).
 TOUCH_TOLERANCE: float = 1.0
@@ -330,21 +334,52 @@ def generated_in_several_segments(
     >>> generated_in_several_segments(np.array([[15, 25], [6, 25]]), np.array([121, 4]), part)
     array([ True, False])
     """
-    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    pts = np.asarray(points, dtype=np.int64).reshape(-1, 2)
     n = len(pts)
     if n == 0:
         return np.zeros(0, bool)
-    radius = np.sqrt(np.asarray(r2, dtype=np.float64).reshape(n)) + tolerance
-    tree = cKDTree(partition.points.astype(np.float64))
-    hits = tree.query_ball_point(pts, radius, return_sorted=False)
-    lengths = np.fromiter((len(h) for h in hits), np.int64, count=n)
-    out = np.zeros(n, bool)
-    nonempty = lengths > 0
-    if not nonempty.any():
-        return out
-    flat = partition.segment[np.concatenate([h for h in hits if h]).astype(np.int64)]
-    starts = np.concatenate(([0], np.cumsum(lengths[nonempty])[:-1]))
-    lo = np.minimum.reduceat(flat, starts)
-    hi = np.maximum.reduceat(flat, starts)
-    out[nonempty] = lo != hi
+    # Segment labels on a raster (a boundary pixel can border two segments: keep the
+    # smallest and largest label), then scan each disk's rim: no background pixel is
+    # nearer than r(s), so the generating points all lie in r <= d <= r + tolerance.
+    bp = partition.points
+    lo_r, lo_c = min(int(bp[:, 0].min()), int(pts[:, 0].min())), min(int(bp[:, 1].min()),
+                                                                      int(pts[:, 1].min()))
+    reach = int(np.ceil(np.sqrt(float(np.max(r2))) + tolerance)) + 1
+    origin = np.array([lo_r - reach, lo_c - reach])
+    shape = (int(max(bp[:, 0].max(), pts[:, 0].max())) - origin[0] + reach + 1,
+             int(max(bp[:, 1].max(), pts[:, 1].max())) - origin[1] + reach + 1)
+    seg_lo = np.full(shape, np.iinfo(np.int64).max, np.int64)
+    seg_hi = np.full(shape, -1, np.int64)
+    _label_raster(seg_lo, seg_hi, bp - origin, partition.segment.astype(np.int64))
+    return _rim_spans_segments(seg_lo, seg_hi, pts - origin,
+                               np.asarray(r2, np.int64).reshape(n), float(tolerance))
+
+
+@numba.njit(cache=True)
+def _label_raster(seg_lo, seg_hi, pts, seg):
+    for k in range(pts.shape[0]):
+        r, c = pts[k, 0], pts[k, 1]
+        seg_lo[r, c] = min(seg_lo[r, c], seg[k])
+        seg_hi[r, c] = max(seg_hi[r, c], seg[k])
+
+
+@numba.njit(cache=True)
+def _rim_spans_segments(seg_lo, seg_hi, pts, r2, tolerance):
+    out = np.zeros(pts.shape[0], np.bool_)
+    for k in range(pts.shape[0]):
+        outer = np.sqrt(r2[k]) + tolerance
+        o2 = outer * outer
+        reach = int(outer)
+        lo, hi = np.iinfo(np.int64).max, -1
+        for dy in range(-reach, reach + 1):
+            row_lo, row_hi = seg_lo[pts[k, 0] + dy], seg_hi[pts[k, 0] + dy]
+            for dx in range(-reach, reach + 1):
+                d2 = dy * dy + dx * dx
+                if d2 < r2[k] or d2 > o2:
+                    continue
+                q = pts[k, 1] + dx
+                if row_hi[q] >= 0:
+                    lo = min(lo, row_lo[q])
+                    hi = max(hi, row_hi[q])
+        out[k] = hi >= 0 and lo != hi
     return out

@@ -29,6 +29,7 @@ __all__ = [
     "choose_step",
     "normalisation",
     "objective",
+    "remove_unsupported",
 ]
 
 
@@ -227,6 +228,38 @@ def bayesian_sequence(
         seq.na.append(graph.na)
         seq.nd.append(graph.nd)
     return seq
+
+
+def remove_unsupported(graph: BranchGraph, supported: np.ndarray) -> list[int]:
+    """DCE pruning on the graph alone: remove, smallest endpoint (row, col) first,
+    every end branch none of whose points is supported, until each has one.
+
+    Used as the coarse stage, whose steps are not part of the Bayesian curve, so no
+    reconstruction is kept up to date. A branch's support only changes when it
+    absorbs another, so candidates wait in a heap and only merged branches are
+    looked at again.
+    """
+
+    def push(b: int) -> None:
+        if graph.is_end_branch(b) and not supported[graph.branches[b].points].any():
+            p = graph.endpoint(b)
+            heapq.heappush(heap, (int(graph.rows[p]), int(graph.cols[p]), b, p))
+
+    heap: list[tuple[int, int, int, int]] = []
+    for b in graph.end_branches():
+        push(b)
+    removed: list[int] = []
+    while heap:
+        _, _, b, p = heapq.heappop(heap)
+        # stale: removed, absorbed, or grown by a merge since it was pushed
+        if not graph.is_end_branch(b) or graph.endpoint(b) != p \
+                or supported[graph.branches[b].points].any():
+            continue
+        merged = graph.remove_end_branch(b)
+        removed.append(b)
+        if merged is not None:
+            push(merged[0])
+    return removed
 
 
 @njit(cache=True)

@@ -70,7 +70,8 @@ def test_fast_equals_naive(case):
 def test_fast_equals_naive_from_the_coarse_dce_skeleton(case):
     """``coarse="dce"``: the Bayesian stage, started from the DCE-pruned skeleton."""
     from skelprune.api import dce_support
-    from skelprune.dce import COARSE_THRESHOLD, COARSE_VERTICES
+    from skelprune.dce import COARSE_PIXEL_THRESHOLD
+    from skelprune.pruning import remove_unsupported
 
     steps = 0
     for crop, _ in components(make(case)):
@@ -79,15 +80,19 @@ def test_fast_equals_naive_from_the_coarse_dce_skeleton(case):
         norm = normalisation(graphs[0], ma.r2, 9.0)
         if norm.alpha is None:
             continue
-        keep = dce_support(crop, ma.rows, ma.cols, ma.r2, COARSE_VERTICES, COARSE_THRESHOLD)
-        coarse = bayesian_sequence(graphs[0], crop, ma.r2, norm.alpha, norm.lbar, supported=keep)
-        for b in coarse.removed:
+        keep = dce_support(crop, ma.rows, ma.cols, ma.r2, None, None,
+                           pixel_threshold=COARSE_PIXEL_THRESHOLD)
+        coarse = remove_unsupported(graphs[0], keep)
+        for b in coarse:
             graphs[1].remove_end_branch(b)
+        norm = normalisation(graphs[0], ma.r2, 9.0)
+        if norm.alpha is None:
+            continue
         fast = bayesian_sequence(graphs[0], crop, ma.r2, norm.alpha, norm.lbar)
         removed, lams = naive_sequence(graphs[1], crop, ma.r2, norm.alpha, norm.lbar)
         assert fast.removed == removed
         np.testing.assert_allclose(fast.objective, lams, rtol=0, atol=1e-9)
-        steps += len(removed) + len(coarse.removed)
+        steps += len(removed) + len(coarse)
     assert steps > 0
 
 

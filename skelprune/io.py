@@ -100,6 +100,10 @@ def _check_chunks(data: bytes) -> None:
         (crc,) = struct.unpack(">I", data[end - 4 : end])
         if zlib.crc32(data[pos + 4 : end - 4]) != crc:
             raise InvalidImageError(f"corrupt PNG: CRC mismatch in chunk {name!r} at byte {pos}")
+        if ctype == b"IHDR" and pos != 8:
+            # Pillow would decode with the last IHDR, after the size was checked on the
+            # first one: a second header could smuggle in any size.
+            raise InvalidImageError(f"corrupt PNG: a second IHDR chunk at byte {pos}")
         if ctype == b"IEND":
             return
         pos = end
@@ -223,5 +227,10 @@ def read_mask(
         )
     _check_chunks(data)
     im = _decode(data)
+    if im.size != (width, height):  # never decode something other than what was checked
+        raise InvalidImageError(
+            f"corrupt PNG: decoded size {im.size[0]}×{im.size[1]} differs from the "
+            f"IHDR size {width}×{height}"
+        )
     mask = _image_mask(im, depth)
     return np.ascontiguousarray(mask, dtype=bool)

@@ -71,8 +71,25 @@ def _geometries(obj: Any, where: str) -> Iterator[tuple[str, Mapping[str, Any]]]
             yield from _geometries(feature, f"{where}.features[{i}]")
     else:
         raise InvalidPolygonError(
-            f"{where}: type {kind!r} is not Polygon, MultiPolygon, Feature or FeatureCollection"
+            f"{where}: type {_show(kind)} is not Polygon, MultiPolygon, Feature or "
+            "FeatureCollection"
         )
+
+
+def _finite(v: int | float) -> bool:
+    """True for a number that converts to a finite float (a huge int overflows)."""
+    try:
+        return math.isfinite(v)
+    except OverflowError:
+        return False
+
+
+def _show(v: Any) -> str:
+    """A short repr for error messages (a huge int has no repr past 4300 digits)."""
+    if isinstance(v, int) and not isinstance(v, bool) and not _finite(v):
+        return f"{'-' if v < 0 else ''}<integer of {v.bit_length()} bits>"
+    text = repr(v)
+    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def _ring(ring: Any, where: str) -> np.ndarray:
@@ -87,8 +104,10 @@ def _ring(ring: Any, where: str) -> np.ndarray:
         if not isinstance(pos, list | tuple) or not 2 <= len(pos) <= 3:
             raise InvalidPolygonError(f"{where}[{i}]: a position must be [x, y] or [x, y, z]")
         for v in pos:
-            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-                raise InvalidPolygonError(f"{where}[{i}]: coordinate {v!r} is not a finite number")
+            if isinstance(v, bool) or not isinstance(v, int | float) or not _finite(v):
+                raise InvalidPolygonError(
+                    f"{where}[{i}]: coordinate {_show(v)} is not a finite number"
+                )
         out[i] = pos[0], pos[1]
     if not np.array_equal(out[0], out[-1]):
         raise InvalidPolygonError(
@@ -214,7 +233,11 @@ def rasterize(
     if pixel_size is None:
         side = DEFAULT_LONGEST_SIDE if longest_side is None else longest_side
         if isinstance(side, bool) or not isinstance(side, int) or side < 1:
-            raise InvalidOptionError(f"longest_side must be a positive integer, got {side!r}")
+            raise InvalidOptionError(f"longest_side must be a positive integer, got {_show(side)}")
+        if side > _MAX_SIDE:
+            raise ImageTooLargeError(
+                f"longest_side {_show(side)} is over the limit of {_MAX_SIDE} pixels"
+            )
         pixel_size = extent / side
     elif not (math.isfinite(pixel_size) and pixel_size > 0):
         raise InvalidOptionError(f"pixel_size must be a positive finite number, got {pixel_size}")

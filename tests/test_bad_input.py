@@ -97,6 +97,15 @@ def bad_depth_png() -> bytes:
             + chunk(b"IEND", b""))
 
 
+def second_ihdr_png() -> bytes:
+    """A small first IHDR (what the size check reads), a huge second one (what Pillow used)."""
+    small = chunk(b"IHDR", struct.pack(">IIBBBBB", 16, 12, 8, 0, 0, 0, 0))
+    big = chunk(b"IHDR", struct.pack(">IIBBBBB", 16, 100_000, 8, 0, 0, 0, 0))
+    raw = zlib.compress(b"\x00" * 17 * 100_000)
+    return (b"\x89PNG\r\n\x1a\n" + small + big + chunk(b"IDAT", raw)
+            + chunk(b"IEND", b""))
+
+
 def polygon(*rings: Any) -> dict[str, Any]:
     return {"type": "Polygon", "coordinates": list(rings)}
 
@@ -151,6 +160,7 @@ CASES = [
     Case("crc-corrupt", crc_corrupt_png(), "image/png", 400, ("CRC mismatch", "IHDR")),
     Case("bad-zlib", bad_zlib_png(), "image/png", 400, ("cannot decode PNG",)),
     Case("bad-bit-depth", bad_depth_png(), "image/png", 400, ("PNG",)),
+    Case("second-ihdr", second_ihdr_png(), "image/png", 400, ("second IHDR",)),
     Case("100000x100000-header", header_only_png(100_000, 100_000), "image/png", 413,
          ("10000000000 pixels", "100000×100000", "limit is 1000000")),
     Case("max-dimension-header", header_only_png(2**31 - 1, 1), "image/png", 413,

@@ -90,7 +90,6 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
     graph = BranchGraph(ma.rows, ma.cols, crop.shape)
     summary = GraphSummary.of(graph)
     norm = normalisation(graph, ma.r2, beta)
-    ma_rer = reconstruction_error(crop, ma.rows, ma.cols, ma.r2)
     before: list[int] = []
     if method == "dce":
         threshold = DCE_THRESHOLD if dce_threshold is None else dce_threshold
@@ -109,6 +108,9 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
                 norm = coarse_norm
         seq = bayesian_sequence(graph, crop, ma.r2, norm.alpha, norm.lbar)
         chosen = choose_step(seq.objective)
+    # A sequence that starts from M already knows Λ(D \ R(M)): no second painting.
+    ma_rer = (seq.lost[0] / seq.area if not before
+              else reconstruction_error(crop, ma.rows, ma.cols, ma.r2))
     final = _replay(ma.rows, ma.cols, crop.shape, before + seq.removed[:chosen])
     return ComponentResult(
         origin=origin, area=int(crop.sum()), r2=ma.r2, medial_axis=summary, graph=final,

@@ -119,6 +119,19 @@ def _anchors(r2: np.ndarray, need: np.ndarray, vectors: np.ndarray, kind: np.nda
     return anchor
 
 
+@njit(cache=True, inline="always")
+def _enqueue(item, nxt, head, tail, used, p, level):
+    """Append pixel ``p`` to the FIFO bucket ``level``; returns the next free slot."""
+    item[used] = p
+    nxt[used] = -1
+    if tail[level] < 0:
+        head[level] = used
+    else:
+        nxt[tail[level]] = used
+    tail[level] = used
+    return used + 1
+
+
 @njit(cache=True)
 def _ordered_thinning(fg, r2, anchor, simple) -> None:
     """Distance-ordered homotopic thinning in place: a bucket queue keyed by ``r2``.
@@ -139,14 +152,7 @@ def _ordered_thinning(fg, r2, anchor, simple) -> None:
     flat = r2.ravel()
     for p in range(n):
         if flat[p] > 0 and not anchor.ravel()[p]:
-            lvl = flat[p]
-            item[used] = p
-            if tail[lvl] < 0:
-                head[lvl] = used
-            else:
-                nxt[tail[lvl]] = used
-            tail[lvl] = used
-            used += 1
+            used = _enqueue(item, nxt, head, tail, used, p, flat[p])
             queued[p] = True
     for lvl in range(max_level + 1):
         while head[lvl] >= 0:
@@ -164,15 +170,7 @@ def _ordered_thinning(fg, r2, anchor, simple) -> None:
                 rr, cc = r + NEIGHBOURS[i, 0], c + NEIGHBOURS[i, 1]
                 q = rr * w + cc
                 if fg[rr, cc] and not queued[q] and not anchor[rr, cc]:
-                    ql = max(flat[q], lvl)
-                    item[used] = q
-                    nxt[used] = -1
-                    if tail[ql] < 0:
-                        head[ql] = used
-                    else:
-                        nxt[tail[ql]] = used
-                    tail[ql] = used
-                    used += 1
+                    used = _enqueue(item, nxt, head, tail, used, q, max(flat[q], lvl))
                     queued[q] = True
 
 

@@ -24,7 +24,7 @@ from scipy import ndimage
 
 from ._digital import NEIGHBOURS
 
-__all__ = ["SQRT2", "Branch", "BranchGraph", "step_counts"]
+__all__ = ["SQRT2", "Branch", "BranchGraph"]
 
 SQRT2 = math.sqrt(2.0)
 
@@ -154,15 +154,6 @@ def _trace(nbr, deg, rows, cols):
                     counts[b, 0] += 1
             prev = cur
     return pts[:used], starts[: nb + 1], att[:nb], counts
-
-
-def step_counts(rows: np.ndarray, cols: np.ndarray) -> tuple[int, int]:
-    """Axial and diagonal steps along a pixel path given in order."""
-    if rows.size < 2:
-        return 0, 0
-    diag = (np.diff(rows) != 0) & (np.diff(cols) != 0)
-    nd = int(diag.sum())
-    return int(rows.size - 1 - nd), nd
 
 
 @dataclass

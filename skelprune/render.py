@@ -50,7 +50,7 @@ def render_overlay(result: PruneResult) -> np.ndarray:
     img[mask & ~covered] = COLOURS["error"]
     img[rows, cols] = COLOURS["skeleton"]
     for comp in result.components:
-        doc_nodes = comp._node_table()[0]
+        doc_nodes = comp.skeleton_table()[0]
         for n in doc_nodes:
             if n["kind"] in ("endpoint", "junction"):
                 _mark(img, int(n["y"]), int(n["x"]), COLOURS[n["kind"]])

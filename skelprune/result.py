@@ -73,8 +73,9 @@ class ComponentResult:
         g = self.graph
         return g.rows[idx] + self.origin[0], g.cols[idx] + self.origin[1], self.r2[idx]
 
-    def _node_table(self) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
-        """Nodes and branches of the pruned skeleton, in image pixel coordinates."""
+    def skeleton_table(self) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+        """Nodes and branches of the pruned skeleton, in image pixel coordinates
+        (the ``skeleton`` part of the document before any frame is applied)."""
         g, r2 = self.graph, self.r2
         oy, ox = self.origin
 
@@ -124,7 +125,7 @@ class ComponentResult:
         return nodes, branches
 
     def to_dict(self, curve: bool = True, frame: PixelFrame = IDENTITY) -> dict[str, Any]:
-        nodes, branches = self._node_table()
+        nodes, branches = self.skeleton_table()
 
         def mapped(pts: list[list[float]]) -> list[list[float]]:
             return [[*frame.point(x, y), frame.distance(r)] for x, y, r in pts]

@@ -9,6 +9,7 @@ from types import FrameType
 import uvicorn
 
 from service.app import create_app
+from service.logs import logging_config
 from service.settings import Settings
 
 
@@ -28,6 +29,10 @@ def main() -> None:
     uvicorn.run(
         create_app(settings), host=settings.host, port=settings.port,
         log_level=settings.log_level,
+        log_config=logging_config(settings.log_level),  # JSON lines on stderr
+        access_log=False,  # the service writes its own access log, with request IDs
+        # a drain after SIGTERM is bounded: below the orchestrator's grace period
+        timeout_graceful_shutdown=settings.shutdown_timeout,
     )
 
 

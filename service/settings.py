@@ -2,21 +2,53 @@
 
 from __future__ import annotations
 
+import math
 import os
-from typing import Literal
+from pathlib import Path
+from typing import Annotated, Any, Literal
 
-from pydantic import Field
-from pydantic_settings import BaseSettings, SettingsConfigDict
+from pydantic import Field, SecretStr, field_validator
+from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
 
-__all__ = ["Settings", "available_cores"]
+__all__ = ["Settings", "available_cores", "cgroup_cpu_limit"]
+
+CGROUP = Path("/sys/fs/cgroup")
 
 
-def available_cores() -> int:
-    """CPU cores this process may run on (respects affinity / container cpusets)."""
+def cgroup_cpu_limit(root: Path = CGROUP) -> float | None:
+    """CPUs allowed by the cgroup CPU quota, or None when there is no quota.
+
+    Reads ``cpu.max`` (cgroup v2: ``"<quota> <period>"`` or ``"max <period>"``), else
+    ``cpu/cpu.cfs_quota_us`` and ``cpu/cpu.cfs_period_us`` (cgroup v1, -1 = no quota).
+    A container started with ``--cpus 1.5`` has a quota of 1.5 CPUs on every core of
+    the host: its affinity alone would size the pool far too large.
+    """
     try:
-        return max(1, len(os.sched_getaffinity(0)))
+        quota, period = (root / "cpu.max").read_text().split()[:2]
+        if quota == "max":
+            return None
+        return int(quota) / int(period) if int(period) > 0 and int(quota) > 0 else None
+    except (OSError, ValueError):
+        pass
+    try:
+        quota_us = int((root / "cpu" / "cpu.cfs_quota_us").read_text())
+        period_us = int((root / "cpu" / "cpu.cfs_period_us").read_text())
+    except (OSError, ValueError):
+        return None
+    return quota_us / period_us if quota_us > 0 and period_us > 0 else None
+
+
+def available_cores(cgroup_root: Path = CGROUP) -> int:
+    """CPU cores this process may use: its CPU affinity (container cpusets), capped by
+    the cgroup CPU quota rounded up (``--cpus 1.5`` gives 2 workers)."""
+    try:
+        cores = len(os.sched_getaffinity(0))
     except AttributeError:  # not on Linux
-        return max(1, os.cpu_count() or 1)
+        cores = os.cpu_count() or 1
+    limit = cgroup_cpu_limit(cgroup_root)
+    if limit is not None:
+        cores = min(cores, math.ceil(limit))
+    return max(1, cores)
 
 
 class Settings(BaseSettings):
@@ -63,5 +95,41 @@ class Settings(BaseSettings):
         description="multiprocessing start method for workers (forkserver: fast restarts).",
     )
     log_level: Literal["critical", "error", "warning", "info", "debug"] = Field(
-        "info", description="uvicorn log level."
+        "info", description="Log level of the service and uvicorn (JSON lines on stderr; "
+        "tracebacks only at debug)."
     )
+    access_log: bool = Field(
+        True, description="One JSON log line per request: method, path, status, "
+        "duration_ms, request_id, client."
+    )
+    api_key: SecretStr | None = Field(
+        None, description="If set, every endpoint but /healthz and /readyz needs "
+        "'Authorization: Bearer <key>' or 'X-API-Key: <key>' (401 otherwise). "
+        "Empty = no key.",
+    )
+    cors_origins: Annotated[list[str], NoDecode] = Field(
+        default_factory=list, description="Origins allowed to call the API from a browser "
+        "(comma-separated, or * for any); empty = no CORS headers at all.",
+    )
+    shutdown_timeout: float = Field(
+        50.0, gt=0, description="Seconds a graceful shutdown (SIGTERM) waits for requests "
+        "in flight before closing them; keep it below the orchestrator's grace period.",
+    )
+
+    @field_validator("api_key", mode="before")
+    @classmethod
+    def _empty_key_is_none(cls, value: Any) -> Any:
+        if isinstance(value, str) and not value.strip():
+            return None
+        if isinstance(value, SecretStr) and not value.get_secret_value().strip():
+            return None
+        return value
+
+    @field_validator("cors_origins", mode="before")
+    @classmethod
+    def _split_origins(cls, value: Any) -> Any:
+        if isinstance(value, str):
+            value = value.split(",")
+        if isinstance(value, list | tuple):
+            return [str(v).strip().rstrip("/") for v in value if str(v).strip()]
+        return value

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from fastapi import FastAPI
+from fastapi.middleware.cors import CORSMiddleware
 from fastapi.openapi.utils import get_openapi
 from prometheus_client import CollectorRegistry, Gauge, Histogram
 from prometheus_fastapi_instrumentator import Instrumentator
@@ -21,6 +22,12 @@ from service.jobs import warmup
 from service.pool import WorkerPool
 from service.routes import router
 from service.schemas import Problem, PruneDocument, SkeletonGeoJSON, polygon_request_adapter
+from service.security import (
+    OPEN_PATHS,
+    REQUEST_ID_HEADER,
+    ApiKeyMiddleware,
+    RequestContextMiddleware,
+)
 from service.settings import Settings
 
 __all__ = ["BodyLimitMiddleware", "Metrics", "create_app"]
@@ -133,6 +140,17 @@ def _openapi(app: FastAPI) -> Callable[[], dict[str, Any]]:
             request = polygon_request_adapter.json_schema(ref_template=REF_TEMPLATE)
             components.update(request.pop("$defs", {}))
             components["PolygonRequest"] = {"title": "PolygonRequest", **request}
+            # SKELPRUNE_API_KEY, when set: either header will do; {} = no key configured.
+            schema["components"]["securitySchemes"] = {
+                "bearer": {"type": "http", "scheme": "bearer",
+                           "description": "`Authorization: Bearer <SKELPRUNE_API_KEY>`"},
+                "apiKey": {"type": "apiKey", "in": "header", "name": "X-API-Key",
+                           "description": "`X-API-Key: <SKELPRUNE_API_KEY>`"},
+            }
+            for path, operations in schema["paths"].items():
+                if path not in OPEN_PATHS:
+                    for op in operations.values():
+                        op["security"] = [{"bearer": []}, {"apiKey": []}, {}]
             # Round-trip through JSON so that the document is plain data (stable output).
             app.openapi_schema = json.loads(json.dumps(schema, sort_keys=True))
         return app.openapi_schema
@@ -178,6 +196,19 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(router)
     install_error_handlers(app, retry_after=settings.retry_after)
     Instrumentator(registry=registry, excluded_handlers=["/metrics"]).instrument(app)
+    # Middlewares, innermost first (each add wraps the ones before it):
     app.add_middleware(BodyLimitMiddleware, limit=settings.max_body_bytes)
+    if settings.api_key is not None:  # before the body is read: strangers send nothing
+        app.add_middleware(ApiKeyMiddleware, key=settings.api_key.get_secret_value())
+    if settings.cors_origins:  # outside the key check: preflights carry no credentials
+        app.add_middleware(
+            CORSMiddleware, allow_origins=settings.cors_origins, allow_credentials=False,
+            allow_methods=["GET", "POST"],
+            allow_headers=["Authorization", "X-API-Key", "Content-Type", "Accept",
+                           REQUEST_ID_HEADER],
+            expose_headers=[REQUEST_ID_HEADER, "Retry-After", "WWW-Authenticate"],
+            max_age=600,
+        )
+    app.add_middleware(RequestContextMiddleware, access_log_enabled=settings.access_log)
     app.openapi = _openapi(app)  # type: ignore[method-assign]
     return app

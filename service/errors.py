@@ -26,6 +26,7 @@ from service.pool import (
     QueueFullError,
     WorkerCrashedError,
 )
+from service.security import request_id_var
 from skelprune.errors import (
     EmptyMaskError,
     ImageTooLargeError,
@@ -119,6 +120,9 @@ def problem_response(
     }
     if instance:
         body["instance"] = instance
+    rid = request_id_var.get()
+    if rid is not None:
+        body["request_id"] = rid
     if extra:
         body.update(extra)
     return JSONResponse(body, status_code=status, headers=headers, media_type=PROBLEM_MEDIA_TYPE)
@@ -136,7 +140,8 @@ def install_error_handlers(app: FastAPI, *, retry_after: int) -> None:
         assert row is not None
         headers = {"Retry-After": str(retry_after)} if row.status == 503 else None
         if row.status >= 500:
-            log.warning("%s %s -> %d: %s", request.method, request.url.path, row.status, exc)
+            log.warning("%s %s -> %d: %s", request.method, request.url.path, row.status, exc,
+                        extra={"request_id": request_id_var.get()})
         return problem_response(
             row.status, str(exc) or row.title, slug=row.slug, title=row.title,
             instance=request.url.path, headers=headers,
@@ -173,8 +178,11 @@ def install_error_handlers(app: FastAPI, *, retry_after: int) -> None:
         )
 
     async def unexpected(request: Request, exc: Exception) -> JSONResponse:
+        # Normally RequestContextMiddleware catches these first; this is the fallback.
         ref = uuid.uuid4().hex[:12]
-        log.exception("unhandled error %s on %s %s", ref, request.method, request.url.path)
+        log.error("unhandled error %s on %s %s: %s", ref, request.method, request.url.path,
+                  type(exc).__name__, exc_info=log.isEnabledFor(logging.DEBUG),
+                  extra={"request_id": request_id_var.get(), "reference": ref})
         return problem_response(
             500, f"internal error (reference {ref}); the server log has the details",
             slug="internal-error", title="Internal error", instance=request.url.path,

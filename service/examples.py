@@ -12,6 +12,7 @@ __all__ = [
     "METRICS_EXAMPLE",
     "PRUNE_REQUEST_BODY",
     "PRUNE_RESPONSES",
+    "UNAUTHORIZED",
     "problem_response",
 ]
 
@@ -88,6 +89,18 @@ def problem_response(
     return response
 
 
+#: Only when SKELPRUNE_API_KEY is set.
+UNAUTHORIZED: dict[str, Any] = problem_response(
+    401, "unauthorized", "Unauthorized",
+    "API key required: send 'Authorization: Bearer <key>' or 'X-API-Key: <key>'",
+)
+UNAUTHORIZED["description"] = "Unauthorized (only when the service has an API key)"
+UNAUTHORIZED["headers"] = {"WWW-Authenticate": {
+    "description": 'The challenge: `Bearer realm="skelprune"`, with '
+                   '`error="invalid_token"` for a wrong key.',
+    "schema": {"type": "string"},
+}}
+
 PRUNE_RESPONSES: dict[int | str, dict[str, Any]] = {
     200: {
         "description": "The pruned skeleton, in the format chosen by `Accept`.",
@@ -101,6 +114,7 @@ PRUNE_RESPONSES: dict[int | str, dict[str, Any]] = {
     },
     400: problem_response(400, "invalid-image", "Invalid image",
                           "truncated PNG: file ends at byte 60 before the IEND chunk"),
+    401: UNAUTHORIZED,
     406: problem_response(406, "not-acceptable", "Not acceptable",
                           "cannot produce any of 'text/html'; available: application/json, "
                           "image/png, application/geo+json"),

@@ -13,6 +13,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from skelprune.errors import InvalidImageError
 from skelprune.frame import PixelFrame
 from skelprune.io import read_mask
 from skelprune.polygon import polygon_mask
@@ -71,7 +72,10 @@ def warmup() -> None:
 
 def _mask(job: Job) -> tuple[np.ndarray, PixelFrame | None]:
     if job.png is not None:
-        return read_mask(job.png, max_pixels=job.max_pixels), None
+        # read_mask also opens files by path: never let anything but bytes through.
+        if not isinstance(job.png, bytes | bytearray | memoryview):
+            raise InvalidImageError("PNG input must be bytes, not a file name")
+        return read_mask(bytes(job.png), max_pixels=job.max_pixels), None
     assert job.geojson is not None
     return polygon_mask(job.geojson, max_pixels=job.max_pixels, **job.raster)
 

@@ -156,7 +156,8 @@ class _Worker:
         if tag == "error":
             raise payload
         message, trace = payload
-        log.error("job failed in worker: %s\n%s", message, trace)
+        log.error("job failed in worker: %s", message)
+        log.debug("worker traceback:\n%s", trace)  # only at SKELPRUNE_LOG_LEVEL=debug
         raise JobFailedError("the job failed with an internal error")
 
     def stop(self, grace: float = 1.0) -> None:

@@ -167,6 +167,11 @@ async def prune(
     pool: WorkerPool = request.app.state.pool
     output = negotiate(request.headers.get("accept"))
     ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    encoding = request.headers.get("content-encoding", "").strip().lower()
+    if encoding not in ("", "identity"):  # never decode what was meant to be inflated
+        raise UnsupportedMediaTypeError(
+            f"Content-Encoding {encoding!r} is not supported; send the body uncompressed"
+        )
     body = await request.body()  # size-limited by BodyLimitMiddleware
     if ctype in ("image/png", "multipart/form-data"):
         png = body if ctype == "image/png" else await _png_from_multipart(request)
@@ -254,7 +259,8 @@ async def readyz(request: Request) -> Readiness:
     response_class=Response,
     responses={200: {"description": "Prometheus text exposition format.",
                      "content": {"text/plain": {"schema": {"type": "string"},
-                                                "example": examples.METRICS_EXAMPLE}}}},
+                                                "example": examples.METRICS_EXAMPLE}}},
+               401: examples.UNAUTHORIZED},
     tags=["ops"],
 )
 async def metrics(request: Request) -> Response:

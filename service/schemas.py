@@ -304,6 +304,8 @@ class Problem(BaseModel):
     status: int
     detail: str
     instance: str | None = None
+    request_id: str | None = Field(
+        None, description="The request's ID, also in the `X-Request-ID` response header.")
     errors: list[ValidationItem] | None = Field(None, description="Validation errors (422).")
 
 

@@ -128,6 +128,22 @@ def multipart(name: str, filename: str, data: bytes, ctype: str) -> tuple[bytes,
     return body, f"multipart/form-data; boundary={boundary}"
 
 
+def multipart_files(n: int) -> tuple[bytes, str]:
+    boundary = "catalogue-boundary"
+    part = (f"--{boundary}\r\nContent-Disposition: form-data; name=\"file\"; "
+            f"filename=\"s.png\"\r\nContent-Type: image/png\r\n\r\n").encode() + GOOD + b"\r\n"
+    return part * n + f"--{boundary}--\r\n".encode(), f"multipart/form-data; boundary={boundary}"
+
+
+def multipart_fields(n: int) -> tuple[bytes, str]:
+    boundary = "catalogue-boundary"
+    fields = b"".join(
+        f"--{boundary}\r\nContent-Disposition: form-data; name=\"f{i}\"\r\n\r\nx\r\n"
+        .encode() for i in range(n))
+    body, ctype = multipart("file", "s.png", GOOD, "image/png")
+    return fields + body, ctype
+
+
 # ---------------------------------------------------------------------- the table
 @dataclass
 class Case:
@@ -182,6 +198,15 @@ CASES = [
          ("multipart field 'file'",)),
     Case("multipart-no-boundary", b"--x\r\nnot a part", "multipart/form-data", 400,
          ("boundary",)),
+    Case("multipart-two-files", *multipart_files(2), 400, ("Too many files",)),
+    Case("multipart-too-many-fields", *multipart_fields(40), 400, ("Too many fields",)),
+    Case("multipart-empty-file", *multipart("file", "empty.png", b"", "image/png"), 400,
+         ("not a PNG",)),
+    Case("form-urlencoded", b"file=%89PNG", "application/x-www-form-urlencoded", 415,
+         ("'application/x-www-form-urlencoded' is not supported",)),
+    Case("gzip-content-encoding", GOOD, "image/png", 415, ("Content-Encoding 'gzip'",),
+         headers={"content-encoding": "gzip"}),
+    Case("content-type-in-capitals", GOOD, "IMAGE/PNG; foo=bar", 200),
     # --- polygons
     Case("nan-coordinate", b'{"type":"Polygon","coordinates":[[[0,0],[NaN,0],[1,1],[0,0]]]}',
          "application/json", 422, ("finite",)),
@@ -208,6 +233,12 @@ CASES = [
          ("too many vertices", "1500 positions", "1000 allowed")),
     Case("string-coordinate", js(polygon([[0, 0], [1, "a"], [1, 1], [0, 0]])),
          "application/json", 422, ("valid number",)),
+    Case("collection-too-many-vertices", js({"type": "FeatureCollection", "features": [
+        {"type": "Feature", "geometry": polygon([[i, 0], [i + 0.5, 0], [i, 1], [i, 0]])}
+        for i in range(300)]}), "application/json", 422, ("1200 positions",)),
+    Case("duplicate-type-key",
+         b'{"type":"Polygon","type":"Point","coordinates":[[[0,0],[1,0],[1,1],[0,0]]]}',
+         "application/json", 422, ("'Point'",)),
     Case("point-geometry", js({"type": "Point", "coordinates": [0, 0]}), "application/json",
          422, ("'Point'",)),
     Case("deeply-nested", deep_json(5000), "application/json", 422, ("body",)),

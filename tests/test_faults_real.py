@@ -209,3 +209,22 @@ def test_time_limit_and_full_queue(tmp_path: Path) -> None:
         assert resp.status_code == 200, resp.text
         assert first_worker not in worker_pids(proc.pid)
         assert proc.poll() is None
+
+
+def test_drain_is_bounded_by_the_shutdown_timeout(tmp_path: Path) -> None:
+    """SIGTERM with a job that would run for minutes: after SKELPRUNE_SHUTDOWN_TIMEOUT the
+    running and the queued request both get a 503 problem, and the server exits 0."""
+    with server(tmp_path, workers="1", queue_size="4", job_timeout="300",
+                shutdown_timeout="2") as (proc, base):
+        long_job = Call(base, LONG_JOB, {"content-type": "application/json"})
+        wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).json()["busy"] == 1,
+                 "the long job to start")
+        queued = Call(base, BIRD, PNG)
+        wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).json()["queued"] == 1,
+                 "a request waiting behind it")
+        proc.send_signal(signal.SIGTERM)
+        for call in (long_job, queued):
+            resp = call.result()
+            body = problem(resp, 503, "unavailable")
+            assert "shut down" in body["detail"] and resp.headers["retry-after"]
+        assert proc.wait(120) == 0

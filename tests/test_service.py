@@ -345,8 +345,8 @@ def test_openapi_lists_every_response_with_examples(client: TestClient) -> None:
     op = schema["paths"]["/v1/prune"]["post"]
     assert set(op["requestBody"]["content"]) == {
         "image/png", "multipart/form-data", "application/json", "application/geo+json"}
-    assert set(op["responses"]) == {"200", "400", "406", "413", "415", "422", "500", "503",
-                                    "504"}
+    assert set(op["responses"]) == {"200", "400", "401", "406", "413", "415", "422", "500",
+                                    "503", "504"}
     for path, ops in schema["paths"].items():
         for method, operation in ops.items():
             for status, resp in operation["responses"].items():
@@ -357,7 +357,7 @@ def test_openapi_lists_every_response_with_examples(client: TestClient) -> None:
         "application/json", "image/png", "application/geo+json"}
     # The documented examples satisfy the documented models.
     PruneDocument.model_validate(op["responses"]["200"]["content"]["application/json"]["example"])
-    for status in ("400", "413", "422", "503", "504"):
+    for status in ("400", "401", "413", "422", "503", "504"):
         Problem.model_validate(
             op["responses"][status]["content"]["application/problem+json"]["example"])
 

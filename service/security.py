@@ -1,0 +1,169 @@
+"""Request context, access log and API key: the outer ASGI middlewares.
+
+- :class:`RequestContextMiddleware` (outermost): gives every request an ID (the
+  client's ``X-Request-ID`` when it is sane, else a fresh one), echoes it in the
+  response, makes it available to problem bodies (:data:`request_id_var`), writes the
+  request's one access-log line (method, path, status, duration, request id) and turns
+  any exception that escaped everything else into a 500 problem without internals.
+- :class:`ApiKeyMiddleware`: with ``SKELPRUNE_API_KEY`` set, every path but
+  :data:`OPEN_PATHS` needs ``Authorization: Bearer <key>`` or ``X-API-Key: <key>``,
+  compared with :func:`hmac.compare_digest`; otherwise 401 with ``WWW-Authenticate``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextvars
+import hmac
+import logging
+import re
+import time
+import uuid
+
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+__all__ = [
+    "OPEN_PATHS",
+    "REQUEST_ID_HEADER",
+    "ApiKeyMiddleware",
+    "RequestContextMiddleware",
+    "request_id_var",
+]
+
+access_log = logging.getLogger("service.access")
+log = logging.getLogger("service.errors")
+
+REQUEST_ID_HEADER = "X-Request-ID"
+#: Paths open without the API key: probes carry no credentials, and say nothing secret.
+OPEN_PATHS = frozenset({"/healthz", "/readyz"})
+_SANE_ID = re.compile(rb"^[A-Za-z0-9._:\-]{1,128}$")
+
+#: The current request's ID (set by RequestContextMiddleware, read by problem bodies).
+request_id_var: contextvars.ContextVar[str | None] = contextvars.ContextVar(
+    "skelprune_request_id", default=None
+)
+
+
+def _header(scope: Scope, name: bytes) -> bytes | None:
+    for key, value in scope["headers"]:
+        if key == name:
+            return value
+    return None
+
+
+class RequestContextMiddleware:
+    """Request ID, one JSON access-log line per request, last-resort 500."""
+
+    def __init__(self, app: ASGIApp, *, access_log_enabled: bool = True) -> None:
+        self.app = app
+        self.access_log_enabled = access_log_enabled
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        given = _header(scope, b"x-request-id")
+        rid = given.decode("ascii") if given and _SANE_ID.match(given) else uuid.uuid4().hex
+        request_id_var.set(rid)
+        scope.setdefault("state", {})["request_id"] = rid
+        status = 500
+        started = False
+        t0 = time.perf_counter()
+
+        async def send_with_id(message: Message) -> None:
+            nonlocal status, started
+            if message["type"] == "http.response.start":
+                started = True
+                status = message["status"]
+                headers = [(k, v) for k, v in message.get("headers", [])
+                           if k.lower() != b"x-request-id"]
+                headers.append((b"x-request-id", rid.encode("ascii")))
+                message = {**message, "headers": headers}
+            await send(message)
+
+        try:
+            await self.app(scope, receive, send_with_id)
+        except asyncio.CancelledError:
+            # uvicorn cancels what is still running when a graceful shutdown runs out of
+            # time (SKELPRUNE_SHUTDOWN_TIMEOUT): answer 503 rather than drop the line.
+            if started:
+                raise
+            from service.errors import problem_response
+
+            response = problem_response(
+                503, "the server shut down before this request finished; retry it",
+                slug="unavailable", title="Service unavailable", instance=scope["path"],
+                headers={"Retry-After": "1"},
+            )
+            await response(scope, receive, send_with_id)
+            status = 503
+        except Exception as exc:
+            # A bug that got past every handler: answer (if still possible) and log it
+            # without the traceback (that needs SKELPRUNE_LOG_LEVEL=debug).
+            ref = uuid.uuid4().hex[:12]
+            log.error("unhandled error %s on %s %s: %s", ref, scope["method"], scope["path"],
+                      type(exc).__name__, exc_info=log.isEnabledFor(logging.DEBUG),
+                      extra={"request_id": rid, "reference": ref})
+            if not started:
+                from service.errors import problem_response
+
+                response = problem_response(
+                    500, f"internal error (reference {ref}); the server log has the details",
+                    slug="internal-error", title="Internal error", instance=scope["path"],
+                )
+                await response(scope, receive, send_with_id)
+            status = 500
+        finally:
+            if self.access_log_enabled:
+                client = scope.get("client")
+                access_log.info(
+                    "%s %s %d", scope["method"], scope["path"], status,
+                    extra={"method": scope["method"], "path": scope["path"], "status": status,
+                           "duration_ms": round(1000 * (time.perf_counter() - t0), 3),
+                           "request_id": rid, "client": client[0] if client else None},
+                )
+
+
+class ApiKeyMiddleware:
+    """Refuse requests without the right API key (401 problem+json)."""
+
+    def __init__(self, app: ASGIApp, *, key: str) -> None:
+        self.app = app
+        self.key = key.encode("utf-8")
+
+    def _presented(self, scope: Scope) -> list[bytes]:
+        keys = []
+        auth = _header(scope, b"authorization")
+        if auth is not None:
+            scheme, _, token = auth.strip().partition(b" ")
+            if scheme.lower() == b"bearer" and token.strip():
+                keys.append(token.strip())
+        api_key = _header(scope, b"x-api-key")
+        if api_key is not None and api_key.strip():
+            keys.append(api_key.strip())
+        return keys
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http" or scope["path"] in OPEN_PATHS:
+            await self.app(scope, receive, send)
+            return
+        presented = self._presented(scope)
+        # compare against every presented key (no early exit) in constant time
+        matches = [hmac.compare_digest(k, self.key) for k in presented]
+        if any(matches):
+            await self.app(scope, receive, send)
+            return
+        from service.errors import problem_response
+
+        challenge = 'Bearer realm="skelprune"'
+        if presented:
+            challenge += ', error="invalid_token"'
+            detail = "invalid API key"
+        else:
+            detail = ("API key required: send 'Authorization: Bearer <key>' "
+                      "or 'X-API-Key: <key>'")
+        response = problem_response(
+            401, detail, slug="unauthorized", title="Unauthorized",
+            instance=scope["path"], headers={"WWW-Authenticate": challenge},
+        )
+        await response(scope, receive, send)

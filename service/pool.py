@@ -122,6 +122,9 @@ class _Worker:
         self.proc.start()
         child.close()
         self.ready = False
+        # kill() can race: the job's thread replacing a dead worker and close()
+        # stopping every worker may both get here; the pipe must be closed once.
+        self._kill_lock = threading.Lock()
 
     def wait_ready(self, timeout: float) -> None:
         if self.ready:
@@ -167,10 +170,12 @@ class _Worker:
         self.kill()
 
     def kill(self) -> None:
-        if self.proc.is_alive():
-            self.proc.kill()
-        self.proc.join(5)
-        self.conn.close()
+        with self._kill_lock:
+            if self.proc.is_alive():
+                self.proc.kill()
+            self.proc.join(5)
+            if not self.conn.closed:
+                self.conn.close()
 
 
 class WorkerPool:

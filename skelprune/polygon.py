@@ -31,7 +31,7 @@ from typing import Any
 import cv2
 import numpy as np
 import shapely
-from shapely.geometry import MultiPolygon, Polygon
+from shapely.geometry import GeometryCollection, MultiPolygon, Polygon
 
 from skelprune.errors import ImageTooLargeError, InvalidOptionError, InvalidPolygonError
 from skelprune.frame import PixelFrame
@@ -82,6 +82,17 @@ def _finite(v: int | float) -> bool:
         return math.isfinite(v)
     except OverflowError:
         return False
+
+
+def _areas(geom: Any) -> list[Polygon]:
+    """The non-empty polygons of any geometry (collections flattened)."""
+    return [g for g in shapely.get_parts(geom) if isinstance(g, Polygon) and not g.is_empty] + [
+        p for g in shapely.get_parts(geom) if isinstance(g, MultiPolygon | GeometryCollection)
+        for p in _areas(g)]
+
+
+def _bounds(geom: Any) -> tuple[float, float, float, float]:
+    return tuple(shapely.bounds(geom))  # type: ignore[return-value]
 
 
 def _show(v: Any) -> str:
@@ -170,7 +181,7 @@ def parse_geojson(
             raise InvalidPolygonError(
                 f"too many vertices: {n_vertices} positions, more than {max_vertices} allowed"
             )
-    parts: list[Polygon] = []
+    parts: list[tuple[str, Polygon]] = []
     for where, geometry in geometries:
         multi = geometry["type"] == "MultiPolygon"
         for pwhere, rings in _polygons(geometry.get("coordinates"), f"{where}.coordinates", multi):
@@ -182,8 +193,32 @@ def parse_geojson(
             if not poly.is_valid and not repair:
                 reason = shapely.is_valid_reason(poly)
                 raise InvalidPolygonError(f"{pwhere}: invalid polygon: {reason}")
-            parts.append(poly)
-    geom = shapely.union_all([shapely.make_valid(p) for p in parts])
+            parts.append((pwhere, poly))
+    areas: list[Polygon] = []
+    for pwhere, poly in parts:
+        try:
+            fixed = shapely.make_valid(poly)
+        except shapely.errors.GEOSException:
+            # The default ("linework") repair fails on some degenerate rings (e.g. an
+            # exterior collapsed to a point); the "structure" one treats rings as areas.
+            try:
+                fixed = shapely.make_valid(poly, method="structure", keep_collapsed=False)
+            except shapely.errors.GEOSException as exc:
+                raise InvalidPolygonError(
+                    f"{pwhere}: cannot repair the polygon: {exc}") from None
+        # make_valid may also yield lines and points (zero-area slivers), and GEOS refuses
+        # to union mixed dimensions: keep only the areas.
+        areas += _areas(fixed)
+    try:
+        geom = shapely.union_all(areas)
+    except shapely.errors.GEOSException:
+        # Nearly coincident edges can defeat the floating-point overlay; the snap-rounding
+        # one on a grid far below a pixel is robust.
+        extent = max((max(b[2] - b[0], b[3] - b[1]) for b in map(_bounds, areas)), default=0.0)
+        try:
+            geom = shapely.union_all(areas, grid_size=extent * 1e-9 or None)
+        except shapely.errors.GEOSException as exc:
+            raise InvalidPolygonError(f"cannot combine the polygons: {exc}") from None
     if not geom.is_valid and not repair:  # e.g. two valid polygons overlapping
         raise InvalidPolygonError(f"invalid geometry: {shapely.is_valid_reason(geom)}")
     # make_valid may also yield lines and points (zero-area slivers); only areas are shapes.

@@ -315,6 +315,17 @@ def test_huge_int_type_and_option_are_reported(raster: dict[str, Any]) -> None:
         polygon_mask(obj, **raster)
 
 
+@pytest.mark.parametrize("repair", [True, False])
+def test_ring_collapsed_to_a_point_with_holes(repair: bool) -> None:
+    """Found by the fuzzer: shapely's make_valid raised GEOSException ("Overlay input is
+    mixed-dimension") on an exterior collapsed to one point, with holes."""
+    point = [[0.0, 0.0]] * 9
+    obj = {"type": "Polygon",
+           "coordinates": [point, [[1, -3], [1, -3], [2, 3], [1, -1], [1, -3]], point]}
+    with pytest.raises(SkelpruneError, match="zero area" if repair else "Too few points"):
+        parse_geojson(obj, repair=repair)
+
+
 def test_second_ihdr_cannot_smuggle_a_size() -> None:
     """Found by the fuzzer: Pillow decodes with the *last* IHDR, the size check read the
     first, so a second header could claim any size behind a small first one."""

@@ -37,6 +37,8 @@ def blobs(seed: int, size: int = 64, n: int = 4, holes: int = 0) -> np.ndarray:
         m |= (u / a) ** 2 + (v / b) ** 2 <= 1
     for _ in range(holes):
         ys, xs = np.nonzero(m)
+        if not len(ys):
+            break  # the holes have eaten the shape
         k = rng.integers(len(ys))
         r = rng.uniform(1.5, 4)
         m &= (yy - ys[k]) ** 2 + (xx - xs[k]) ** 2 > r * r

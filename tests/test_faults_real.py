@@ -19,18 +19,15 @@ from __future__ import annotations
 import json
 import os
 import signal
-import socket
-import subprocess
-import sys
 import threading
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 
 import httpx
 import numpy as np
 import pytest
+
+from .realserver import running_server
 
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(300)]
 
@@ -50,12 +47,6 @@ def star(longest_side: int) -> bytes:
 
 
 LONG_JOB = star(2048)
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def process_table() -> dict[int, tuple[int, str]]:
@@ -78,36 +69,6 @@ def worker_pids(server_pid: int) -> set[int]:
     table = process_table()
     forkservers = {p for p, (pp, cmd) in table.items() if pp == server_pid and "forkserver" in cmd}
     return {p for p, (pp, _) in table.items() if pp in forkservers}
-
-
-@contextmanager
-def server(tmp_path: Path, **settings: str) -> Iterator[tuple[subprocess.Popen[bytes], str]]:
-    port = free_port()
-    env = {**os.environ, "SKELPRUNE_HOST": "127.0.0.1", "SKELPRUNE_PORT": str(port),
-           "SKELPRUNE_LOG_LEVEL": "warning", "OMP_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1",
-           **{f"SKELPRUNE_{k.upper()}": v for k, v in settings.items()}}
-    env.pop("SKELPRUNE_API_KEY", None)
-    log_path = tmp_path / f"server-{port}.log"
-    with log_path.open("wb") as log:
-        proc = subprocess.Popen([sys.executable, "-m", "service"], cwd=ROOT, env=env,
-                                stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
-        base = f"http://127.0.0.1:{port}"
-        try:
-            deadline = time.monotonic() + 120
-            while True:
-                assert proc.poll() is None, log_path.read_text(errors="replace")[-3000:]
-                try:
-                    if httpx.get(f"{base}/readyz", timeout=2).status_code == 200:
-                        break
-                except httpx.TransportError:
-                    pass
-                assert time.monotonic() < deadline, "server not ready in 120 s"
-                time.sleep(0.2)
-            yield proc, base
-        finally:
-            if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait(30)
 
 
 class Call(threading.Thread):
@@ -153,7 +114,8 @@ def problem(resp: httpx.Response, status: int, slug: str) -> dict:
 
 
 def test_worker_killed_from_outside_mid_job(tmp_path: Path) -> None:
-    with server(tmp_path, workers="1", queue_size="4", job_timeout="200") as (proc, base):
+    with running_server(tmp_path / "server.log", workers="1", queue_size="4",
+                        job_timeout="200") as (proc, base):
         before = worker_pids(proc.pid)
         assert len(before) == 1, before
         (victim,) = before
@@ -185,7 +147,7 @@ def test_worker_killed_from_outside_mid_job(tmp_path: Path) -> None:
 def test_time_limit_and_full_queue(tmp_path: Path) -> None:
     # The long job prunes for a minute or more (105 s on the reference machine): a time
     # limit of 8 s stops it whatever the machine, and leaves the 503 checks ample time.
-    with server(tmp_path, workers="1", queue_size="0", job_timeout="8",
+    with running_server(tmp_path / "server.log", workers="1", queue_size="0", job_timeout="8",
                 retry_after="3") as (proc, base):
         (first_worker,) = worker_pids(proc.pid)
         long_job = Call(base, LONG_JOB, {"content-type": "application/json"})
@@ -214,7 +176,7 @@ def test_time_limit_and_full_queue(tmp_path: Path) -> None:
 def test_drain_is_bounded_by_the_shutdown_timeout(tmp_path: Path) -> None:
     """SIGTERM with a job that would run for minutes: after SKELPRUNE_SHUTDOWN_TIMEOUT the
     running and the queued request both get a 503 problem, and the server exits 0."""
-    with server(tmp_path, workers="1", queue_size="4", job_timeout="300",
+    with running_server(tmp_path / "server.log", workers="1", queue_size="4", job_timeout="300",
                 shutdown_timeout="2") as (proc, base):
         long_job = Call(base, LONG_JOB, {"content-type": "application/json"})
         wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).json()["busy"] == 1,

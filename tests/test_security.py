@@ -15,13 +15,8 @@ from __future__ import annotations
 
 import json
 import logging
-import os
 import re
-import signal
-import socket
-import subprocess
 import sys
-import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, get_args
@@ -38,6 +33,8 @@ from service.routes import job_function
 from service.schemas import PolygonJob, Problem, PruneQuery
 from service.settings import Settings
 from skelprune.errors import InvalidImageError
+
+from .realserver import running_server, stop
 
 pytestmark = pytest.mark.timeout(300)
 
@@ -345,41 +342,16 @@ def test_json_formatter_is_one_line_without_tracebacks() -> None:
 
 
 def test_real_server_logs_json_lines_without_the_key(tmp_path: Path) -> None:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    env = {**os.environ, "SKELPRUNE_HOST": "127.0.0.1", "SKELPRUNE_PORT": str(port),
-           "SKELPRUNE_WORKERS": "1", "SKELPRUNE_API_KEY": KEY}
     log_path = tmp_path / "server.log"
-    base = f"http://127.0.0.1:{port}"
-    with log_path.open("wb") as log:
-        proc = subprocess.Popen([sys.executable, "-m", "service"], cwd=ROOT, env=env,
-                                stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
-        try:
-            deadline = time.monotonic() + 120
-            while True:
-                assert proc.poll() is None, log_path.read_text()[-3000:]
-                try:
-                    if httpx.get(f"{base}/readyz", timeout=2).status_code == 200:
-                        break
-                except httpx.TransportError:
-                    pass
-                assert time.monotonic() < deadline, "server not ready"
-                time.sleep(0.2)
-            ok = httpx.post(f"{base}/v1/prune", content=BIRD, timeout=60,
-                            headers={**PNG, "x-api-key": KEY, "x-request-id": "real-1"})
-            assert ok.status_code == 200 and ok.headers["x-request-id"] == "real-1"
-            denied = httpx.post(f"{base}/v1/prune", content=BIRD, timeout=60,
-                                headers={**PNG, "authorization": "Bearer guessed-key"})
-            assert_problem(denied, 401)
-            assert denied.headers["www-authenticate"].startswith("Bearer")
-        finally:
-            proc.send_signal(signal.SIGTERM)
-            try:
-                code = proc.wait(60)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                code = proc.wait(30)
+    with running_server(log_path, workers="1", api_key=KEY, log_level="info") as (proc, base):
+        ok = httpx.post(f"{base}/v1/prune", content=BIRD, timeout=60,
+                        headers={**PNG, "x-api-key": KEY, "x-request-id": "real-1"})
+        assert ok.status_code == 200 and ok.headers["x-request-id"] == "real-1"
+        denied = httpx.post(f"{base}/v1/prune", content=BIRD, timeout=60,
+                            headers={**PNG, "authorization": "Bearer guessed-key"})
+        assert_problem(denied, 401)
+        assert denied.headers["www-authenticate"].startswith("Bearer")
+        code = stop(proc)
     assert code == 0
     text = log_path.read_text()
     assert KEY not in text and "guessed-key" not in text and "Traceback" not in text

@@ -29,7 +29,6 @@ import io
 import json
 import os
 import signal
-import socket
 import subprocess
 import sys
 import tempfile
@@ -44,6 +43,8 @@ import httpx
 import numpy as np
 from PIL import Image
 
+from tests.realserver import running_server, stop
+
 from .common import DATA
 
 REPO = Path(__file__).resolve().parents[1]
@@ -51,12 +52,6 @@ SHAPES = ["bird-10", "elephant-1", "hammer-1", "key-1", "bone-1", "brick-10"]
 
 
 # ------------------------------------------------------------------------ server
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @dataclass
 class Server:
     proc: subprocess.Popen[bytes]
@@ -67,44 +62,15 @@ class Server:
 
 @contextmanager
 def server(workers: int, queue_size: int) -> Iterator[Server]:
-    """A real ``python -m service`` on a free loopback port; stopped (SIGINT) on exit."""
-    port = _free_port()
-    env = {**os.environ, "SKELPRUNE_PORT": str(port), "SKELPRUNE_HOST": "127.0.0.1",
-           "SKELPRUNE_WORKERS": str(workers), "SKELPRUNE_QUEUE_SIZE": str(queue_size),
-           "SKELPRUNE_LOG_LEVEL": "warning",
-           "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
-    env.pop("SKELPRUNE_API_KEY", None)  # an open server: the load test measures pruning
-    with tempfile.TemporaryFile() as log:
-        proc = subprocess.Popen([sys.executable, "-m", "service"], cwd=REPO, env=env,
-                                stdout=log, stderr=subprocess.STDOUT)
-        base = f"http://127.0.0.1:{port}"
+    """A real ``python -m service`` on a free loopback port; stopped (SIGINT) on exit.
 
-        def tail() -> str:
-            log.seek(0)
-            return log.read().decode(errors="replace")[-3000:]
-
-        try:
-            deadline = time.monotonic() + 180
-            while True:
-                if proc.poll() is not None:
-                    raise RuntimeError(f"server exited during start ({proc.returncode}):\n"
-                                       f"{tail()}")
-                try:
-                    if httpx.get(f"{base}/readyz", timeout=1).status_code == 200:
-                        break
-                except httpx.TransportError:
-                    pass
-                if time.monotonic() > deadline:
-                    raise RuntimeError(f"server did not become ready in 180 s:\n{tail()}")
-                time.sleep(0.2)
-            yield Server(proc, base, workers, queue_size)
-        finally:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(60)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(10)
+    No API key: the load test measures pruning.
+    """
+    with tempfile.TemporaryDirectory() as tmp, running_server(
+            Path(tmp) / "server.log", workers=str(workers),
+            queue_size=str(queue_size)) as (proc, base):
+        yield Server(proc, base, workers, queue_size)
+        stop(proc, signal.SIGINT, 60)
 
 
 def _rss_kib(pid: int) -> int:

@@ -17,10 +17,10 @@ import io
 import json
 import os
 import signal
-import socket
 import statistics
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Iterator
@@ -33,6 +33,7 @@ from PIL import Image
 
 import skelprune
 from skelprune.io import read_mask
+from tests.realserver import running_server, stop
 
 from .common import DATA, table, upscale
 
@@ -55,44 +56,13 @@ def shape_png(side: int = 256) -> bytes:
     return buf.getvalue()
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @contextmanager
 def server(workers: int) -> Iterator[str]:
-    """A real ``python -m service`` on a free loopback port; stopped on exit."""
-    port = _free_port()
-    env = {**os.environ, "SKELPRUNE_PORT": str(port), "SKELPRUNE_HOST": "127.0.0.1",
-           "SKELPRUNE_WORKERS": str(workers), "SKELPRUNE_QUEUE_SIZE": "256",
-           "SKELPRUNE_LOG_LEVEL": "warning",
-           # one thread per worker process: the pool is the parallelism
-           "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
-    proc = subprocess.Popen([sys.executable, "-m", "service"], cwd=REPO, env=env)
-    base = f"http://127.0.0.1:{port}"
-    try:
-        deadline = time.monotonic() + 120
-        while time.monotonic() < deadline:
-            if proc.poll() is not None:
-                raise RuntimeError("server exited during start")
-            try:
-                if httpx.get(f"{base}/readyz", timeout=1).status_code == 200:
-                    break
-            except httpx.TransportError:
-                pass
-            time.sleep(0.2)
-        else:
-            raise RuntimeError("server did not become ready")
+    """A real ``python -m service`` on a free loopback port; stopped (SIGINT) on exit."""
+    with tempfile.TemporaryDirectory() as tmp, running_server(
+            Path(tmp) / "server.log", workers=str(workers), queue_size="256") as (proc, base):
         yield base
-    finally:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(30)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(10)
+        stop(proc, signal.SIGINT, 30)
 
 
 def _post(client: httpx.Client, png: bytes) -> None:

@@ -94,7 +94,8 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
     if method == "dce":
         threshold = DCE_THRESHOLD if dce_threshold is None else dce_threshold
         keep = dce_support(crop, ma.rows, ma.cols, ma.r2, DCE_VERTICES, threshold)
-        seq = bayesian_sequence(graph, crop, ma.r2, norm.alpha, norm.lbar, supported=keep)
+        order = remove_unsupported(BranchGraph(ma.rows, ma.cols, crop.shape), keep)
+        seq = bayesian_sequence(graph, crop, ma.r2, norm.alpha, norm.lbar, order=order)
         chosen = len(seq.removed)
     else:
         if coarse == "dce" and norm.alpha is not None:

@@ -150,7 +150,7 @@ def bayesian_sequence(
     r2: np.ndarray,
     alpha: float | None,
     lbar: float,
-    supported: np.ndarray | None = None,
+    order: list[int] | None = None,
 ) -> PruningSequence:
     """Remove end branches until none is left; record every step.
 
@@ -165,10 +165,10 @@ def bayesian_sequence(
     alpha, lbar : float
         ``α`` and ``ℓ̄`` of the medial axis. Bayesian order (eqs. 9–11); with
         ``alpha=None`` (degenerate shapes) nothing is removed.
-    supported : (n,) bool array, optional
-        Instead of the Bayesian order, DCE pruning (SPEC §2.5): remove, smallest
-        endpoint (row, col) first, every end branch none of whose points is
-        supported, until every end branch has one.
+    order : list of int, optional
+        Instead of choosing by λ, remove exactly these end branches in this order
+        (e.g. :func:`remove_unsupported` run on a twin graph, for ``method="dce"``),
+        recording every step the same way.
     """
     area = int(mask.sum())
     nb = len(graph.branches)
@@ -183,7 +183,7 @@ def bayesian_sequence(
     cov = Coverage(mask, graph.rows[alive], graph.cols[alive], r2[alive], labels[alive],
                    nb + len(graph.junctions) + 1)
     seq = PruningSequence([], [cov.lost], [graph.na], [graph.nd], area, alpha, lbar)
-    if alpha is None and supported is None:
+    if alpha is None and order is None:
         return seq
     # Coverage numbers points by their rank among the alive ones.
     rank = np.full(graph.rows.size, -1, np.int64)
@@ -200,20 +200,16 @@ def bayesian_sequence(
             p = graph.endpoint(b)
             ep[b] = graph.rows[p], graph.cols[p]
 
-    def unsupported() -> int:
-        cands = [b for b in graph.ends if not supported[graph.branches[b].points].any()]
-        return min(cands, key=lambda b: (ep[b, 0], ep[b, 1], b)) if cands else -1
-
     for b in graph.ends:
         mark_end(b)
     while graph.ends:
-        if supported is None:
+        if order is None:
             pick = _pick(is_end, cov.exclusive, bna, bnd, ep, cov.lost, area, graph.na,
                          graph.nd, alpha, lbar)
+        elif len(seq.removed) < len(order):
+            pick = order[len(seq.removed)]
         else:
-            pick = unsupported()
-            if pick < 0:
-                break
+            break
         cov.remove(rank[graph.branches[pick].points])
         merged = graph.remove_end_branch(pick)
         is_end[pick] = False

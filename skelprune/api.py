@@ -115,7 +115,7 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
     final = _replay(ma.rows, ma.cols, crop.shape, before + seq.removed[:chosen])
     return ComponentResult(
         origin=origin, area=int(crop.sum()), r2=ma.r2, medial_axis=summary, graph=final,
-        sequence=seq, chosen_step=chosen, ma_rer=ma_rer, coarse_removed=before,
+        sequence=seq, chosen_step=chosen, ma_rer=ma_rer,
     )
 
 

@@ -49,7 +49,6 @@ class ComponentResult:
     sequence: PruningSequence
     chosen_step: int
     ma_rer: float
-    coarse_removed: list[int] = field(default_factory=list)  # the coarse stage's removals
 
     @property
     def alpha(self) -> float | None:

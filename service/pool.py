@@ -131,29 +131,28 @@ class _Worker:
             return
         if not self.conn.poll(timeout):
             raise WorkerCrashedError(f"worker did not start within {timeout:g} s")
-        try:
-            tag, info = self.conn.recv()
-        except (EOFError, OSError):
-            self.proc.join(1)
-            raise WorkerCrashedError(
-                f"worker died while starting ({_exit_reason(self.proc.exitcode)})"
-            ) from None
+        tag, info = self._receive("worker died while starting ({reason})")
         if tag != "ready":
             raise WorkerCrashedError(f"worker failed to start: {info}")
         self.ready = True
+
+    def _receive(self, died: str) -> tuple[str, Any]:
+        """The worker's next message; a closed pipe means it died: ``died`` names how."""
+        try:
+            return self.conn.recv()
+        except (EOFError, OSError):
+            self.proc.join(1)
+            raise WorkerCrashedError(
+                died.format(reason=_exit_reason(self.proc.exitcode))
+            ) from None
 
     def call(self, fn: Callable[..., Any], args: tuple[Any, ...], timeout: float) -> Any:
         self.conn.send((fn, args))
         if not self.conn.poll(timeout):
             raise JobTimeoutError(f"job exceeded the time limit of {timeout:g} s and was stopped")
-        try:
-            tag, payload = self.conn.recv()
-        except (EOFError, OSError):
-            self.proc.join(1)
-            raise WorkerCrashedError(
-                f"the worker process died while running this job "
-                f"({_exit_reason(self.proc.exitcode)}); it has been replaced"
-            ) from None
+        tag, payload = self._receive(
+            "the worker process died while running this job ({reason}); it has been replaced"
+        )
         if tag == "ok":
             return payload
         if tag == "error":

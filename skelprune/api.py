@@ -112,7 +112,9 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
     # A sequence that starts from M already knows Λ(D \ R(M)): no second painting.
     ma_rer = (seq.lost[0] / seq.area if not before
               else reconstruction_error(crop, ma.rows, ma.cols, ma.r2))
-    final = _replay(ma.rows, ma.cols, crop.shape, before + seq.removed[:chosen])
+    # The pruning graph ends as S(n); only an earlier argmin needs a replay.
+    final = (graph if chosen == len(seq.removed)
+             else _replay(ma.rows, ma.cols, crop.shape, before + seq.removed[:chosen]))
     return ComponentResult(
         origin=origin, area=int(crop.sum()), r2=ma.r2, medial_axis=summary, graph=final,
         sequence=seq, chosen_step=chosen, ma_rer=ma_rer,

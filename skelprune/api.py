@@ -8,8 +8,8 @@ from typing import Literal
 import numpy as np
 from scipy import ndimage
 
+from .coarse import coarse_dce
 from .dce import (
-    COARSE_PIXEL_THRESHOLD,
     DCE_THRESHOLD,
     DCE_VERTICES,
     boundary_partition,
@@ -99,9 +99,7 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
         chosen = len(seq.removed)
     else:
         if coarse == "dce" and norm.alpha is not None:
-            keep = dce_support(crop, ma.rows, ma.cols, ma.r2, None, None,
-                               pixel_threshold=COARSE_PIXEL_THRESHOLD)
-            before = remove_unsupported(graph, keep)
+            before = coarse_dce(graph, crop, ma.r2)
             # The Bayesian stage starts from the coarse skeleton, as in the paper's
             # experiments: its α and ℓ̄ are those of its own starting skeleton.
             coarse_norm = normalisation(graph, ma.r2, beta)

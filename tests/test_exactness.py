@@ -66,23 +66,35 @@ def test_fast_equals_naive(case):
     assert steps > 0  # the case really exercised pruning
 
 
-@pytest.mark.parametrize("case", CASES[::3])
-def test_fast_equals_naive_from_the_coarse_dce_skeleton(case):
-    """``coarse="dce"``: the Bayesian stage, started from the DCE-pruned skeleton."""
-    from skelprune.api import dce_support
-    from skelprune.dce import COARSE_PIXEL_THRESHOLD
-    from skelprune.pruning import remove_unsupported
+NOISY = [pytest.param(("k216", i, s), id=f"noisy-kimia216-{K216[i].stem}-{s}")
+         for i, s in ((5, 1.0), (60, 1.5), (150, 1.0))]
 
+
+def make_noisy(case: tuple[str, int, float]) -> np.ndarray:
+    from skelprune.perturb import boundary_noise
+
+    _, i, scale = case
+    return boundary_noise(load(K216[i], factor=2), "gaussian", scale, rng=i, margin=2)
+
+
+@pytest.mark.parametrize("case", CASES[::3] + NOISY)
+def test_fast_equals_naive_from_the_coarse_dce_skeleton(case):
+    """``coarse="dce"``: the Bayesian stage, started from the coarse skeleton.
+
+    The noisy shapes make the coarse stage's roughness-raised threshold and its
+    one-branch-per-convex-vertex rule act.
+    """
+    from skelprune.coarse import coarse_dce
+
+    mask = make_noisy(case) if len(case) == 3 else make(case)
     steps = 0
-    for crop, _ in components(make(case)):
+    for crop, _ in components(mask):
         ma = medial_axis(crop, squared_distance(crop))
         graphs = [BranchGraph(ma.rows, ma.cols, crop.shape) for _ in range(2)]
         norm = normalisation(graphs[0], ma.r2, 9.0)
         if norm.alpha is None:
             continue
-        keep = dce_support(crop, ma.rows, ma.cols, ma.r2, None, None,
-                           pixel_threshold=COARSE_PIXEL_THRESHOLD)
-        coarse = remove_unsupported(graphs[0], keep)
+        coarse = coarse_dce(graphs[0], crop, ma.r2)
         for b in coarse:
             graphs[1].remove_end_branch(b)
         norm = normalisation(graphs[0], ma.r2, 9.0)

@@ -1,0 +1,130 @@
+"""The coarse stage of ``prune(coarse="dce")``: roughness-raised DCE stop, one branch per
+convex vertex (``skelprune/coarse.py``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skelprune.api import components
+from skelprune.coarse import (
+    ROUGHNESS_FLOOR,
+    boundary_roughness,
+    coarse_dce,
+    coarse_threshold,
+)
+from skelprune.dce import (
+    COARSE_PIXEL_THRESHOLD,
+    boundary_partition,
+    generated_in_several_segments,
+    generating_segments,
+)
+from skelprune.graph import BranchGraph
+from skelprune.medial_axis import medial_axis, squared_distance
+from skelprune.perturb import boundary_noise, noisy_rectangle
+from skelprune.pruning import remove_unsupported
+
+from .shapes import dataset, load
+
+SHAPES = dataset("kimia216")[::6] + dataset("kimia99")[::6]
+
+
+def _axis(mask: np.ndarray):
+    crop, _ = max(components(mask), key=lambda c: int(c[0].sum()))
+    return crop, medial_axis(crop, squared_distance(crop))
+
+
+def test_clean_silhouettes_keep_about_the_base_threshold():
+    """Most clean shapes stay under the floor; the roughest (a fork's tines, an
+    aircraft's many corners) get at most a pixel or two more."""
+    rough = np.array([boundary_roughness(load(p)) for p in SHAPES])
+    assert np.median(rough) < ROUGHNESS_FLOOR / 1.5
+    assert np.mean(rough < ROUGHNESS_FLOOR) >= 0.85
+    assert max(coarse_threshold(load(p)) for p in SHAPES) <= COARSE_PIXEL_THRESHOLD + 2.0
+
+
+@pytest.mark.parametrize("kind,scale", [("gaussian", 1.0), ("gaussian", 1.5), ("uniform", 1.0)])
+def test_boundary_noise_raises_roughness_and_threshold(kind, scale):
+    clean = [load(p) for p in SHAPES[::4]]
+    noisy = [boundary_noise(m, kind, scale, rng=k, margin=2) for k, m in enumerate(clean)]
+    for c, n in zip(clean, noisy, strict=True):
+        assert boundary_roughness(n) > max(boundary_roughness(c), ROUGHNESS_FLOOR)
+        assert coarse_threshold(n) > coarse_threshold(c)
+    assert np.median([coarse_threshold(n) for n in noisy]) > 2 * COARSE_PIXEL_THRESHOLD
+
+
+def test_roughness_of_degenerate_masks():
+    assert boundary_roughness(np.zeros((5, 5), bool)) == 0.0
+    one = np.zeros((5, 5), bool)
+    one[2, 2] = True
+    assert boundary_roughness(one) == 1.0  # the opening removes the single pixel
+
+
+def test_generating_segments_agrees_with_the_support_test():
+    crop, ma = _axis(load(SHAPES[3], factor=2))
+    part = boundary_partition(crop, pixel_threshold=COARSE_PIXEL_THRESHOLD)
+    pts = np.stack([ma.rows, ma.cols], axis=1)
+    labels = generating_segments(pts, ma.r2, part)
+    assert labels.shape == (len(pts), 3)
+    np.testing.assert_array_equal(labels[:, 1] != -1,
+                                  generated_in_several_segments(pts, ma.r2, part))
+    assert ((labels >= -1) & (labels < part.n_segments)).all()
+    assert (labels[:, 0] >= 0).all()  # every disk touches the boundary somewhere
+    # ids are distinct within a row
+    for a, b in ((0, 1), (0, 2), (1, 2)):
+        both = (labels[:, a] >= 0) & (labels[:, b] >= 0)
+        assert (labels[both, a] != labels[both, b]).all()
+
+
+@pytest.mark.parametrize("kind,scale", [("gaussian", 1.0), ("gaussian", 1.5), ("uniform", 1.5)])
+@pytest.mark.parametrize("seed", range(3))
+def test_noisy_rectangle_coarse_skeleton_has_one_branch_per_corner(kind, scale, seed):
+    mask, _ = noisy_rectangle(60, 160, kind, scale, rng=seed)
+    crop, ma = _axis(mask)
+    graph = BranchGraph(ma.rows, ma.cols, crop.shape)
+    coarse_dce(graph, crop, ma.r2)
+    assert graph.n_endpoints() == 4
+    # every surviving end reaches its own corner of the rectangle (rows 8..67, cols 8..167,
+    # the crop is shifted by its padding)
+    ends = [graph.endpoint(b) for b in graph.end_branches()]
+    corners = {(int(graph.rows[p] > crop.shape[0] / 2), int(graph.cols[p] > crop.shape[1] / 2))
+               for p in ends}
+    assert len(corners) == 4
+
+
+def test_the_corner_rule_is_what_removes_forks():
+    """Support alone leaves forks at the corners of these rectangles; the rule removes them."""
+    forked = 0
+    for seed in range(5):
+        mask, _ = noisy_rectangle(60, 160, "gaussian", 1.5, rng=seed)
+        crop, ma = _axis(mask)
+        part = boundary_partition(crop, pixel_threshold=coarse_threshold(crop))
+        support_only = BranchGraph(ma.rows, ma.cols, crop.shape)
+        labels = generating_segments(np.stack([ma.rows, ma.cols], axis=1), ma.r2, part)
+        remove_unsupported(support_only, labels[:, 1] != -1)
+        full = BranchGraph(ma.rows, ma.cols, crop.shape)
+        coarse_dce(full, crop, ma.r2)
+        assert full.n_endpoints() <= support_only.n_endpoints()
+        forked += support_only.n_endpoints() > full.n_endpoints()
+    assert forked >= 3
+
+
+@pytest.mark.parametrize("path", SHAPES[::3], ids=lambda p: p.stem)
+def test_coarse_removals_replay_and_keep_topology(path):
+    mask = boundary_noise(load(path), "gaussian", 1.0, rng=1, margin=2)
+    crop, ma = _axis(mask)
+    graph = BranchGraph(ma.rows, ma.cols, crop.shape)
+    before_ends = graph.n_endpoints()
+    removed = coarse_dce(graph, crop, ma.r2)
+    assert removed and graph.n_endpoints() < before_ends
+    replay = BranchGraph(ma.rows, ma.cols, crop.shape)
+    for b in removed:
+        replay.remove_end_branch(b)
+    np.testing.assert_array_equal(np.sort(graph.alive_points()), np.sort(replay.alive_points()))
+    # a tree stays one tree: points alive form one 8-connected component
+    from scipy import ndimage
+
+    img = np.zeros(crop.shape, bool)
+    alive = graph.alive_points()
+    img[graph.rows[alive], graph.cols[alive]] = True
+    assert ndimage.label(img, np.ones((3, 3), bool))[1] == 1

@@ -513,21 +513,46 @@ def _label_raster(seg_lo, seg_hi, pts, seg):
 
 @numba.njit(cache=True)
 def _rim_spans_segments(seg_lo, seg_hi, pts, r2, tolerance):
+    # Only the annulus r2 <= d2 <= o2 is scanned, row by row, as two column runs per row
+    # (the same integer/float comparisons as a test of every pixel of the square), and a
+    # point stops as soon as two labels are seen: the answer cannot change after that.
     out = np.zeros(pts.shape[0], np.bool_)
     for k in range(pts.shape[0]):
         outer = np.sqrt(r2[k]) + tolerance
         o2 = outer * outer
         reach = int(outer)
         lo, hi = np.iinfo(np.int64).max, -1
+        r, c = pts[k, 0], pts[k, 1]
         for dy in range(-reach, reach + 1):
-            row_lo, row_hi = seg_lo[pts[k, 0] + dy], seg_hi[pts[k, 0] + dy]
-            for dx in range(-reach, reach + 1):
-                d2 = dy * dy + dx * dx
-                if d2 < r2[k] or d2 > o2:
-                    continue
-                q = pts[k, 1] + dx
+            dy2 = dy * dy
+            if dy2 > o2:
+                continue
+            # widest dx with dy2 + dx^2 <= o2, narrowest with dy2 + dx^2 >= r2 (the
+            # float square roots are only a first guess, fixed up with the exact tests)
+            dx_hi = int(np.sqrt(o2 - dy2))
+            while dy2 + (dx_hi + 1) * (dx_hi + 1) <= o2:
+                dx_hi += 1
+            while dx_hi > 0 and dy2 + dx_hi * dx_hi > o2:
+                dx_hi -= 1
+            dx_lo = 0
+            if r2[k] > dy2:
+                dx_lo = int(np.sqrt(r2[k] - dy2))
+                while dx_lo > 0 and dy2 + (dx_lo - 1) * (dx_lo - 1) >= r2[k]:
+                    dx_lo -= 1
+                while dy2 + dx_lo * dx_lo < r2[k]:
+                    dx_lo += 1
+            if dx_lo > dx_hi:
+                continue
+            row_lo, row_hi = seg_lo[r + dy], seg_hi[r + dy]
+            for q in range(c - dx_hi, c - max(dx_lo, 1) + 1):  # left run, without dx = 0
                 if row_hi[q] >= 0:
                     lo = min(lo, row_lo[q])
                     hi = max(hi, row_hi[q])
+            for q in range(c + dx_lo, c + dx_hi + 1):  # right run
+                if row_hi[q] >= 0:
+                    lo = min(lo, row_lo[q])
+                    hi = max(hi, row_hi[q])
+            if hi >= 0 and lo != hi:
+                break  # two segments already: more labels cannot undo that
         out[k] = hi >= 0 and lo != hi
     return out

@@ -27,7 +27,6 @@ Conventions (see ``docs/dce.md``):
 
 from __future__ import annotations
 
-import heapq
 from dataclasses import dataclass
 from itertools import pairwise
 
@@ -82,7 +81,48 @@ def _relevance(xy: np.ndarray, p: int, i: int, q: int, perimeter: float) -> floa
 
 
 @numba.njit(cache=True)
+def _before(key: np.ndarray, a: int, b: int) -> bool:
+    # the heap order: relevance, then vertex index (ties go to the smaller index)
+    return key[a] < key[b] or (key[a] == key[b] and a < b)
+
+
+@numba.njit(cache=True)
+def _sift_up(heap: np.ndarray, pos: np.ndarray, key: np.ndarray, j: int) -> None:
+    v = heap[j]
+    while j > 0:
+        up = (j - 1) >> 1
+        if not _before(key, v, heap[up]):
+            break
+        heap[j] = heap[up]
+        pos[heap[j]] = j
+        j = up
+    heap[j] = v
+    pos[v] = j
+
+
+@numba.njit(cache=True)
+def _sift_down(heap: np.ndarray, pos: np.ndarray, key: np.ndarray, j: int, size: int) -> None:
+    v = heap[j]
+    while True:
+        child = 2 * j + 1
+        if child >= size:
+            break
+        if child + 1 < size and _before(key, heap[child + 1], heap[child]):
+            child += 1
+        if not _before(key, heap[child], v):
+            break
+        heap[j] = heap[child]
+        pos[heap[j]] = j
+        j = child
+    heap[j] = v
+    pos[v] = j
+
+
+@numba.njit(cache=True)
 def _evolve(xy: np.ndarray, n_keep: int, threshold: float) -> np.ndarray:
+    # An indexed binary heap over the live vertices keyed by (relevance, index): a deletion
+    # re-keys its two neighbours in place. The live vertex of least (relevance, index) is
+    # the same one a lazily invalidated heap of tuples would pop, so is the result.
     n = xy.shape[0]
     prev = np.empty(n, np.int64)
     nxt = np.empty(n, np.int64)
@@ -97,28 +137,36 @@ def _evolve(xy: np.ndarray, n_keep: int, threshold: float) -> np.ndarray:
     if perimeter == 0.0:
         perimeter = 1.0
     alive = np.ones(n, np.bool_)
-    version = np.zeros(n, np.int64)
-    heap = [(_relevance(xy, prev[0], 0, nxt[0], perimeter), 0, 0)]
-    for i in range(1, n):
-        heap.append((_relevance(xy, prev[i], i, nxt[i], perimeter), i, 0))
-    heapq.heapify(heap)
+    key = np.empty(n, np.float64)
+    for i in range(n):
+        key[i] = _relevance(xy, prev[i], i, nxt[i], perimeter)
+    heap = np.arange(n)
+    pos = np.arange(n)
+    size = n
+    for j in range(n // 2 - 1, -1, -1):
+        _sift_down(heap, pos, key, j, size)
     count = n
-    while count > 3 and len(heap) > 0:
-        k, i, v = heapq.heappop(heap)
-        if not alive[i] or v != version[i]:
-            continue  # stale entry (lazy invalidation)
-        if count <= n_keep and k > threshold:
+    while count > 3:
+        i = heap[0]
+        if count <= n_keep and key[i] > threshold:
             break
+        size -= 1
+        if size > 0:
+            heap[0] = heap[size]
+            pos[heap[0]] = 0
+            _sift_down(heap, pos, key, 0, size)
         p = prev[i]
         q = nxt[i]
         nxt[p] = q
         prev[q] = p
         alive[i] = False
         count -= 1
-        version[p] += 1
-        version[q] += 1
-        heapq.heappush(heap, (_relevance(xy, prev[p], p, q, perimeter), p, version[p]))
-        heapq.heappush(heap, (_relevance(xy, p, q, nxt[q], perimeter), q, version[q]))
+        key[p] = _relevance(xy, prev[p], p, q, perimeter)
+        _sift_up(heap, pos, key, pos[p])
+        _sift_down(heap, pos, key, pos[p], size)
+        key[q] = _relevance(xy, p, q, nxt[q], perimeter)
+        _sift_up(heap, pos, key, pos[q])
+        _sift_down(heap, pos, key, pos[q], size)
     return np.nonzero(alive)[0]
 
 
@@ -137,7 +185,7 @@ def evolve_polygon(
     has a relevance ``<= threshold``. With neither given, the defaults
     :data:`DCE_VERTICES` and :data:`DCE_THRESHOLD` (together). At least 3 vertices are
     always kept. Ties go to the smaller
-    index, so the result is deterministic. Runs in O(n log n) (heap, lazy invalidation).
+    index, so the result is deterministic. Runs in O(n log n) (indexed binary heap).
 
     Parameters
     ----------

@@ -456,43 +456,67 @@ def boundary_partition(
     >>> part.n_segments, part.points.shape
     (4, (120, 2))
     """
-    pts, seg, pid, verts, convex = [], [], [], [], []
+    xy, bg, bounds = _trace_boundaries(np.ascontiguousarray(mask, dtype=np.bool_))
+    if len(bounds) < 2:
+        raise ValueError("mask has no foreground pixel")
+    seg = np.empty(len(xy), np.int64)
+    pid = np.empty(len(xy), np.int64)
+    verts, convex = [], []
     next_id = 0
-    for k, (poly, bg) in enumerate(_boundary_polygons(mask)):
+    for k, (a, b) in enumerate(pairwise(bounds.tolist())):
+        poly = xy[a:b]
         if pixel_threshold is not None:
-            perimeter = float(np.hypot(*(np.roll(poly, -1, axis=0) - poly).T).sum())
+            d = np.diff(poly, axis=0, append=poly[:1])  # edge i runs from vertex i to i + 1
+            perimeter = float(np.hypot(d[:, 0], d[:, 1]).sum())
             threshold = pixel_threshold / max(perimeter, 1.0)
         idx = evolve_polygon(poly, n_vertices=n_vertices, threshold=threshold)
-        v = poly[idx]
-        d_in = v - np.roll(v, 1, axis=0)
-        d_out = np.roll(v, -1, axis=0) - v
-        # (row, col) frame with the shape on the left: convex turns have cross > 0
-        cross = d_in[:, 0] * d_out[:, 1] - d_in[:, 1] * d_out[:, 0]
-        is_convex = cross > 0
-        cuts = idx[is_convex]
-        labels = np.zeros(len(poly), np.int64)
-        if len(cuts) >= 2:
-            # point j gets the index of the last cut at or before it (cyclically)
-            labels = (np.searchsorted(cuts, np.arange(len(poly)), side="right") - 1) % len(cuts)
-            n_seg = len(cuts)
-        else:
-            n_seg = 1
-        pts.append(bg)
-        seg.append(labels + next_id)
-        pid.append(np.full(len(poly), k, np.int64))
-        verts.append(v)
+        is_convex, n_seg = _cut_at_convex(poly, idx, seg[a:b], next_id)
+        pid[a:b] = k
+        verts.append(poly[idx])
         convex.append(is_convex)
         next_id += n_seg
-    if not pts:
-        raise ValueError("mask has no foreground pixel")
     return BoundaryPartition(
-        points=np.concatenate(pts),
-        segment=np.concatenate(seg),
-        polygon_id=np.concatenate(pid),
+        points=bg,
+        segment=seg,
+        polygon_id=pid,
         vertices=verts,
         convex=convex,
         n_segments=next_id,
     )
+
+
+@numba.njit(cache=True)
+def _cut_at_convex(
+    poly: np.ndarray, idx: np.ndarray, labels: np.ndarray, first_id: int
+) -> tuple[np.ndarray, int]:
+    """Convex flags of the kept vertices ``idx``; fills ``labels`` with segment ids.
+
+    Point ``j`` gets ``first_id`` plus the rank of the last convex vertex at or before it
+    (cyclically); with fewer than two convex vertices the whole polygon is one segment.
+    Returns the flags and the number of segments.
+    """
+    m = idx.shape[0]
+    is_convex = np.empty(m, np.bool_)
+    n_cuts = 0
+    for t in range(m):
+        a, b, c = idx[(t - 1) % m], idx[t], idx[(t + 1) % m]
+        in0, in1 = poly[b, 0] - poly[a, 0], poly[b, 1] - poly[a, 1]
+        out0, out1 = poly[c, 0] - poly[b, 0], poly[c, 1] - poly[b, 1]
+        # (row, col) frame with the shape on the left: convex turns have cross > 0
+        is_convex[t] = in0 * out1 - in1 * out0 > 0
+        n_cuts += is_convex[t]
+    if n_cuts < 2:
+        labels[:] = first_id
+        return is_convex, 1
+    cuts = idx[is_convex]
+    rank = n_cuts - 1  # before the first cut: still the segment of the last one
+    nxt = 0
+    for j in range(labels.shape[0]):
+        while nxt < n_cuts and cuts[nxt] <= j:
+            rank = nxt
+            nxt += 1
+        labels[j] = first_id + rank
+    return is_convex, n_cuts
 
 
 def generated_in_several_segments(
@@ -534,29 +558,33 @@ def generated_in_several_segments(
     n = len(pts)
     if n == 0:
         return np.zeros(0, bool)
-    # Segment labels on a raster (a boundary pixel can border two segments: keep the
-    # smallest and largest label), then scan each disk's rim: no background pixel is
-    # nearer than r(s), so the generating points all lie in r <= d <= r + tolerance.
-    bp = partition.points
-    lo_r, lo_c = min(int(bp[:, 0].min()), int(pts[:, 0].min())), min(int(bp[:, 1].min()),
-                                                                      int(pts[:, 1].min()))
-    reach = int(np.ceil(np.sqrt(float(np.max(r2))) + tolerance)) + 1
-    origin = np.array([lo_r - reach, lo_c - reach])
-    shape = (int(max(bp[:, 0].max(), pts[:, 0].max())) - origin[0] + reach + 1,
-             int(max(bp[:, 1].max(), pts[:, 1].max())) - origin[1] + reach + 1)
-    seg_lo = np.full(shape, np.iinfo(np.int64).max, np.int64)
-    seg_hi = np.full(shape, -1, np.int64)
-    _label_raster(seg_lo, seg_hi, bp - origin, partition.segment.astype(np.int64))
-    return _rim_spans_segments(seg_lo, seg_hi, pts - origin,
-                               np.asarray(r2, np.int64).reshape(n), float(tolerance))
+    return _generated(np.ascontiguousarray(partition.points, dtype=np.int64),
+                      np.ascontiguousarray(partition.segment, dtype=np.int64),
+                      np.ascontiguousarray(pts), np.asarray(r2, np.int64).reshape(n),
+                      float(tolerance))
 
 
 @numba.njit(cache=True)
-def _label_raster(seg_lo, seg_hi, pts, seg):
-    for k in range(pts.shape[0]):
-        r, c = pts[k, 0], pts[k, 1]
+def _generated(bp, seg, pts, r2, tolerance):
+    # Segment labels on a raster (a boundary pixel can border two segments: keep the
+    # smallest and largest label), then scan each disk's rim: no background pixel is
+    # nearer than r(s), so the generating points all lie in r <= d <= r + tolerance.
+    lo_r = min(bp[:, 0].min(), pts[:, 0].min())
+    lo_c = min(bp[:, 1].min(), pts[:, 1].min())
+    reach = int(np.ceil(np.sqrt(float(r2.max())) + tolerance)) + 1
+    o_r, o_c = lo_r - reach, lo_c - reach
+    h = max(bp[:, 0].max(), pts[:, 0].max()) - o_r + reach + 1
+    w = max(bp[:, 1].max(), pts[:, 1].max()) - o_c + reach + 1
+    seg_lo = np.full((h, w), np.iinfo(np.int64).max, np.int64)
+    seg_hi = np.full((h, w), -1, np.int64)
+    for k in range(bp.shape[0]):
+        r, c = bp[k, 0] - o_r, bp[k, 1] - o_c
         seg_lo[r, c] = min(seg_lo[r, c], seg[k])
         seg_hi[r, c] = max(seg_hi[r, c], seg[k])
+    local = np.empty_like(pts)
+    local[:, 0] = pts[:, 0] - o_r
+    local[:, 1] = pts[:, 1] - o_c
+    return _rim_spans_segments(seg_lo, seg_hi, local, r2, tolerance)
 
 
 @numba.njit(cache=True)

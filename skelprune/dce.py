@@ -293,7 +293,7 @@ def _trace_boundaries(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndar
     padded = np.zeros((h, w), np.bool_)
     padded[1:-1, 1:-1] = mask
     n_ids = 2 * h * w
-    prv = np.empty(n_ids, np.int32)  # previous point of the chain (skimage's deque order)
+    prv = np.empty(n_ids, np.int64)  # previous point of the chain (skimage's deque order)
     start_of = np.full(n_ids, -1, np.int32)  # chain that starts at this point, or -1
     end_of = np.full(n_ids, -1, np.int32)  # chain that ends at this point, or -1
     first = [0]  # first / last point of each chain; [0] only types the lists
@@ -565,7 +565,8 @@ def generated_in_several_segments(
 
 
 @numba.njit(cache=True)
-def _generated(bp, seg, pts, r2, tolerance):
+def _generated(bp: np.ndarray, seg: np.ndarray, pts: np.ndarray, r2: np.ndarray,
+               tolerance: float) -> np.ndarray:
     # Segment labels on a raster (a boundary pixel can border two segments: keep the
     # smallest and largest label), then scan each disk's rim: no background pixel is
     # nearer than r(s), so the generating points all lie in r <= d <= r + tolerance.
@@ -588,7 +589,8 @@ def _generated(bp, seg, pts, r2, tolerance):
 
 
 @numba.njit(cache=True)
-def _rim_spans_segments(seg_lo, seg_hi, pts, r2, tolerance):
+def _rim_spans_segments(seg_lo: np.ndarray, seg_hi: np.ndarray, pts: np.ndarray,
+                        r2: np.ndarray, tolerance: float) -> np.ndarray:
     # Only the annulus r2 <= d2 <= o2 is scanned, row by row, as two column runs per row
     # (the same integer/float comparisons as a test of every pixel of the square), and a
     # point stops as soon as two labels are seen: the answer cannot change after that.

@@ -10,7 +10,8 @@ Conventions (see ``docs/dce.md``):
 
 * **Boundary polygon.** Each boundary (the outer one and one per hole) is the closed
   crack curve between the shape and the background, traced by marching squares at level
-  0.5 with the shape 8-connected (:func:`skimage.measure.find_contours`). Every vertex is
+  0.5 with the shape 8-connected (the polygons of :func:`skimage.measure.find_contours`,
+  replayed in numba by :func:`_trace_boundaries`). Every vertex is
   the midpoint of a 4-adjacent (shape pixel, background pixel) pair. The shape is always
   on the left of the curve (image view), so outer boundaries and holes share one
   orientation and "convex w.r.t. the shape" is one turn sign for all of them.
@@ -26,12 +27,11 @@ Conventions (see ``docs/dce.md``):
 
 from __future__ import annotations
 
-import heapq
 from dataclasses import dataclass
+from itertools import pairwise
 
 import numba
 import numpy as np
-from skimage.measure import find_contours
 
 __all__ = [
     "COARSE_PIXEL_THRESHOLD",
@@ -82,7 +82,48 @@ def _relevance(xy: np.ndarray, p: int, i: int, q: int, perimeter: float) -> floa
 
 
 @numba.njit(cache=True)
+def _before(key: np.ndarray, a: int, b: int) -> bool:
+    # the heap order: relevance, then vertex index (ties go to the smaller index)
+    return key[a] < key[b] or (key[a] == key[b] and a < b)
+
+
+@numba.njit(cache=True)
+def _sift_up(heap: np.ndarray, pos: np.ndarray, key: np.ndarray, j: int) -> None:
+    v = heap[j]
+    while j > 0:
+        up = (j - 1) >> 1
+        if not _before(key, v, heap[up]):
+            break
+        heap[j] = heap[up]
+        pos[heap[j]] = j
+        j = up
+    heap[j] = v
+    pos[v] = j
+
+
+@numba.njit(cache=True)
+def _sift_down(heap: np.ndarray, pos: np.ndarray, key: np.ndarray, j: int, size: int) -> None:
+    v = heap[j]
+    while True:
+        child = 2 * j + 1
+        if child >= size:
+            break
+        if child + 1 < size and _before(key, heap[child + 1], heap[child]):
+            child += 1
+        if not _before(key, heap[child], v):
+            break
+        heap[j] = heap[child]
+        pos[heap[j]] = j
+        j = child
+    heap[j] = v
+    pos[v] = j
+
+
+@numba.njit(cache=True)
 def _evolve(xy: np.ndarray, n_keep: int, threshold: float) -> np.ndarray:
+    # An indexed binary heap over the live vertices keyed by (relevance, index): a deletion
+    # re-keys its two neighbours in place. The live vertex of least (relevance, index) is
+    # the same one a lazily invalidated heap of tuples would pop, so is the result.
     n = xy.shape[0]
     prev = np.empty(n, np.int64)
     nxt = np.empty(n, np.int64)
@@ -97,28 +138,36 @@ def _evolve(xy: np.ndarray, n_keep: int, threshold: float) -> np.ndarray:
     if perimeter == 0.0:
         perimeter = 1.0
     alive = np.ones(n, np.bool_)
-    version = np.zeros(n, np.int64)
-    heap = [(_relevance(xy, prev[0], 0, nxt[0], perimeter), 0, 0)]
-    for i in range(1, n):
-        heap.append((_relevance(xy, prev[i], i, nxt[i], perimeter), i, 0))
-    heapq.heapify(heap)
+    key = np.empty(n, np.float64)
+    for i in range(n):
+        key[i] = _relevance(xy, prev[i], i, nxt[i], perimeter)
+    heap = np.arange(n)
+    pos = np.arange(n)
+    size = n
+    for j in range(n // 2 - 1, -1, -1):
+        _sift_down(heap, pos, key, j, size)
     count = n
-    while count > 3 and len(heap) > 0:
-        k, i, v = heapq.heappop(heap)
-        if not alive[i] or v != version[i]:
-            continue  # stale entry (lazy invalidation)
-        if count <= n_keep and k > threshold:
+    while count > 3:
+        i = heap[0]
+        if count <= n_keep and key[i] > threshold:
             break
+        size -= 1
+        if size > 0:
+            heap[0] = heap[size]
+            pos[heap[0]] = 0
+            _sift_down(heap, pos, key, 0, size)
         p = prev[i]
         q = nxt[i]
         nxt[p] = q
         prev[q] = p
         alive[i] = False
         count -= 1
-        version[p] += 1
-        version[q] += 1
-        heapq.heappush(heap, (_relevance(xy, prev[p], p, q, perimeter), p, version[p]))
-        heapq.heappush(heap, (_relevance(xy, p, q, nxt[q], perimeter), q, version[q]))
+        key[p] = _relevance(xy, prev[p], p, q, perimeter)
+        _sift_up(heap, pos, key, pos[p])
+        _sift_down(heap, pos, key, pos[p], size)
+        key[q] = _relevance(xy, p, q, nxt[q], perimeter)
+        _sift_up(heap, pos, key, pos[q])
+        _sift_down(heap, pos, key, pos[q], size)
     return np.nonzero(alive)[0]
 
 
@@ -137,7 +186,7 @@ def evolve_polygon(
     has a relevance ``<= threshold``. With neither given, the defaults
     :data:`DCE_VERTICES` and :data:`DCE_THRESHOLD` (together). At least 3 vertices are
     always kept. Ties go to the smaller
-    index, so the result is deterministic. Runs in O(n log n) (heap, lazy invalidation).
+    index, so the result is deterministic. Runs in O(n log n) (indexed binary heap).
 
     Parameters
     ----------
@@ -203,25 +252,172 @@ class BoundaryPartition:
 
 
 def _boundary_polygons(mask: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Closed crack polygons (float row/col) with their background pixels (int row/col)."""
-    padded = np.pad(np.asarray(mask, dtype=bool), 1)
-    out = []
-    for c in find_contours(
-        padded.astype(np.float64), 0.5, fully_connected="high", positive_orientation="high"
-    ):
-        if len(c) > 1 and np.array_equal(c[0], c[-1]):
-            c = c[:-1]
-        keep = np.ones(len(c), bool)
-        keep[1:] = np.any(np.diff(c, axis=0) != 0, axis=1)
-        c = c[keep]
-        if len(c) < 3:
+    """Closed crack polygons (float row/col) with their background pixels (int row/col).
+
+    Exactly the polygons of ``find_contours(pad(mask, 1), 0.5, fully_connected="high",
+    positive_orientation="high")`` with the closing vertex dropped: same vertices, same
+    start vertex and orientation, same polygon order (``tests/test_dce_fast.py`` checks
+    this against skimage). The DCE tie-breaking depends on vertex indices, so the start
+    vertex matters.
+    """
+    xy, bg, bounds = _trace_boundaries(np.ascontiguousarray(mask, dtype=np.bool_))
+    return [(xy[a:b], bg[a:b]) for a, b in pairwise(bounds.tolist())]
+
+
+@numba.njit(cache=True)
+def _trace_boundaries(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Marching squares at level 0.5 on the mask padded by one pixel, shape 8-connected.
+
+    A replay of skimage's ``find_contours`` on a binary image: the same raster scan of
+    2x2 squares, the same directed segments per square case (shape on the right of each
+    segment; the diagonal cases 6 and 9 connect the shape pixels) and the same assembly of
+    segments into chains (a chain absorbs a later-created one, so a closed curve keeps the
+    number and start of the first chain it grew from). skimage's dict of deques becomes
+    linked lists over point ids: every crack midpoint ends exactly one segment and starts
+    exactly one, since the padding keeps every curve closed. The output walks each curve
+    backwards from its start, which is skimage's ``positive_orientation="high"`` reversal
+    (shape on the left).
+
+    Point ids: ``2 * (r * w + c)`` is the midpoint between padded pixels ``(r, c)`` and
+    ``(r, c + 1)``, ``2 * (r * w + c) + 1`` the one between ``(r, c)`` and ``(r + 1, c)``.
+
+    Returns
+    -------
+    xy : (n, 2) float array
+        All vertices, row/col in the frame of ``mask`` (half-integer on one axis).
+    bg : (n, 2) int array
+        The background pixel of each vertex.
+    bounds : (m + 1,) int array
+        Polygon ``i`` is ``xy[bounds[i]:bounds[i + 1]]``.
+    """
+    h, w = mask.shape[0] + 2, mask.shape[1] + 2
+    padded = np.zeros((h, w), np.bool_)
+    padded[1:-1, 1:-1] = mask
+    n_ids = 2 * h * w
+    prv = np.empty(n_ids, np.int64)  # previous point of the chain (skimage's deque order)
+    start_of = np.full(n_ids, -1, np.int32)  # chain that starts at this point, or -1
+    end_of = np.full(n_ids, -1, np.int32)  # chain that ends at this point, or -1
+    first = [0]  # first / last point of each chain; [0] only types the lists
+    last = [0]
+    alive = [False]  # False once merged into an earlier chain
+    first.pop()
+    last.pop()
+    alive.pop()
+    for r0 in range(h - 1):
+        r1 = r0 + 1
+        for c0 in range(w - 1):
+            c1 = c0 + 1
+            case = ((1 if padded[r0, c0] else 0) + (2 if padded[r0, c1] else 0)
+                    + (4 if padded[r1, c0] else 0) + (8 if padded[r1, c1] else 0))
+            if case == 0 or case == 15:
+                continue
+            top = 2 * (r0 * w + c0)
+            bottom = 2 * (r1 * w + c0)
+            left = top + 1
+            right = 2 * (r0 * w + c1) + 1
+            for second in range(2):
+                # the segment(s) of the square, in skimage's order and direction
+                if second:
+                    if case == 6:
+                        a, b = right, bottom
+                    elif case == 9:
+                        a, b = bottom, left
+                    else:
+                        break
+                elif case == 1:
+                    a, b = top, left
+                elif case == 2:
+                    a, b = right, top
+                elif case == 3:
+                    a, b = right, left
+                elif case == 4:
+                    a, b = left, bottom
+                elif case == 5:
+                    a, b = top, bottom
+                elif case == 6:
+                    a, b = left, top
+                elif case == 7:
+                    a, b = right, bottom
+                elif case == 8:
+                    a, b = bottom, right
+                elif case == 9:
+                    a, b = top, right
+                elif case == 10:
+                    a, b = bottom, top
+                elif case == 11:
+                    a, b = bottom, left
+                elif case == 12:
+                    a, b = left, right
+                elif case == 13:
+                    a, b = top, right
+                else:
+                    a, b = left, top
+                tail = start_of[b]  # the chain the segment is prepended to
+                head = end_of[a]  # the chain the segment is appended to
+                start_of[b] = -1
+                end_of[a] = -1
+                prv[b] = a
+                if tail >= 0 and head >= 0:
+                    if tail > head:  # tail created later: appended to head
+                        last[head] = last[tail]
+                        end_of[last[tail]] = head
+                        alive[tail] = False
+                    elif tail < head:  # head created later: prepended to tail
+                        first[tail] = first[head]
+                        start_of[first[head]] = tail
+                        alive[head] = False
+                    # tail == head: the curve closes, nothing more to record
+                elif tail < 0 and head < 0:
+                    start_of[a] = len(first)
+                    end_of[b] = len(first)
+                    first.append(a)
+                    last.append(b)
+                    alive.append(True)
+                elif head < 0:
+                    first[tail] = a
+                    start_of[a] = tail
+                else:
+                    last[head] = b
+                    end_of[b] = head
+    n = 0
+    for ch in range(len(first)):
+        if alive[ch]:
+            p = first[ch]
+            while True:
+                n += 1
+                p = prv[p]
+                if p == first[ch]:
+                    break
+    xy = np.empty((n, 2), np.float64)
+    bg = np.empty((n, 2), np.int64)
+    bounds = [0]
+    k = 0
+    for ch in range(len(first)):
+        if not alive[ch]:
             continue
-        lo = np.floor(c).astype(np.int64)
-        hi = np.ceil(c).astype(np.int64)  # the two pixels a crack vertex lies between
-        lo_bg = ~padded[lo[:, 0], lo[:, 1]]
-        bg = np.where(lo_bg[:, None], lo, hi)
-        out.append((c - 1.0, bg - 1))
-    return out
+        p = first[ch]
+        while True:
+            cell = p // 2
+            r = cell // w
+            c = cell - r * w
+            # back to the frame of mask (padding removed); the background pixel is
+            # whichever of the two pixels the midpoint lies between is not shape
+            if p % 2 == 0:
+                xy[k, 0] = r - 1.0
+                xy[k, 1] = c - 0.5
+                bg[k, 0] = r - 1
+                bg[k, 1] = c if padded[r, c] else c - 1
+            else:
+                xy[k, 0] = r - 0.5
+                xy[k, 1] = c - 1.0
+                bg[k, 0] = r if padded[r, c] else r - 1
+                bg[k, 1] = c - 1
+            k += 1
+            p = prv[p]
+            if p == first[ch]:
+                break
+        bounds.append(k)
+    return xy, bg, np.array(bounds, np.int64)
 
 
 def boundary_partition(
@@ -261,43 +457,67 @@ def boundary_partition(
     >>> part.n_segments, part.points.shape
     (4, (120, 2))
     """
-    pts, seg, pid, verts, convex = [], [], [], [], []
+    xy, bg, bounds = _trace_boundaries(np.ascontiguousarray(mask, dtype=np.bool_))
+    if len(bounds) < 2:
+        raise ValueError("mask has no foreground pixel")
+    seg = np.empty(len(xy), np.int64)
+    pid = np.empty(len(xy), np.int64)
+    verts, convex = [], []
     next_id = 0
-    for k, (poly, bg) in enumerate(_boundary_polygons(mask)):
+    for k, (a, b) in enumerate(pairwise(bounds.tolist())):
+        poly = xy[a:b]
         if pixel_threshold is not None:
-            perimeter = float(np.hypot(*(np.roll(poly, -1, axis=0) - poly).T).sum())
+            d = np.diff(poly, axis=0, append=poly[:1])  # edge i runs from vertex i to i + 1
+            perimeter = float(np.hypot(d[:, 0], d[:, 1]).sum())
             threshold = pixel_threshold / max(perimeter, 1.0)
         idx = evolve_polygon(poly, n_vertices=n_vertices, threshold=threshold)
-        v = poly[idx]
-        d_in = v - np.roll(v, 1, axis=0)
-        d_out = np.roll(v, -1, axis=0) - v
-        # (row, col) frame with the shape on the left: convex turns have cross > 0
-        cross = d_in[:, 0] * d_out[:, 1] - d_in[:, 1] * d_out[:, 0]
-        is_convex = cross > 0
-        cuts = idx[is_convex]
-        labels = np.zeros(len(poly), np.int64)
-        if len(cuts) >= 2:
-            # point j gets the index of the last cut at or before it (cyclically)
-            labels = (np.searchsorted(cuts, np.arange(len(poly)), side="right") - 1) % len(cuts)
-            n_seg = len(cuts)
-        else:
-            n_seg = 1
-        pts.append(bg)
-        seg.append(labels + next_id)
-        pid.append(np.full(len(poly), k, np.int64))
-        verts.append(v)
+        is_convex, n_seg = _cut_at_convex(poly, idx, seg[a:b], next_id)
+        pid[a:b] = k
+        verts.append(poly[idx])
         convex.append(is_convex)
         next_id += n_seg
-    if not pts:
-        raise ValueError("mask has no foreground pixel")
     return BoundaryPartition(
-        points=np.concatenate(pts),
-        segment=np.concatenate(seg),
-        polygon_id=np.concatenate(pid),
+        points=bg,
+        segment=seg,
+        polygon_id=pid,
         vertices=verts,
         convex=convex,
         n_segments=next_id,
     )
+
+
+@numba.njit(cache=True)
+def _cut_at_convex(
+    poly: np.ndarray, idx: np.ndarray, labels: np.ndarray, first_id: int
+) -> tuple[np.ndarray, int]:
+    """Convex flags of the kept vertices ``idx``; fills ``labels`` with segment ids.
+
+    Point ``j`` gets ``first_id`` plus the rank of the last convex vertex at or before it
+    (cyclically); with fewer than two convex vertices the whole polygon is one segment.
+    Returns the flags and the number of segments.
+    """
+    m = idx.shape[0]
+    is_convex = np.empty(m, np.bool_)
+    n_cuts = 0
+    for t in range(m):
+        a, b, c = idx[(t - 1) % m], idx[t], idx[(t + 1) % m]
+        in0, in1 = poly[b, 0] - poly[a, 0], poly[b, 1] - poly[a, 1]
+        out0, out1 = poly[c, 0] - poly[b, 0], poly[c, 1] - poly[b, 1]
+        # (row, col) frame with the shape on the left: convex turns have cross > 0
+        is_convex[t] = in0 * out1 - in1 * out0 > 0
+        n_cuts += is_convex[t]
+    if n_cuts < 2:
+        labels[:] = first_id
+        return is_convex, 1
+    cuts = idx[is_convex]
+    rank = n_cuts - 1  # before the first cut: still the segment of the last one
+    nxt = 0
+    for j in range(labels.shape[0]):
+        while nxt < n_cuts and cuts[nxt] <= j:
+            rank = nxt
+            nxt += 1
+        labels[j] = first_id + rank
+    return is_convex, n_cuts
 
 
 def generated_in_several_segments(
@@ -339,49 +559,80 @@ def generated_in_several_segments(
     n = len(pts)
     if n == 0:
         return np.zeros(0, bool)
+    return _generated(np.ascontiguousarray(partition.points, dtype=np.int64),
+                      np.ascontiguousarray(partition.segment, dtype=np.int64),
+                      np.ascontiguousarray(pts), np.asarray(r2, np.int64).reshape(n),
+                      float(tolerance))
+
+
+@numba.njit(cache=True)
+def _generated(bp: np.ndarray, seg: np.ndarray, pts: np.ndarray, r2: np.ndarray,
+               tolerance: float) -> np.ndarray:
     # Segment labels on a raster (a boundary pixel can border two segments: keep the
     # smallest and largest label), then scan each disk's rim: no background pixel is
     # nearer than r(s), so the generating points all lie in r <= d <= r + tolerance.
-    bp = partition.points
-    lo_r, lo_c = min(int(bp[:, 0].min()), int(pts[:, 0].min())), min(int(bp[:, 1].min()),
-                                                                      int(pts[:, 1].min()))
-    reach = int(np.ceil(np.sqrt(float(np.max(r2))) + tolerance)) + 1
-    origin = np.array([lo_r - reach, lo_c - reach])
-    shape = (int(max(bp[:, 0].max(), pts[:, 0].max())) - origin[0] + reach + 1,
-             int(max(bp[:, 1].max(), pts[:, 1].max())) - origin[1] + reach + 1)
-    seg_lo = np.full(shape, np.iinfo(np.int64).max, np.int64)
-    seg_hi = np.full(shape, -1, np.int64)
-    _label_raster(seg_lo, seg_hi, bp - origin, partition.segment.astype(np.int64))
-    return _rim_spans_segments(seg_lo, seg_hi, pts - origin,
-                               np.asarray(r2, np.int64).reshape(n), float(tolerance))
-
-
-@numba.njit(cache=True)
-def _label_raster(seg_lo, seg_hi, pts, seg):
-    for k in range(pts.shape[0]):
-        r, c = pts[k, 0], pts[k, 1]
+    lo_r = min(bp[:, 0].min(), pts[:, 0].min())
+    lo_c = min(bp[:, 1].min(), pts[:, 1].min())
+    reach = int(np.ceil(np.sqrt(float(r2.max())) + tolerance)) + 1
+    o_r, o_c = lo_r - reach, lo_c - reach
+    h = max(bp[:, 0].max(), pts[:, 0].max()) - o_r + reach + 1
+    w = max(bp[:, 1].max(), pts[:, 1].max()) - o_c + reach + 1
+    seg_lo = np.full((h, w), np.iinfo(np.int64).max, np.int64)
+    seg_hi = np.full((h, w), -1, np.int64)
+    for k in range(bp.shape[0]):
+        r, c = bp[k, 0] - o_r, bp[k, 1] - o_c
         seg_lo[r, c] = min(seg_lo[r, c], seg[k])
         seg_hi[r, c] = max(seg_hi[r, c], seg[k])
+    local = np.empty_like(pts)
+    local[:, 0] = pts[:, 0] - o_r
+    local[:, 1] = pts[:, 1] - o_c
+    return _rim_spans_segments(seg_lo, seg_hi, local, r2, tolerance)
 
 
 @numba.njit(cache=True)
-def _rim_spans_segments(seg_lo, seg_hi, pts, r2, tolerance):
+def _rim_spans_segments(seg_lo: np.ndarray, seg_hi: np.ndarray, pts: np.ndarray,
+                        r2: np.ndarray, tolerance: float) -> np.ndarray:
+    # Only the annulus r2 <= d2 <= o2 is scanned, row by row, as two column runs per row
+    # (the same integer/float comparisons as a test of every pixel of the square), and a
+    # point stops as soon as two labels are seen: the answer cannot change after that.
     out = np.zeros(pts.shape[0], np.bool_)
     for k in range(pts.shape[0]):
         outer = np.sqrt(r2[k]) + tolerance
         o2 = outer * outer
         reach = int(outer)
         lo, hi = np.iinfo(np.int64).max, -1
+        r, c = pts[k, 0], pts[k, 1]
         for dy in range(-reach, reach + 1):
-            row_lo, row_hi = seg_lo[pts[k, 0] + dy], seg_hi[pts[k, 0] + dy]
-            for dx in range(-reach, reach + 1):
-                d2 = dy * dy + dx * dx
-                if d2 < r2[k] or d2 > o2:
-                    continue
-                q = pts[k, 1] + dx
+            dy2 = dy * dy
+            if dy2 > o2:
+                continue
+            # widest dx with dy2 + dx^2 <= o2, narrowest with dy2 + dx^2 >= r2 (the
+            # float square roots are only a first guess, fixed up with the exact tests)
+            dx_hi = int(np.sqrt(o2 - dy2))
+            while dy2 + (dx_hi + 1) * (dx_hi + 1) <= o2:
+                dx_hi += 1
+            while dx_hi > 0 and dy2 + dx_hi * dx_hi > o2:
+                dx_hi -= 1
+            dx_lo = 0
+            if r2[k] > dy2:
+                dx_lo = int(np.sqrt(r2[k] - dy2))
+                while dx_lo > 0 and dy2 + (dx_lo - 1) * (dx_lo - 1) >= r2[k]:
+                    dx_lo -= 1
+                while dy2 + dx_lo * dx_lo < r2[k]:
+                    dx_lo += 1
+            if dx_lo > dx_hi:
+                continue
+            row_lo, row_hi = seg_lo[r + dy], seg_hi[r + dy]
+            for q in range(c - dx_hi, c - max(dx_lo, 1) + 1):  # left run, without dx = 0
                 if row_hi[q] >= 0:
                     lo = min(lo, row_lo[q])
                     hi = max(hi, row_hi[q])
+            for q in range(c + dx_lo, c + dx_hi + 1):  # right run
+                if row_hi[q] >= 0:
+                    lo = min(lo, row_lo[q])
+                    hi = max(hi, row_hi[q])
+            if hi >= 0 and lo != hi:
+                break  # two segments already: more labels cannot undo that
         out[k] = hi >= 0 and lo != hi
     return out
 

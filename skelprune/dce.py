@@ -11,7 +11,7 @@ Conventions (see ``docs/dce.md``):
 * **Boundary polygon.** Each boundary (the outer one and one per hole) is the closed
   crack curve between the shape and the background, traced by marching squares at level
   0.5 with the shape 8-connected (the polygons of :func:`skimage.measure.find_contours`,
-  replayed in numba by :func:`_trace_boundaries`). Every vertex is
+  replayed in numba by :func:`trace_boundaries`). Every vertex is
   the midpoint of a 4-adjacent (shape pixel, background pixel) pair. The shape is always
   on the left of the curve (image view), so outer boundaries and holes share one
   orientation and "convex w.r.t. the shape" is one turn sign for all of them.
@@ -32,6 +32,8 @@ from itertools import pairwise
 
 import numba
 import numpy as np
+
+from ._contours import trace_boundaries
 
 __all__ = [
     "COARSE_PIXEL_THRESHOLD",
@@ -251,175 +253,6 @@ class BoundaryPartition:
     n_segments: int
 
 
-def _boundary_polygons(mask: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Closed crack polygons (float row/col) with their background pixels (int row/col).
-
-    Exactly the polygons of ``find_contours(pad(mask, 1), 0.5, fully_connected="high",
-    positive_orientation="high")`` with the closing vertex dropped: same vertices, same
-    start vertex and orientation, same polygon order (``tests/test_dce_fast.py`` checks
-    this against skimage). The DCE tie-breaking depends on vertex indices, so the start
-    vertex matters.
-    """
-    xy, bg, bounds = _trace_boundaries(np.ascontiguousarray(mask, dtype=np.bool_))
-    return [(xy[a:b], bg[a:b]) for a, b in pairwise(bounds.tolist())]
-
-
-@numba.njit(cache=True)
-def _trace_boundaries(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Marching squares at level 0.5 on the mask padded by one pixel, shape 8-connected.
-
-    A replay of skimage's ``find_contours`` on a binary image: the same raster scan of
-    2x2 squares, the same directed segments per square case (shape on the right of each
-    segment; the diagonal cases 6 and 9 connect the shape pixels) and the same assembly of
-    segments into chains (a chain absorbs a later-created one, so a closed curve keeps the
-    number and start of the first chain it grew from). skimage's dict of deques becomes
-    linked lists over point ids: every crack midpoint ends exactly one segment and starts
-    exactly one, since the padding keeps every curve closed. The output walks each curve
-    backwards from its start, which is skimage's ``positive_orientation="high"`` reversal
-    (shape on the left).
-
-    Point ids: ``2 * (r * w + c)`` is the midpoint between padded pixels ``(r, c)`` and
-    ``(r, c + 1)``, ``2 * (r * w + c) + 1`` the one between ``(r, c)`` and ``(r + 1, c)``.
-
-    Returns
-    -------
-    xy : (n, 2) float array
-        All vertices, row/col in the frame of ``mask`` (half-integer on one axis).
-    bg : (n, 2) int array
-        The background pixel of each vertex.
-    bounds : (m + 1,) int array
-        Polygon ``i`` is ``xy[bounds[i]:bounds[i + 1]]``.
-    """
-    h, w = mask.shape[0] + 2, mask.shape[1] + 2
-    padded = np.zeros((h, w), np.bool_)
-    padded[1:-1, 1:-1] = mask
-    n_ids = 2 * h * w
-    prv = np.empty(n_ids, np.int64)  # previous point of the chain (skimage's deque order)
-    start_of = np.full(n_ids, -1, np.int32)  # chain that starts at this point, or -1
-    end_of = np.full(n_ids, -1, np.int32)  # chain that ends at this point, or -1
-    first = [0]  # first / last point of each chain; [0] only types the lists
-    last = [0]
-    alive = [False]  # False once merged into an earlier chain
-    first.pop()
-    last.pop()
-    alive.pop()
-    for r0 in range(h - 1):
-        r1 = r0 + 1
-        for c0 in range(w - 1):
-            c1 = c0 + 1
-            case = ((1 if padded[r0, c0] else 0) + (2 if padded[r0, c1] else 0)
-                    + (4 if padded[r1, c0] else 0) + (8 if padded[r1, c1] else 0))
-            if case == 0 or case == 15:
-                continue
-            top = 2 * (r0 * w + c0)
-            bottom = 2 * (r1 * w + c0)
-            left = top + 1
-            right = 2 * (r0 * w + c1) + 1
-            for second in range(2):
-                # the segment(s) of the square, in skimage's order and direction
-                if second:
-                    if case == 6:
-                        a, b = right, bottom
-                    elif case == 9:
-                        a, b = bottom, left
-                    else:
-                        break
-                elif case == 1:
-                    a, b = top, left
-                elif case == 2:
-                    a, b = right, top
-                elif case == 3:
-                    a, b = right, left
-                elif case == 4:
-                    a, b = left, bottom
-                elif case == 5:
-                    a, b = top, bottom
-                elif case == 6:
-                    a, b = left, top
-                elif case == 7:
-                    a, b = right, bottom
-                elif case == 8:
-                    a, b = bottom, right
-                elif case == 9:
-                    a, b = top, right
-                elif case == 10:
-                    a, b = bottom, top
-                elif case == 11:
-                    a, b = bottom, left
-                elif case == 12:
-                    a, b = left, right
-                elif case == 13:
-                    a, b = top, right
-                else:
-                    a, b = left, top
-                tail = start_of[b]  # the chain the segment is prepended to
-                head = end_of[a]  # the chain the segment is appended to
-                start_of[b] = -1
-                end_of[a] = -1
-                prv[b] = a
-                if tail >= 0 and head >= 0:
-                    if tail > head:  # tail created later: appended to head
-                        last[head] = last[tail]
-                        end_of[last[tail]] = head
-                        alive[tail] = False
-                    elif tail < head:  # head created later: prepended to tail
-                        first[tail] = first[head]
-                        start_of[first[head]] = tail
-                        alive[head] = False
-                    # tail == head: the curve closes, nothing more to record
-                elif tail < 0 and head < 0:
-                    start_of[a] = len(first)
-                    end_of[b] = len(first)
-                    first.append(a)
-                    last.append(b)
-                    alive.append(True)
-                elif head < 0:
-                    first[tail] = a
-                    start_of[a] = tail
-                else:
-                    last[head] = b
-                    end_of[b] = head
-    n = 0
-    for ch in range(len(first)):
-        if alive[ch]:
-            p = first[ch]
-            while True:
-                n += 1
-                p = prv[p]
-                if p == first[ch]:
-                    break
-    xy = np.empty((n, 2), np.float64)
-    bg = np.empty((n, 2), np.int64)
-    bounds = [0]
-    k = 0
-    for ch in range(len(first)):
-        if not alive[ch]:
-            continue
-        p = first[ch]
-        while True:
-            cell = p // 2
-            r = cell // w
-            c = cell - r * w
-            # back to the frame of mask (padding removed); the background pixel is
-            # whichever of the two pixels the midpoint lies between is not shape
-            if p % 2 == 0:
-                xy[k, 0] = r - 1.0
-                xy[k, 1] = c - 0.5
-                bg[k, 0] = r - 1
-                bg[k, 1] = c if padded[r, c] else c - 1
-            else:
-                xy[k, 0] = r - 0.5
-                xy[k, 1] = c - 1.0
-                bg[k, 0] = r if padded[r, c] else r - 1
-                bg[k, 1] = c - 1
-            k += 1
-            p = prv[p]
-            if p == first[ch]:
-                break
-        bounds.append(k)
-    return xy, bg, np.array(bounds, np.int64)
-
-
 def boundary_partition(
     mask: np.ndarray,
     n_vertices: int | None = None,
@@ -457,7 +290,7 @@ def boundary_partition(
     >>> part.n_segments, part.points.shape
     (4, (120, 2))
     """
-    xy, bg, bounds = _trace_boundaries(np.ascontiguousarray(mask, dtype=np.bool_))
+    xy, bg, bounds = trace_boundaries(np.ascontiguousarray(mask, dtype=np.bool_))
     if len(bounds) < 2:
         raise ValueError("mask has no foreground pixel")
     seg = np.empty(len(xy), np.int64)
@@ -555,19 +388,46 @@ def generated_in_several_segments(
     >>> generated_in_several_segments(np.array([[15, 25], [6, 25]]), np.array([121, 4]), part)
     array([ True, False])
     """
+    labels = generating_segments(points, r2, partition, tolerance, _limit=2)
+    return labels[:, 1] != -1
+
+
+def generating_segments(
+    points: np.ndarray,
+    r2: np.ndarray,
+    partition: BoundaryPartition,
+    tolerance: float = TOUCH_TOLERANCE,
+    _limit: int = 3,
+) -> np.ndarray:
+    """The segments whose boundary points generate each skeleton point, up to three.
+
+    Same generating points as :func:`generated_in_several_segments`, but the segment
+    ids are returned: row ``k`` holds the distinct ids found (in scan order), padded
+    with -1. A point generated by two or more segments has ``out[k, 1] != -1``; by three
+    or more, ``out[k, 2] != -1``.
+
+    Examples
+    --------
+    >>> m = np.zeros((30, 50), bool)
+    >>> m[5:26, 5:45] = True
+    >>> part = boundary_partition(m)
+    >>> generating_segments(np.array([[15, 25], [6, 25]]), np.array([121, 4]), part)
+    array([[ 1,  3, -1],
+           [ 1, -1, -1]])
+    """
     pts = np.asarray(points, dtype=np.int64).reshape(-1, 2)
     n = len(pts)
     if n == 0:
-        return np.zeros(0, bool)
-    return _generated(np.ascontiguousarray(partition.points, dtype=np.int64),
-                      np.ascontiguousarray(partition.segment, dtype=np.int64),
-                      np.ascontiguousarray(pts), np.asarray(r2, np.int64).reshape(n),
-                      float(tolerance))
+        return np.full((0, _limit), -1, np.int64)
+    return _generating(np.ascontiguousarray(partition.points, dtype=np.int64),
+                       np.ascontiguousarray(partition.segment, dtype=np.int64),
+                       np.ascontiguousarray(pts), np.asarray(r2, np.int64).reshape(n),
+                       float(tolerance), _limit)
 
 
 @numba.njit(cache=True)
-def _generated(bp: np.ndarray, seg: np.ndarray, pts: np.ndarray, r2: np.ndarray,
-               tolerance: float) -> np.ndarray:
+def _generating(bp: np.ndarray, seg: np.ndarray, pts: np.ndarray, r2: np.ndarray,
+                tolerance: float, limit: int) -> np.ndarray:
     # Segment labels on a raster (a boundary pixel can border two segments: keep the
     # smallest and largest label), then scan each disk's rim: no background pixel is
     # nearer than r(s), so the generating points all lie in r <= d <= r + tolerance.
@@ -586,21 +446,30 @@ def _generated(bp: np.ndarray, seg: np.ndarray, pts: np.ndarray, r2: np.ndarray,
     local = np.empty_like(pts)
     local[:, 0] = pts[:, 0] - o_r
     local[:, 1] = pts[:, 1] - o_c
-    return _rim_spans_segments(seg_lo, seg_hi, local, r2, tolerance)
+    return _rim_labels(seg_lo, seg_hi, local, r2, tolerance, limit)
 
 
 @numba.njit(cache=True)
-def _rim_spans_segments(seg_lo: np.ndarray, seg_hi: np.ndarray, pts: np.ndarray,
-                        r2: np.ndarray, tolerance: float) -> np.ndarray:
+def _add_label(out: np.ndarray, k: int, found: int, lab: int) -> int:
+    for j in range(found):
+        if out[k, j] == lab:
+            return found
+    out[k, found] = lab
+    return found + 1
+
+
+@numba.njit(cache=True)
+def _rim_labels(seg_lo: np.ndarray, seg_hi: np.ndarray, pts: np.ndarray,
+                r2: np.ndarray, tolerance: float, limit: int) -> np.ndarray:
     # Only the annulus r2 <= d2 <= o2 is scanned, row by row, as two column runs per row
     # (the same integer/float comparisons as a test of every pixel of the square), and a
-    # point stops as soon as two labels are seen: the answer cannot change after that.
-    out = np.zeros(pts.shape[0], np.bool_)
+    # point stops as soon as `limit` distinct labels are seen.
+    out = np.full((pts.shape[0], limit), -1, np.int64)
     for k in range(pts.shape[0]):
         outer = np.sqrt(r2[k]) + tolerance
         o2 = outer * outer
         reach = int(outer)
-        lo, hi = np.iinfo(np.int64).max, -1
+        found = 0
         r, c = pts[k, 0], pts[k, 1]
         for dy in range(-reach, reach + 1):
             dy2 = dy * dy
@@ -624,84 +493,15 @@ def _rim_spans_segments(seg_lo: np.ndarray, seg_hi: np.ndarray, pts: np.ndarray,
                 continue
             row_lo, row_hi = seg_lo[r + dy], seg_hi[r + dy]
             for q in range(c - dx_hi, c - max(dx_lo, 1) + 1):  # left run, without dx = 0
-                if row_hi[q] >= 0:
-                    lo = min(lo, row_lo[q])
-                    hi = max(hi, row_hi[q])
+                if row_hi[q] >= 0 and found < limit:
+                    found = _add_label(out, k, found, row_lo[q])
+                    if found < limit:
+                        found = _add_label(out, k, found, row_hi[q])
             for q in range(c + dx_lo, c + dx_hi + 1):  # right run
-                if row_hi[q] >= 0:
-                    lo = min(lo, row_lo[q])
-                    hi = max(hi, row_hi[q])
-            if hi >= 0 and lo != hi:
-                break  # two segments already: more labels cannot undo that
-        out[k] = hi >= 0 and lo != hi
-    return out
-
-
-def generating_segments(
-    points: np.ndarray,
-    r2: np.ndarray,
-    partition: BoundaryPartition,
-    tolerance: float = TOUCH_TOLERANCE,
-) -> np.ndarray:
-    """The segments whose boundary points generate each skeleton point, up to three.
-
-    Same generating points as :func:`generated_in_several_segments`, but the segment
-    ids are returned: row ``k`` holds the distinct ids found (in scan order), padded
-    with -1. A point generated by two or more segments has ``out[k, 1] != -1``; by three
-    or more, ``out[k, 2] != -1``.
-
-    Examples
-    --------
-    >>> m = np.zeros((30, 50), bool)
-    >>> m[5:26, 5:45] = True
-    >>> part = boundary_partition(m)
-    >>> generating_segments(np.array([[15, 25], [6, 25]]), np.array([121, 4]), part)
-    array([[ 1,  3, -1],
-           [ 1, -1, -1]])
-    """
-    pts = np.asarray(points, dtype=np.int64).reshape(-1, 2)
-    n = len(pts)
-    if n == 0:
-        return np.zeros((0, 3), np.int64)
-    bp = partition.points
-    lo_r, lo_c = min(int(bp[:, 0].min()), int(pts[:, 0].min())), min(int(bp[:, 1].min()),
-                                                                      int(pts[:, 1].min()))
-    reach = int(np.ceil(np.sqrt(float(np.max(r2))) + tolerance)) + 1
-    origin = np.array([lo_r - reach, lo_c - reach])
-    shape = (int(max(bp[:, 0].max(), pts[:, 0].max())) - origin[0] + reach + 1,
-             int(max(bp[:, 1].max(), pts[:, 1].max())) - origin[1] + reach + 1)
-    seg_lo = np.full(shape, np.iinfo(np.int64).max, np.int64)
-    seg_hi = np.full(shape, -1, np.int64)
-    _label_raster(seg_lo, seg_hi, bp - origin, partition.segment.astype(np.int64))
-    return _rim_segments(seg_lo, seg_hi, pts - origin,
-                         np.asarray(r2, np.int64).reshape(n), float(tolerance))
-
-
-@numba.njit(cache=True)
-def _rim_segments(seg_lo, seg_hi, pts, r2, tolerance):
-    out = np.full((pts.shape[0], 3), -1, np.int64)
-    for k in range(pts.shape[0]):
-        outer = np.sqrt(r2[k]) + tolerance
-        o2 = outer * outer
-        reach = int(outer)
-        found = 0
-        for dy in range(-reach, reach + 1):
-            if found == 3:
-                break
-            row_lo, row_hi = seg_lo[pts[k, 0] + dy], seg_hi[pts[k, 0] + dy]
-            for dx in range(-reach, reach + 1):
-                d2 = dy * dy + dx * dx
-                if d2 < r2[k] or d2 > o2:
-                    continue
-                q = pts[k, 1] + dx
-                if row_hi[q] < 0:
-                    continue
-                for lab in (row_lo[q], row_hi[q]):
-                    new = True
-                    for j in range(found):
-                        if out[k, j] == lab:
-                            new = False
-                    if new and found < 3:
-                        out[k, found] = lab
-                        found += 1
+                if row_hi[q] >= 0 and found < limit:
+                    found = _add_label(out, k, found, row_lo[q])
+                    if found < limit:
+                        found = _add_label(out, k, found, row_hi[q])
+            if found == limit:
+                break  # enough labels: more cannot change the answer asked for
     return out

@@ -1,6 +1,6 @@
 """The numba boundary tracer of skelprune.dce equals skimage's ``find_contours``.
 
-``_boundary_polygons`` replays marching squares without skimage; DCE breaks ties by vertex
+``skelprune._contours.boundary_polygons`` replays marching squares without skimage; DCE breaks ties by vertex
 index, so the polygons must be the same arrays (same start vertex, orientation and polygon
 order), not only the same cyclic sequences. The reference below is the implementation the
 tracer replaced.
@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 from skimage.measure import find_contours
 
-from skelprune.dce import _boundary_polygons, boundary_partition, generated_in_several_segments
+from skelprune._contours import boundary_polygons as _boundary_polygons
+from skelprune.dce import boundary_partition, generated_in_several_segments
 from skelprune.perturb import boundary_noise, rotate
 
 from .shapes import blobs, dataset, load, rectangle_with_holes, touching_border, two_components

@@ -61,13 +61,6 @@ def _check_options(beta: float, method: str, coarse: str | None,
             f"dce_threshold must be a finite number >= 0, got {dce_threshold!r}")
 
 
-def _replay(ma_rows, ma_cols, shape, removed: list[int]) -> BranchGraph:
-    g = BranchGraph(ma_rows, ma_cols, shape)
-    for b in removed:
-        g.remove_end_branch(b)
-    return g
-
-
 def dce_support(crop: np.ndarray, ma_rows: np.ndarray, ma_cols: np.ndarray, r2: np.ndarray,
                 n_vertices: int | None, threshold: float | None,
                 pixel_threshold: float | None = None) -> np.ndarray:
@@ -89,30 +82,38 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
     ma = medial_axis(crop, r2img)
     graph = BranchGraph(ma.rows, ma.cols, crop.shape)
     summary = GraphSummary.of(graph)
-    norm = normalisation(graph, ma.r2, beta)
     before: list[int] = []
     if method == "dce":
+        norm = normalisation(graph, ma.r2, beta)
         threshold = DCE_THRESHOLD if dce_threshold is None else dce_threshold
         keep = dce_support(crop, ma.rows, ma.cols, ma.r2, DCE_VERTICES, threshold)
-        order = remove_unsupported(BranchGraph(ma.rows, ma.cols, crop.shape), keep)
+        order = remove_unsupported(graph.copy(), keep)
         seq = bayesian_sequence(graph, crop, ma.r2, norm.alpha, norm.lbar, order=order)
         chosen = len(seq.removed)
+        start = graph  # never replayed: DCE's answer is its last step
     else:
-        if coarse == "dce" and norm.alpha is not None:
+        if coarse == "dce" and graph.ends:
             before = coarse_dce(graph, crop, ma.r2)
             # The Bayesian stage starts from the coarse skeleton, as in the paper's
-            # experiments: its α and ℓ̄ are those of its own starting skeleton.
-            coarse_norm = normalisation(graph, ma.r2, beta)
-            if coarse_norm.alpha is not None:
-                norm = coarse_norm
+            # experiments: its α and ℓ̄ are those of its own starting skeleton (or of
+            # M, should the coarse skeleton have none).
+            norm = normalisation(graph, ma.r2, beta)
+            if norm.alpha is None:
+                norm = normalisation(BranchGraph(ma.rows, ma.cols, crop.shape), ma.r2, beta)
+        else:
+            norm = normalisation(graph, ma.r2, beta)
+        start = graph.copy()  # S(0), should the argmin be earlier than the last step
         seq = bayesian_sequence(graph, crop, ma.r2, norm.alpha, norm.lbar)
         chosen = choose_step(seq.objective)
     # A sequence that starts from M already knows Λ(D \ R(M)): no second painting.
     ma_rer = (seq.lost[0] / seq.area if not before
               else reconstruction_error(crop, ma.rows, ma.cols, ma.r2))
-    # The pruning graph ends as S(n); only an earlier argmin needs a replay.
-    final = (graph if chosen == len(seq.removed)
-             else _replay(ma.rows, ma.cols, crop.shape, before + seq.removed[:chosen]))
+    # The pruning graph ends as S(n); only an earlier argmin needs a replay from S(0).
+    final = graph
+    if chosen < len(seq.removed):
+        final = start
+        for b in seq.removed[:chosen]:
+            final.remove_end_branch(b)
     return ComponentResult(
         origin=origin, area=int(crop.sum()), r2=ma.r2, medial_axis=summary, graph=final,
         sequence=seq, chosen_step=chosen, ma_rer=ma_rer,

@@ -258,6 +258,22 @@ class BranchGraph:
         self.na = sum(b.na for b in self.branches if b.alive)
         self.nd = sum(b.nd for b in self.branches if b.alive)
 
+    def copy(self) -> BranchGraph:
+        """An independent copy; the point arrays, which no removal changes, are shared.
+
+        Cheaper than building the graph again and replaying its removals.
+        """
+        g = object.__new__(BranchGraph)
+        g.rows, g.cols, g.nbr, g.degree = self.rows, self.cols, self.nbr, self.degree
+        g.extra_na, g.extra_nd = self.extra_na, self.extra_nd
+        g.na, g.nd = self.na, self.nd
+        g.branches = [Branch(list(b.points), list(b.node), list(b.attach), b.na, b.nd,
+                             b.loop, b.alive) for b in self.branches]
+        g.junctions = [Junction(list(j.points), list(j.ends), j.alive)
+                       for j in self.junctions]
+        g.ends = set(self.ends)
+        return g
+
     # -- queries ------------------------------------------------------------------
     def is_end_branch(self, b: int) -> bool:
         br = self.branches[b]

@@ -78,17 +78,17 @@ def test_generating_segments_agrees_with_the_support_test():
 
 @pytest.mark.parametrize("kind,scale", [("gaussian", 1.0), ("gaussian", 1.5), ("uniform", 1.5)])
 @pytest.mark.parametrize("seed", range(3))
-def test_noisy_rectangle_coarse_skeleton_has_one_branch_per_corner(kind, scale, seed):
+def test_noisy_rectangle_gets_one_branch_per_corner(kind, scale, seed):
+    """The paper's Table 2 setting: 4 endpoints, one at each corner, after both stages."""
+    import skelprune
+
     mask, _ = noisy_rectangle(60, 160, kind, scale, rng=seed)
-    crop, ma = _axis(mask)
-    graph = BranchGraph(ma.rows, ma.cols, crop.shape)
-    coarse_dce(graph, crop, ma.r2)
-    assert graph.n_endpoints() == 4
-    # every surviving end reaches its own corner of the rectangle (rows 8..67, cols 8..167,
-    # the crop is shifted by its padding)
-    ends = [graph.endpoint(b) for b in graph.end_branches()]
-    corners = {(int(graph.rows[p] > crop.shape[0] / 2), int(graph.cols[p] > crop.shape[1] / 2))
-               for p in ends}
+    comp = skelprune.prune(mask, coarse="dce").components[0]
+    ends = comp.to_dict()["skeleton"]["endpoints"]
+    assert len(ends) == 4
+    h, w = mask.shape
+    corners = {(n["y"] > h / 2, n["x"] > w / 2) for n in comp.to_dict()["skeleton"]["nodes"]
+               if n["id"] in ends}
     assert len(corners) == 4
 
 
@@ -128,3 +128,20 @@ def test_coarse_removals_replay_and_keep_topology(path):
     alive = graph.alive_points()
     img[graph.rows[alive], graph.cols[alive]] = True
     assert ndimage.label(img, np.ones((3, 3), bool))[1] == 1
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_roughness_counts_equal_scipy_morphology(seed):
+    from scipy import ndimage
+
+    rng = np.random.default_rng(seed)
+    if seed < 3:
+        mask = boundary_noise(load(SHAPES[seed * 7]), "uniform", 1.5, rng=seed, margin=2)
+    else:
+        mask = ndimage.binary_opening(rng.random((40, 50)) < 0.6) | (rng.random((40, 50)) < 0.05)
+    cross = ndimage.generate_binary_structure(2, 1)
+    m = np.pad(mask, 2)
+    perimeter = np.count_nonzero(m & ~ndimage.binary_erosion(m, cross))
+    changed = (np.count_nonzero(m & ~ndimage.binary_opening(m, cross))
+               + np.count_nonzero(ndimage.binary_closing(m, cross) & ~m))
+    assert boundary_roughness(mask) == pytest.approx(changed / perimeter, abs=0)

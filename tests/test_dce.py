@@ -8,8 +8,6 @@ from scipy import ndimage as ndi
 from skimage.draw import polygon as fill_polygon
 
 from skelprune.dce import (
-    COARSE_THRESHOLD,
-    COARSE_VERTICES,
     BoundaryPartition,
     boundary_partition,
     evolve_polygon,
@@ -179,16 +177,6 @@ def test_partition_is_deterministic():
     a, b = boundary_partition(m), boundary_partition(m.copy())
     assert np.array_equal(a.points, b.points)
     assert np.array_equal(a.segment, b.segment)
-
-
-def test_coarse_default_keeps_more_vertices_than_the_method_default():
-    v = star(n_tips=7)
-    m = np.zeros((100, 100), bool)
-    m[fill_polygon(v[:, 0], v[:, 1], m.shape)] = True
-    m = m & ~(np.random.default_rng(2).random(m.shape) < 0.02)
-    coarse = boundary_partition(m, n_vertices=COARSE_VERTICES, threshold=COARSE_THRESHOLD)
-    default = boundary_partition(m)
-    assert len(coarse.vertices[0]) >= len(default.vertices[0])
 
 
 # --- generated_in_several_segments ------------------------------------------------

@@ -1,6 +1,6 @@
-"""The numba boundary tracer of skelprune.dce equals skimage's ``find_contours``.
+"""The numba boundary tracer (``skelprune._contours``) equals skimage's ``find_contours``.
 
-``skelprune._contours.boundary_polygons`` replays marching squares without skimage; DCE breaks ties by vertex
+``boundary_polygons`` replays marching squares without skimage; DCE breaks ties by vertex
 index, so the polygons must be the same arrays (same start vertex, orientation and polygon
 order), not only the same cyclic sequences. The reference below is the implementation the
 tracer replaced.

@@ -19,7 +19,7 @@ from .errors import EmptyMaskError, InvalidOptionError
 from .graph import BranchGraph
 from .medial_axis import medial_axis, squared_distance
 from .pruning import bayesian_sequence, choose_step, normalisation, remove_unsupported
-from .reconstruction import reconstruction_error
+from .reconstruction import count_covered
 from .result import ComponentResult, GraphSummary, PruneResult
 
 __all__ = ["METHODS", "components", "prune"]
@@ -105,9 +105,15 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
         start = graph.copy()  # S(0), should the argmin be earlier than the last step
         seq = bayesian_sequence(graph, crop, ma.r2, norm.alpha, norm.lbar)
         chosen = choose_step(seq.objective)
-    # A sequence that starts from M already knows Λ(D \ R(M)): no second painting.
-    ma_rer = (seq.lost[0] / seq.area if not before
-              else reconstruction_error(crop, ma.rows, ma.cols, ma.r2))
+    # Λ(D \ R(M)) without a second painting: a sequence from M knows it; from the
+    # coarse skeleton, only the pixels it misses need testing against the removed disks.
+    ma_lost = seq.lost[0]
+    if before:
+        gone = np.ones(ma.rows.size, bool)
+        gone[start.alive_points()] = False  # start is still S(0), the coarse skeleton
+        ma_lost -= count_covered(seq.uncovered, crop.shape[1], ma.rows[gone], ma.cols[gone],
+                                 ma.r2[gone])
+    ma_rer = ma_lost / seq.area
     # The pruning graph ends as S(n); only an earlier argmin needs a replay from S(0).
     final = graph
     if chosen < len(seq.removed):

@@ -189,25 +189,42 @@ def _claimed_vertex(points: np.ndarray, vertex: np.ndarray, first: np.ndarray,
     return v
 
 
-def _forks(graph: BranchGraph, vertex: np.ndarray, first: np.ndarray, before: np.ndarray,
-           after: np.ndarray, positions: np.ndarray) -> list[int]:
-    """End branches that describe a convex vertex another end branch describes better.
+class _Claims:
+    """Which convex vertex each end branch claims, cached until the branch changes.
 
     A branch claims a vertex when its generating segments are exactly the two that
-    meet there. Returns every claimant but the one ending nearest the vertex (ties:
-    lower branch id), for every vertex claimed by two or more end branches.
+    meet there. Only merges change a branch, and a merge changes its point count.
     """
-    claims: dict[int, list[tuple[float, int]]] = {}
-    for b in graph.end_branches():
-        pts = np.asarray(graph.branches[b].points, np.int64)
-        v = _claimed_vertex(pts, vertex, first, before, after)
-        if v < 0:
-            continue
-        p = graph.endpoint(b)
-        dr = graph.rows[p] - positions[v, 0]
-        dc = graph.cols[p] - positions[v, 1]
-        claims.setdefault(v, []).append((float(dr * dr + dc * dc), b))
-    return [b for c in claims.values() if len(c) > 1 for _, b in sorted(c)[1:]]
+
+    def __init__(self, graph: BranchGraph, vertex: np.ndarray, first: np.ndarray,
+                 before: np.ndarray, after: np.ndarray, positions: np.ndarray) -> None:
+        self.graph, self.vertex, self.first = graph, vertex, first
+        self.before, self.after, self.positions = before, after, positions
+        self.cache: dict[int, tuple[int, int, float]] = {}  # b -> (n points, vertex, d2)
+
+    def claim(self, b: int) -> tuple[int, float]:
+        pts = self.graph.branches[b].points
+        hit = self.cache.get(b)
+        if hit is None or hit[0] != len(pts):
+            v = _claimed_vertex(np.asarray(pts, np.int64), self.vertex, self.first,
+                                self.before, self.after)
+            d2 = 0.0
+            if v >= 0:
+                p = self.graph.endpoint(b)
+                dr = self.graph.rows[p] - self.positions[v, 0]
+                dc = self.graph.cols[p] - self.positions[v, 1]
+                d2 = float(dr * dr + dc * dc)
+            hit = self.cache[b] = (len(pts), v, d2)
+        return hit[1], hit[2]
+
+    def surplus(self) -> list[int]:
+        """Every claimant but the one ending nearest its vertex (ties: lower id)."""
+        by_vertex: dict[int, list[tuple[float, int]]] = {}
+        for b in self.graph.end_branches():
+            v, d2 = self.claim(b)
+            if v >= 0:
+                by_vertex.setdefault(v, []).append((d2, b))
+        return [b for c in by_vertex.values() if len(c) > 1 for _, b in sorted(c)[1:]]
 
 
 def coarse_dce(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> list[int]:
@@ -238,11 +255,11 @@ def coarse_dce(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> list[int
     before, after, positions = _convex_vertices(partition)
     vertex = _point_vertices(labels, before, after, partition.n_segments)
     removed = remove_unsupported(graph, supported)
-    while True:
-        forks = _forks(graph, vertex, labels[:, 0], before, after, positions)
-        if not forks:
-            return removed
-        # one at a time: a removal can merge branches and change every other claim
-        graph.remove_end_branch(forks[0])
-        removed.append(forks[0])
-        removed += remove_unsupported(graph, supported)
+    claims = _Claims(graph, vertex, labels[:, 0], before, after, positions)
+    while surplus := claims.surplus():
+        # one at a time: a removal can merge branches and change other claims
+        merged = graph.remove_end_branch(surplus[0])
+        removed.append(surplus[0])
+        if merged is not None:  # only the merged branch can have lost its support
+            removed += remove_unsupported(graph, supported, candidates=[merged[0]])
+    return removed

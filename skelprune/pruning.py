@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import heapq
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
@@ -106,6 +106,8 @@ class PruningSequence:
     area: int
     alpha: float | None
     lbar: float
+    #: Flat indices (into the mask) of the pixels of ``D`` that ``S(0)`` misses.
+    uncovered: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
 
     @property
     def length(self) -> np.ndarray:
@@ -182,7 +184,8 @@ def bayesian_sequence(
     alive = graph.alive_points()
     cov = Coverage(mask, graph.rows[alive], graph.cols[alive], r2[alive], labels[alive],
                    nb + len(graph.junctions) + 1)
-    seq = PruningSequence([], [cov.lost], [graph.na], [graph.nd], area, alpha, lbar)
+    seq = PruningSequence([], [cov.lost], [graph.na], [graph.nd], area, alpha, lbar,
+                          np.flatnonzero(mask & (cov.c == 0)))
     if alpha is None and order is None:
         return seq
     # Coverage numbers points by their rank among the alive ones.
@@ -226,14 +229,16 @@ def bayesian_sequence(
     return seq
 
 
-def remove_unsupported(graph: BranchGraph, supported: np.ndarray) -> list[int]:
+def remove_unsupported(graph: BranchGraph, supported: np.ndarray,
+                       candidates: list[int] | None = None) -> list[int]:
     """DCE pruning on the graph alone: remove, smallest endpoint (row, col) first,
     every end branch none of whose points is supported, until each has one.
 
     Used as the coarse stage, whose steps are not part of the Bayesian curve, so no
     reconstruction is kept up to date. A branch's support only changes when it
     absorbs another, so candidates wait in a heap and only merged branches are
-    looked at again.
+    looked at again. ``candidates`` restricts the first look to those branches (when
+    the caller knows no other end branch can be unsupported).
     """
 
     def push(b: int) -> None:
@@ -242,7 +247,7 @@ def remove_unsupported(graph: BranchGraph, supported: np.ndarray) -> list[int]:
             heapq.heappush(heap, (int(graph.rows[p]), int(graph.cols[p]), b, p))
 
     heap: list[tuple[int, int, int, int]] = []
-    for b in graph.end_branches():
+    for b in graph.end_branches() if candidates is None else candidates:
         push(b)
     removed: list[int] = []
     while heap:

@@ -15,7 +15,7 @@ from numba import njit
 
 from ._digital import disk_half_width, isqrt
 
-__all__ = ["Coverage", "reconstruction", "reconstruction_error"]
+__all__ = ["Coverage", "count_covered", "reconstruction", "reconstruction_error"]
 
 
 @njit(cache=True)
@@ -59,6 +59,38 @@ def reconstruction_error(
         return 0.0
     rec = reconstruction(mask.shape, rows, cols, r2)
     return float((mask & ~rec).sum()) / area
+
+
+def count_covered(pixels: np.ndarray, width: int, rows: np.ndarray, cols: np.ndarray,
+                  r2: np.ndarray) -> int:
+    """How many of ``pixels`` (flat indices, row length ``width``) the disks cover.
+
+    For a few pixels and many disks: a test per pair, no painting.
+
+    Examples
+    --------
+    >>> count_covered(np.array([0, 7, 24]), 5, np.array([1]), np.array([1]), np.array([2]))
+    1
+    """
+    if len(pixels) == 0 or len(rows) == 0:
+        return 0
+    return int(_count_covered(np.asarray(pixels, np.int64) // width,
+                              np.asarray(pixels, np.int64) % width,
+                              np.asarray(rows, np.int64), np.asarray(cols, np.int64),
+                              np.asarray(r2, np.int64)))
+
+
+@njit(cache=True)
+def _count_covered(py, px, rows, cols, r2):
+    n = 0
+    for i in range(py.size):
+        for k in range(rows.size):
+            dy = py[i] - rows[k]
+            dx = px[i] - cols[k]
+            if dy * dy + dx * dx < r2[k]:
+                n += 1
+                break
+    return n
 
 
 # Kernels index a 1-D view of each disk row: measured faster than both slice updates

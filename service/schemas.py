@@ -43,8 +43,8 @@ class PruneQuery(BaseModel):
         None, description="`bayesian` (the paper) or `dce` (its ref. [10]). Default `bayesian`."
     )
     coarse: Literal["dce", "none"] | None = Field(
-        None, description="Coarse DCE stage before Bayesian pruning, or `none`. "
-        "Default: the library's default.",
+        None, description="`dce`: a coarse DCE stage before the Bayesian pruning (the "
+        "default); `none`: start from the full medial axis. Ignored by `method=dce`.",
     )
     dce_threshold: float | None = Field(
         None, ge=0, allow_inf_nan=False,
@@ -132,7 +132,7 @@ class PolygonJob(BaseModel):
     geojson: GeoJSONInput
     beta: FiniteFloat | None = Field(None, gt=0)
     method: Literal["bayesian", "dce"] | None = None
-    coarse: Literal["dce"] | None = None
+    coarse: Literal["dce", "none"] | None = None
     dce_threshold: FiniteFloat | None = Field(None, ge=0)
     curve: bool | None = None
     overlay: bool | None = None

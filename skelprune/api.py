@@ -52,8 +52,6 @@ def _check_options(beta: float, method: str, coarse: str | None,
         raise InvalidOptionError(f"method must be one of {METHODS}, got {method!r}")
     if coarse not in COARSE:
         raise InvalidOptionError(f"coarse must be null or 'dce', got {coarse!r}")
-    if method == "dce" and coarse is not None:
-        raise InvalidOptionError("coarse applies to method='bayesian' only")
     if dce_threshold is not None and (
             isinstance(dce_threshold, bool) or not isinstance(dce_threshold, (int, float))
             or not math.isfinite(dce_threshold) or dce_threshold < 0):
@@ -130,7 +128,7 @@ def prune(
     mask: np.ndarray,
     beta: float = 9.0,
     method: Literal["bayesian", "dce"] = "bayesian",
-    coarse: Literal["dce"] | None = None,
+    coarse: Literal["dce"] | None = "dce",
     dce_threshold: float | None = None,
 ) -> PruneResult:
     """Pruned skeleton of every 8-connected component of a binary mask.
@@ -143,9 +141,12 @@ def prune(
         Weight of the reconstruction term, ``α = β·log(length(M)/ℓ̄)``; the paper's 9.
     method : {"bayesian", "dce"}
         Bayesian pruning (the paper) or DCE contour-partition pruning (its ref. [10]).
-    coarse : {None, "dce"}
-        For ``method="bayesian"``: start from the full medial axis (``None``), or from
-        a coarse DCE-pruned skeleton (SPEC §2.4, as the paper's experiments did).
+    coarse : {"dce", None}
+        For ``method="bayesian"``: start from a coarse skeleton, pruned by DCE contour
+        partition (:mod:`skelprune.coarse`; the default, as the paper's experiments
+        did), or from the full medial axis (``None``). Chosen by the stability
+        benchmark: see ``docs/stability-findings.md``. Ignored by ``method="dce"``,
+        which is the DCE pruning itself.
     dce_threshold : float, optional
         For ``method="dce"``: the DCE stop threshold on relevance (scale-free: edge
         lengths over the perimeter); default :data:`skelprune.dce.DCE_THRESHOLD`.
@@ -170,6 +171,8 @@ def prune(
     (4, True)
     """
     _check_options(beta, method, coarse, dce_threshold)
+    if method == "dce":
+        coarse = None  # DCE pruning has no stage before it
     mask = np.asarray(mask)
     if mask.ndim != 2:
         raise InvalidOptionError(f"mask must be 2-D, got shape {mask.shape}")

@@ -49,7 +49,8 @@ def prune_command(
     files: Annotated[list[Path], typer.Argument(help="PNG masks, or folders of them.")],
     beta: Annotated[float, typer.Option(help="Weight of the reconstruction term.")] = 9.0,
     method: Annotated[str, typer.Option(help="bayesian or dce.")] = "bayesian",
-    coarse: Annotated[str | None, typer.Option(help="Coarse stage: dce, or none.")] = None,
+    coarse: Annotated[str, typer.Option(help="Coarse stage before the Bayesian pruning: "
+                                        "dce, or none (the full medial axis).")] = "dce",
     overlay: Annotated[Path | None, typer.Option(help="Write the overlay PNG here "
                                                  "(one input file only).")] = None,
     curve: Annotated[bool, typer.Option(help="Include the pruning curve.")] = True,

@@ -78,13 +78,15 @@ class Variant:
         return dict(self.options)
 
 
-#: Every variant, in report order: the three pruning variants of SPEC §2.4–2.5, then the
-#: baseline at each threshold.
+#: Every variant, in report order: the three pruning variants of SPEC §2.4–2.5 (the
+#: library's default first), then the baseline at each threshold.
 VARIANTS: dict[str, Variant] = {
     v.name: v
     for v in (
-        Variant("bayesian", "Bayesian, coarse=None", "prune", ()),
-        Variant("bayesian+dce", "Bayesian, coarse=\"dce\"", "prune", (("coarse", "dce"),)),
+        Variant("bayesian+dce", "Bayesian, coarse=\"dce\" (the default)", "prune",
+                (("coarse", "dce"),)),
+        Variant("bayesian", "Bayesian, coarse=None (from the full medial axis)", "prune",
+                (("coarse", None),)),
         Variant("dce", "DCE pruning [10] (method=\"dce\")", "prune", (("method", "dce"),)),
         *(Variant(f"cut-{L:g}", f"skeletonize + cut < {L:g} px", "cut", (("min_length", L),))
           for L in CUT_LENGTHS),

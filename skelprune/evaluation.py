@@ -178,7 +178,7 @@ def figures(sets: dict[str, list[tuple[str, np.ndarray]]], out: Path, seed: int,
             shapes = _pick(k216, STABILITY_SHAPES, 1 if small else 3)
             perturbed = [[(p.name, p.apply(m, _rng(seed, names.index(n), p.name)))
                           for p in PERTURBATIONS.values()] for n, m in shapes]
-            ef.perturbation_figure(shapes, perturbed, VARIANTS["bayesian"],
+            ef.perturbation_figure(shapes, perturbed, VARIANTS["bayesian+dce"],
                                    fig_dir / "fig6_7_stability.png")
             paths[step] = "figures/fig6_7_stability.png"
         elif step == "methods":
@@ -246,7 +246,7 @@ def _markdown(run: StabilityRun, spd: list[SpeedRow], n_speed: int, figs: dict[s
         targets_table(run),
         "",
         *(line for d in run.datasets for line in (f"### {d}", "", agreement_table(run, d), "")),
-        "Default method (`bayesian`) on a few shapes under every perturbation; the row "
+        "Default method (`bayesian+dce`) on a few shapes under every perturbation; the row "
         "label lists the endpoint counts (clean first):",
         "",
         f"![stability]({figs['stability']})",

@@ -209,6 +209,16 @@ def test_beta_and_coarse_none(client: TestClient) -> None:
     assert doc == library_document(BIRD, beta=2.5, coarse=None)
 
 
+def test_coarse_default_and_none_in_a_polygon_body(client: TestClient) -> None:
+    assert post_png(client, BIRD).json()["coarse"] == "dce"  # the library's default
+    body = {"geojson": {"type": "Polygon", "coordinates": [RECT]}, "coarse": "none"}
+    resp = client.post("/v1/prune", json=body)
+    assert resp.status_code == 200, resp.text
+    assert resp.json()["coarse"] is None
+    body["coarse"] = "dce"
+    assert client.post("/v1/prune", json=body).json()["coarse"] == "dce"
+
+
 @pytest.mark.parametrize(
     "opts",
     [{"method": "dce"}, {"method": "dce", "dce_threshold": 0.05}, {"coarse": "dce"}],

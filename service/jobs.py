@@ -58,14 +58,22 @@ class JobResult:
 
 
 def warmup() -> None:
-    """Worker initialiser: import the library and run it once so the JIT is compiled."""
-    import skelprune
+    """Worker initialiser: import the library and run it once so the JIT is compiled.
 
-    mask = np.zeros((24, 32), dtype=bool)
-    mask[4:20, 4:28] = True
-    mask[8:16, 12:20] = False  # a hole, so the loop code paths compile too
-    res = skelprune.prune(mask)
-    res.to_dict()
+    The shape has a hole (the loop code paths) and a noisy boundary whose spurs the
+    coarse stage removes (its code paths); ``coarse=None`` and ``method="dce"`` run
+    too, so that no job of any option meets a function still to be loaded.
+    """
+    import skelprune
+    from skelprune.perturb import boundary_noise
+
+    mask = np.zeros((32, 44), dtype=bool)
+    mask[4:28, 4:40] = True
+    mask[12:20, 16:28] = False  # a hole
+    mask = boundary_noise(mask, "uniform", 1.0, rng=0)
+    for options in ({}, {"coarse": None}, {"method": "dce"}):
+        res = skelprune.prune(mask, **options)
+        res.to_dict()
     res.to_geojson()
     res.overlay_png()
 

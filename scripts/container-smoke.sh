@@ -196,8 +196,9 @@ log "starting container on port $PORT"
 
 show_logs() { "${PODMAN[@]}" logs "$CONTAINER" 2>&1 | tail -n 40 >&2 || true; }
 
-# the first start compiles the numba kernels in every worker (no cache in a new container)
-deadline=$(($(date +%s) + 300))
+# the workers load the numba kernels compiled at build time (seeded into /tmp/numba-cache)
+started=$(date +%s)
+deadline=$((started + 300))
 until curl -fsS -m 2 "http://127.0.0.1:$PORT/healthz" >/dev/null 2>&1; do
     state=$("${PODMAN[@]}" inspect -f '{{.State.Status}}' "$CONTAINER" 2>/dev/null || echo gone)
     [[ $state == running ]] || { show_logs; die "container is $state before becoming healthy"; }
@@ -207,7 +208,10 @@ done
 log "/healthz answers"
 code=$(curl -sS -m 5 -o /dev/null -w '%{http_code}' "http://127.0.0.1:$PORT/readyz") || true
 [[ $code == 200 ]] || { show_logs; die "/readyz answers $code, not 200 (pool not up?)"; }
-log "/readyz answers 200"
+log "/readyz answers 200, $(($(date +%s) - started)) s after start"
+"${PODMAN[@]}" logs "$CONTAINER" 2>&1 | grep -q "numba cache seeded: [1-9]" \
+    || { show_logs; die "the server did not seed the numba cache from the image"; }
+log "numba cache seeded from the image"
 
 # The image's own HEALTHCHECK command must pass too (it is what docker/podman will run).
 health=$("${PODMAN[@]}" image inspect --format '{{json .HealthCheck}}' "$IMAGE" 2>/dev/null || true)

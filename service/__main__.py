@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+import logging
+import logging.config
+import os
 import signal
 import sys
 from types import FrameType
 
 import uvicorn
 
-from service.app import create_app
 from service.logs import logging_config
+from service.numba_seed import seed_numba_cache
 from service.settings import Settings
 
 
@@ -21,6 +24,14 @@ def main() -> None:
     """Read the settings from the environment and run uvicorn (one process; the
     pruning work is spread over the app's own worker pool)."""
     settings = Settings()
+    logging.config.dictConfig(logging_config(settings.log_level))  # uvicorn sets it again
+    cache = os.environ.get("NUMBA_CACHE_DIR")
+    if settings.numba_cache_seed and cache:
+        # before the pool starts: its workers read the cache when they warm up
+        copied = seed_numba_cache(settings.numba_cache_seed, cache)
+        logging.getLogger("service").info("numba cache seeded: %d files", copied)
+    from service.app import create_app  # only now: importing it already compiles
+
     # uvicorn drains in-flight requests and closes the pool on SIGTERM/SIGINT, then
     # re-raises the signal under the handlers it found. These make that final step a
     # clean exit 0 (what `docker stop` and Kubernetes expect) instead of death by signal.

@@ -77,6 +77,10 @@ class Settings(BaseSettings):
         300.0, gt=0, description="Seconds a worker may take to start and warm up."
     )
     warmup: bool = Field(True, description="Prune a tiny shape in each worker at start (JIT).")
+    numba_cache_seed: str | None = Field(
+        None, description="A numba cache built with the image: copied into an empty "
+        "NUMBA_CACHE_DIR at start, so that workers load compiled code instead of compiling.",
+    )
     retry_after: int = Field(1, ge=1, description="Retry-After seconds sent with a 503.")
     max_body_bytes: int = Field(
         16 * 1024 * 1024, ge=1024, description="Largest request body accepted, bytes (413)."

@@ -96,3 +96,20 @@ def test_deploy_files_bound_the_drain_below_their_grace_periods() -> None:
     job_timeout = float(values.get("SKELPRUNE_JOB_TIMEOUT")
                         or Settings.model_fields["job_timeout"].default)
     assert job_timeout < drain < pod["terminationGracePeriodSeconds"] - pre_stop_s
+
+
+def test_numba_cache_seed_is_copied_once_into_an_empty_cache(tmp_path) -> None:
+    from service.numba_seed import seed_numba_cache
+
+    seed = tmp_path / "seed" / "skelprune"
+    seed.mkdir(parents=True)
+    (seed / "a.nbi").write_bytes(b"index")
+    (seed / "a.nbc").write_bytes(b"code")
+    target = tmp_path / "cache"
+    assert seed_numba_cache(tmp_path / "seed", target) == 2
+    assert (target / "skelprune" / "a.nbc").read_bytes() == b"code"
+    (target / "skelprune" / "a.nbc").write_bytes(b"newer")
+    assert seed_numba_cache(tmp_path / "seed", target) == 0  # not empty: left alone
+    assert (target / "skelprune" / "a.nbc").read_bytes() == b"newer"
+    assert seed_numba_cache(tmp_path / "missing", tmp_path / "other") == 0
+    assert not (tmp_path / "other").exists()

@@ -62,7 +62,9 @@ def test_default_worker_count_uses_both(monkeypatch: pytest.MonkeyPatch) -> None
 def test_shutdown_timeout_reaches_uvicorn(monkeypatch: pytest.MonkeyPatch) -> None:
     seen: dict[str, object] = {}
     monkeypatch.setattr(entry.uvicorn, "run", lambda app, **kw: seen.update(kw))
-    monkeypatch.setattr(entry, "create_app", lambda settings: "app")
+    import service.app
+
+    monkeypatch.setattr(service.app, "create_app", lambda settings: "app")
     monkeypatch.setattr(entry.signal, "signal", lambda *args: None)  # not in pytest itself
     monkeypatch.setenv("SKELPRUNE_SHUTDOWN_TIMEOUT", "12.5")
     monkeypatch.setenv("SKELPRUNE_LOG_LEVEL", "warning")

@@ -21,15 +21,14 @@ import numpy as np
 from numba import njit
 from scipy import ndimage
 
+from ._coverage import coverage, disk_covered_twice, disk_loss, disk_remove
 from ._digital import (
     DEGREE,
     NEIGHBOURS,
     SIMPLE,
-    disk_half_width,
     disk_offsets,
     heap_pop,
     heap_push,
-    isqrt,
     neighbourhood_code,
 )
 
@@ -142,8 +141,10 @@ def _ordered_thinning(fg, r2, anchor, simple) -> None:
     h, w = fg.shape
     n = h * w
     max_level = r2.max()
-    cap = 9 * n + 1
-    nxt = np.full(cap, -1, dtype=np.int64)
+    cap = 9 * n + 1  # each deletion re-queues at most 8 neighbours
+    # uninitialised: _enqueue writes a slot before it is read, and untouched pages
+    # of these large buffers then cost nothing
+    nxt = np.empty(cap, dtype=np.int64)
     item = np.empty(cap, dtype=np.int64)
     head = np.full(max_level + 1, -1, dtype=np.int64)
     tail = np.full(max_level + 1, -1, dtype=np.int64)
@@ -175,49 +176,6 @@ def _ordered_thinning(fg, r2, anchor, simple) -> None:
 
 
 @njit(cache=True)
-def _paint(cover, rows, cols, r2s, delta: int) -> None:
-    for k in range(rows.size):
-        _paint_one(cover, rows[k], cols[k], r2s[k], delta)
-
-
-@njit(cache=True, inline="always")
-def _paint_one(cover, r, c, v, delta) -> None:
-    h = isqrt(v - 1)
-    for dy in range(-h, h + 1):
-        w = disk_half_width(v, dy)
-        row = cover[r + dy]
-        for x in range(c - w, c + w + 1):
-            row[x] += delta
-
-
-@njit(cache=True)
-def _loss(cover, r, c, v) -> int:
-    """Pixels only the disk at (r, c) covers: what removing it would lose."""
-    n = 0
-    h = isqrt(v - 1)
-    for dy in range(-h, h + 1):
-        w = disk_half_width(v, dy)
-        row = cover[r + dy]
-        for x in range(c - w, c + w + 1):
-            if row[x] == 1:
-                n += 1
-    return n
-
-
-@njit(cache=True)
-def _covered_twice(cover, r, c, v) -> bool:
-    """Whether every pixel of the disk at (r, c) is covered at least twice."""
-    h = isqrt(v - 1)
-    for dy in range(-h, h + 1):
-        w = disk_half_width(v, dy)
-        row = cover[r + dy]
-        for x in range(c - w, c + w + 1):
-            if row[x] < 2:
-                return False
-    return True
-
-
-@njit(cache=True)
 def _drop_redundant_anchors(anchor, r2, rows, cols) -> None:
     """Un-anchor centres whose disk the other anchors' disks already cover.
 
@@ -225,16 +183,15 @@ def _drop_redundant_anchors(anchor, r2, rows, cols) -> None:
     maximal disks, each of which would otherwise pull a spur into the axis). The union
     of the remaining anchors' disks is unchanged: still the whole shape.
     """
-    cover = np.zeros(anchor.shape, dtype=np.int32)
     r2s = np.empty(rows.size, dtype=np.int64)
     for k in range(rows.size):
         r2s[k] = r2[rows[k], cols[k]]
-    _paint(cover, rows, cols, r2s, 1)
+    cover, bmin, bcnt, lazy = coverage(anchor.shape[0], anchor.shape[1], rows, cols, r2s)
     for k in range(rows.size):
         r, c, v = rows[k], cols[k], r2s[k]
-        if _covered_twice(cover, r, c, v):
+        if disk_covered_twice(cover, bmin, bcnt, lazy, r, c, v):
             anchor[r, c] = False
-            _paint_one(cover, r, c, v, -1)
+            disk_remove(cover, bmin, bcnt, lazy, r, c, v)
 
 
 @njit(cache=True)
@@ -246,11 +203,10 @@ def _thin(fg, r2, rows, cols, simple, degree) -> None:
     only lower the coverage, so a pixel's loss never decreases: a min-heap with lazy
     re-evaluation of the popped key gives exactly that greedy order.
     """
-    cover = np.zeros(fg.shape, dtype=np.int32)
     r2s = np.empty(rows.size, dtype=np.int64)
     for k in range(rows.size):
         r2s[k] = r2[rows[k], cols[k]]
-    _paint(cover, rows, cols, r2s, 1)
+    cover, bmin, bcnt, lazy = coverage(fg.shape[0], fg.shape[1], rows, cols, r2s)
     n = rows.size
     rank = np.full(fg.shape, -1, dtype=np.int64)
     for k in range(n):
@@ -262,7 +218,7 @@ def _thin(fg, r2, rows, cols, simple, degree) -> None:
     for k in range(n):
         code = neighbourhood_code(fg, rows[k], cols[k])
         if degree[code] >= 2 and simple[code]:
-            loss = _loss(cover, rows[k], cols[k], r2[rows[k], cols[k]])
+            loss = disk_loss(cover, bmin, bcnt, lazy, rows[k], cols[k], r2s[k])
             size = heap_push(heap, size, loss * big + k)
             inheap[k] = True
     while size > 0:
@@ -276,13 +232,13 @@ def _thin(fg, r2, rows, cols, simple, degree) -> None:
         if degree[code] < 2 or not simple[code]:
             continue  # comes back when a neighbour changes
         v = r2[r, c]
-        loss = _loss(cover, r, c, v)
+        loss = disk_loss(cover, bmin, bcnt, lazy, r, c, v)
         if loss > key // big:
             size = heap_push(heap, size, loss * big + k)
             inheap[k] = True
             continue
         fg[r, c] = False
-        _paint_one(cover, r, c, v, -1)
+        disk_remove(cover, bmin, bcnt, lazy, r, c, v)
         for i in range(8):
             rr, cc = r + NEIGHBOURS[i, 0], c + NEIGHBOURS[i, 1]
             q = rank[rr, cc]
@@ -290,7 +246,7 @@ def _thin(fg, r2, rows, cols, simple, degree) -> None:
                 continue
             qcode = neighbourhood_code(fg, rr, cc)
             if degree[qcode] >= 2 and simple[qcode]:
-                qloss = _loss(cover, rr, cc, r2[rr, cc])
+                qloss = disk_loss(cover, bmin, bcnt, lazy, rr, cc, r2s[q])
                 size = heap_push(heap, size, qloss * big + q)
                 inheap[q] = True
 

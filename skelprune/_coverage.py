@@ -1,12 +1,14 @@
 """Disk coverage counts with cheap whole-disk queries and removals.
 
-The medial axis keeps, for every pixel, how many disks of a set cover it, and asks
-of one disk at a time: is every pixel covered at least twice, how many exactly once,
-and removes the disk. Walking every pixel of a disk costs its area, which dominates
-on large shapes (radii of 100 px and more). Here each row of the count array is cut
-into blocks of ``BLOCK`` pixels carrying their minimum, the number of pixels at that
-minimum, and a pending addend for the whole block: a disk row then costs its two
-partial end blocks plus one step per full block in between.
+The thinning of the medial axis keeps, for every pixel, how many disks of a set
+cover it, and asks of one disk at a time: how many of its pixels are covered exactly
+once (by the disk alone), and removes the disk. Walking every pixel of a disk costs
+its area, which dominates on large shapes (radii of 100 px and more). Here each row
+of the count array is cut into blocks of ``BLOCK`` pixels carrying their minimum, the
+number of pixels at that minimum, and a pending addend for the whole block: a disk
+row then costs its two partial end blocks plus one step per full block in between.
+
+:func:`last_cover` serves the redundant-anchor pass of the medial axis instead.
 
 The true count of pixel ``(y, x)`` is ``cover[y, x] + lazy[y, x // BLOCK]``;
 ``bmin`` and ``bcnt`` describe ``cover`` alone (the addend shifts a whole block).
@@ -19,7 +21,7 @@ from numba import njit
 
 from ._digital import disk_half_width, isqrt
 
-__all__ = ["BLOCK", "Coverage", "coverage", "disk_covered_twice", "disk_loss", "disk_remove"]
+__all__ = ["BLOCK", "Coverage", "coverage", "disk_loss", "disk_remove", "last_cover"]
 
 BLOCK = 16
 
@@ -79,28 +81,6 @@ def _block_stats(cover, bmin, bcnt, y, b) -> None:
 
 
 @njit(cache=True, inline="always")
-def _row_min(cover, bmin, lazy, y, a, e) -> int:
-    """Least true count over ``cover[y, a:e+1]``."""
-    row = cover[y]
-    ba, be = a // BLOCK, e // BLOCK
-    if ba == be:
-        m = row[a]
-        for x in range(a + 1, e + 1):
-            m = min(m, row[x])
-        return m + lazy[y, ba]
-    m = row[a]
-    for x in range(a + 1, (ba + 1) * BLOCK):
-        m = min(m, row[x])
-    m += lazy[y, ba]
-    for b in range(ba + 1, be):
-        m = min(m, bmin[y, b] + lazy[y, b])
-    t = row[be * BLOCK]
-    for x in range(be * BLOCK + 1, e + 1):
-        t = min(t, row[x])
-    return min(m, t + lazy[y, be])
-
-
-@njit(cache=True, inline="always")
 def _row_ones(cover, bmin, bcnt, lazy, y, a, e) -> int:
     """Pixels of ``cover[y, a:e+1]`` whose true count is 1 (counts must be >= 1)."""
     row = cover[y]
@@ -154,17 +134,6 @@ def _row_decrement(cover, bmin, bcnt, lazy, y, a, e) -> None:
 
 
 @njit(cache=True)
-def disk_covered_twice(cover, bmin, bcnt, lazy, r, c, v) -> bool:
-    """Whether every pixel of the disk at ``(r, c)``, ``r2 = v`` is covered twice or more."""
-    h = isqrt(v - 1)
-    for dy in range(-h, h + 1):
-        w = disk_half_width(v, dy)
-        if _row_min(cover, bmin, lazy, r + dy, c - w, c + w) < 2:
-            return False
-    return True
-
-
-@njit(cache=True)
 def disk_loss(cover, bmin, bcnt, lazy, r, c, v) -> int:
     """Pixels of the disk at ``(r, c)`` covered exactly once, by the disk itself.
 
@@ -195,3 +164,42 @@ def true_counts(cover, lazy) -> np.ndarray:
         for x in range(cover.shape[1]):
             out[y, x] += lazy[y, x // BLOCK]
     return out
+
+
+@njit(cache=True, inline="always")
+def _find(nxt, x) -> int:
+    """First unpainted pixel at or after ``x`` in a row (union-find, path compression)."""
+    root = x
+    while nxt[root] != root:
+        root = nxt[root]
+    while nxt[x] != root:
+        nxt[x], x = root, nxt[x]
+    return root
+
+
+@njit(cache=True)
+def last_cover(shape_h: int, shape_w: int, rows, cols, r2s) -> np.ndarray:
+    """For every pixel, the largest ``k`` whose disk ``(rows[k], cols[k], r2s[k])``
+    covers it, -1 where none does.
+
+    Disks are painted last to first, each onto the pixels no later disk took; a
+    union-find per row skips the painted runs, so the cost is the painted area plus
+    the disks' heights.
+    """
+    last = np.full((shape_h, shape_w), -1, dtype=np.int64)
+    nxt = np.empty((shape_h, shape_w + 1), dtype=np.int64)
+    for y in range(shape_h):
+        for x in range(shape_w + 1):
+            nxt[y, x] = x
+    for k in range(rows.size - 1, -1, -1):
+        r, c, v = rows[k], cols[k], r2s[k]
+        h = isqrt(v - 1)
+        for dy in range(-h, h + 1):
+            w = disk_half_width(v, dy)
+            row = nxt[r + dy]
+            x = _find(row, c - w)
+            while x <= c + w:
+                last[r + dy, x] = k
+                row[x] = x + 1
+                x = _find(row, x + 1)
+    return last

@@ -153,8 +153,9 @@ def _ordered_thinning(fg, r2, anchor, simple) -> None:
     queued = np.zeros(n, dtype=np.bool_)
     used = 0
     flat = r2.ravel()
+    anchored = anchor.ravel()  # once: ravel() inside the loop costs ~60 ns a pixel
     for p in range(n):
-        if flat[p] > 0 and not anchor.ravel()[p]:
+        if flat[p] > 0 and not anchored[p]:
             used = _enqueue(item, nxt, head, tail, used, p, flat[p])
             queued[p] = True
     for lvl in range(max_level + 1):

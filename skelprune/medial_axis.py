@@ -74,7 +74,7 @@ VECTOR_KIND = np.array([_KINDS.index(tuple(sorted((abs(int(a)), abs(int(b))))))
 
 
 def _domination_table(values: np.ndarray) -> np.ndarray:
-    """:func:`_cached_domination_table` sized for the largest of ``values``."""
+    """:func:`_cached_domination_table` sized for the largest of ``values`` (at least 1)."""
     max_r2 = int(values.max()) if values.size else 1
     return _cached_domination_table(1 << max(max_r2, 1).bit_length())
 
@@ -409,7 +409,7 @@ def medial_axis(padded: np.ndarray, r2: np.ndarray | None = None) -> MedialAxis:
     """
     if r2 is None:
         r2 = squared_distance(padded)
-    need = _domination_table(r2[r2 > 0])
+    need = _domination_table(r2)  # sized by the maximum: no need to select the shape
     anchor = _anchors(r2, need, VECTORS, VECTOR_KIND)
     ar, ac = np.nonzero(anchor)
     order = np.lexsort((ac, ar, r2[ar, ac]))

@@ -8,7 +8,8 @@ of the count array is cut into blocks of ``BLOCK`` pixels carrying their minimum
 number of pixels at that minimum, and a pending addend for the whole block: a disk
 row then costs its two partial end blocks plus one step per full block in between.
 
-:func:`last_cover` serves the redundant-anchor pass of the medial axis instead.
+:func:`drop_redundant_anchors`, a pass of the medial axis, uses :func:`last_cover`
+instead.
 
 The true count of pixel ``(y, x)`` is ``cover[y, x] + lazy[y, x // BLOCK]``;
 ``bmin`` and ``bcnt`` describe ``cover`` alone (the addend shifts a whole block).
@@ -21,7 +22,8 @@ from numba import njit
 
 from ._digital import disk_half_width, isqrt
 
-__all__ = ["BLOCK", "Coverage", "coverage", "disk_loss", "disk_remove", "last_cover"]
+__all__ = ["BLOCK", "Coverage", "coverage", "disk_loss", "disk_remove",
+           "drop_redundant_anchors", "last_cover"]
 
 BLOCK = 16
 
@@ -203,3 +205,53 @@ def last_cover(shape_h: int, shape_w: int, rows, cols, r2s) -> np.ndarray:
                 row[x] = x + 1
                 x = _find(row, x + 1)
     return last
+
+
+@njit(cache=True)
+def drop_redundant_anchors(anchor, r2, rows, cols) -> None:
+    """Un-anchor centres whose disk the other anchors' disks already cover.
+
+    Visited smallest radius first (boundary noise makes many small, redundant
+    maximal disks, each of which would otherwise pull a spur into the axis). The union
+    of the remaining anchors' disks is unchanged: still the whole shape.
+
+    Anchor ``k`` goes iff each pixel of its disk has another live cover: a later
+    anchor (all still live) or an earlier one that stayed. The first holds exactly
+    where a later disk covers the pixel, so only the pixels whose last cover is ``k``
+    need a look, each pixel of the shape once in all, and only the kept disks are
+    painted.
+    """
+    h, w = anchor.shape
+    n = rows.size
+    r2s = np.empty(n, dtype=np.int64)
+    for k in range(n):
+        r2s[k] = r2[rows[k], cols[k]]
+    last = last_cover(h, w, rows, cols, r2s).ravel()
+    # pixels grouped by their last cover (a counting sort)
+    start = np.zeros(n + 1, dtype=np.int64)
+    for p in range(last.size):
+        if last[p] >= 0:
+            start[last[p] + 1] += 1
+    for k in range(n):
+        start[k + 1] += start[k]
+    fill = start[:-1].copy()
+    pixels = np.empty(start[n], dtype=np.int64)
+    for p in range(last.size):
+        if last[p] >= 0:
+            pixels[fill[last[p]]] = p
+            fill[last[p]] += 1
+    kept = np.zeros(h * w, dtype=np.bool_)  # covered by a disk that stayed
+    for k in range(n):
+        redundant = True
+        for i in range(start[k], start[k + 1]):
+            if not kept[pixels[i]]:
+                redundant = False
+                break
+        r, c, v = rows[k], cols[k], r2s[k]
+        if redundant:
+            anchor[r, c] = False
+            continue
+        for dy in range(-isqrt(v - 1), isqrt(v - 1) + 1):
+            half = disk_half_width(v, dy)
+            base = (r + dy) * w + c
+            kept[base - half : base + half + 1] = True

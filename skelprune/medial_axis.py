@@ -21,16 +21,14 @@ import numpy as np
 from numba import njit
 from scipy import ndimage
 
-from ._coverage import coverage, disk_loss, disk_remove, last_cover
+from ._coverage import coverage, disk_loss, disk_remove, drop_redundant_anchors
 from ._digital import (
     DEGREE,
     NEIGHBOURS,
     SIMPLE,
-    disk_half_width,
     disk_offsets,
     heap_pop,
     heap_push,
-    isqrt,
     neighbourhood_code,
 )
 
@@ -211,56 +209,6 @@ def _ordered_thinning(fg, r2, anchor, simple) -> None:
 
 
 @njit(cache=True)
-def _drop_redundant_anchors(anchor, r2, rows, cols) -> None:
-    """Un-anchor centres whose disk the other anchors' disks already cover.
-
-    Visited smallest radius first (boundary noise makes many small, redundant
-    maximal disks, each of which would otherwise pull a spur into the axis). The union
-    of the remaining anchors' disks is unchanged: still the whole shape.
-
-    Anchor ``k`` goes iff each pixel of its disk has another live cover: a later
-    anchor (all still live) or an earlier one that stayed. The first holds exactly
-    where a later disk covers the pixel, so only the pixels whose last cover is ``k``
-    need a look, each pixel of the shape once in all, and only the kept disks are
-    painted.
-    """
-    h, w = anchor.shape
-    n = rows.size
-    r2s = np.empty(n, dtype=np.int64)
-    for k in range(n):
-        r2s[k] = r2[rows[k], cols[k]]
-    last = last_cover(h, w, rows, cols, r2s).ravel()
-    # pixels grouped by their last cover (a counting sort)
-    start = np.zeros(n + 1, dtype=np.int64)
-    for p in range(last.size):
-        if last[p] >= 0:
-            start[last[p] + 1] += 1
-    for k in range(n):
-        start[k + 1] += start[k]
-    fill = start[:-1].copy()
-    pixels = np.empty(start[n], dtype=np.int64)
-    for p in range(last.size):
-        if last[p] >= 0:
-            pixels[fill[last[p]]] = p
-            fill[last[p]] += 1
-    kept = np.zeros(h * w, dtype=np.bool_)  # covered by a disk that stayed
-    for k in range(n):
-        redundant = True
-        for i in range(start[k], start[k + 1]):
-            if not kept[pixels[i]]:
-                redundant = False
-                break
-        r, c, v = rows[k], cols[k], r2s[k]
-        if redundant:
-            anchor[r, c] = False
-            continue
-        for dy in range(-isqrt(v - 1), isqrt(v - 1) + 1):
-            half = disk_half_width(v, dy)
-            base = (r + dy) * w + c
-            kept[base - half : base + half + 1] = True
-
-
-@njit(cache=True)
 def _thin(fg, r2, rows, cols, simple, degree) -> None:
     """Make the anchored skeleton one pixel thin.
 
@@ -413,7 +361,7 @@ def medial_axis(padded: np.ndarray, r2: np.ndarray | None = None) -> MedialAxis:
     anchor = _anchors(r2, need, VECTORS, VECTOR_KIND)
     ar, ac = np.nonzero(anchor)
     order = np.lexsort((ac, ar, r2[ar, ac]))
-    _drop_redundant_anchors(anchor, r2, ar[order].astype(np.int64), ac[order].astype(np.int64))
+    drop_redundant_anchors(anchor, r2, ar[order].astype(np.int64), ac[order].astype(np.int64))
     fg = padded.astype(np.bool_).copy()
     _ordered_thinning(fg, r2, anchor, SIMPLE)
     rows, cols = np.nonzero(fg)

@@ -8,7 +8,14 @@ import importlib
 import numpy as np
 import pytest
 
-from skelprune._coverage import coverage, disk_loss, disk_remove, last_cover, true_counts
+from skelprune._coverage import (
+    coverage,
+    disk_loss,
+    disk_remove,
+    drop_redundant_anchors,
+    last_cover,
+    true_counts,
+)
 from skelprune._digital import disk_half_width, isqrt
 from skelprune.api import components
 from skelprune.perturb import boundary_noise
@@ -82,7 +89,7 @@ def test_drop_redundant_anchors_matches_plain_counts(case):
         order = np.lexsort((ac, ar, r2[ar, ac]))
         rows, cols = ar[order].astype(np.int64), ac[order].astype(np.int64)
         fast, plain = anchor.copy(), anchor.copy()
-        ma._drop_redundant_anchors(fast, r2, rows, cols)
+        drop_redundant_anchors(fast, r2, rows, cols)
         _drop_plainly(plain, r2, rows, cols)
         assert np.array_equal(fast, plain)
         assert 0 < fast.sum() < anchor.sum()

@@ -21,15 +21,14 @@ import numpy as np
 from numba import njit
 from scipy import ndimage
 
+from ._coverage import coverage, disk_loss, disk_remove, drop_redundant_anchors
 from ._digital import (
     DEGREE,
     NEIGHBOURS,
     SIMPLE,
-    disk_half_width,
     disk_offsets,
     heap_pop,
     heap_push,
-    isqrt,
     neighbourhood_code,
 )
 
@@ -61,8 +60,11 @@ def squared_distance(padded: np.ndarray) -> np.ndarray:
 # neighbours alone see domination only where the distance gradient is axial or
 # diagonal; elsewhere nearly every pixel would pass for a centre of a maximal disk.
 REACH = 3
-VECTORS = np.array([(dy, dx) for dy in range(-REACH, REACH + 1) for dx in range(-REACH, REACH + 1)
-                    if (dy, dx) != (0, 0)], dtype=np.int64)
+# Shortest first: the containing disk is most often a near one (the order does not
+# change the result, only how soon the search stops).
+VECTORS = np.array(sorted(((dy, dx) for dy in range(-REACH, REACH + 1)
+                           for dx in range(-REACH, REACH + 1) if (dy, dx) != (0, 0)),
+                          key=lambda v: (v[0] ** 2 + v[1] ** 2, v)), dtype=np.int64)
 # Disks are symmetric, so the table depends on (min, max) of |dy|, |dx| only.
 _KINDS = sorted({tuple(sorted((abs(int(a)), abs(int(b))))) for a, b in VECTORS})
 VECTOR_KIND = np.array([_KINDS.index(tuple(sorted((abs(int(a)), abs(int(b))))))
@@ -70,7 +72,7 @@ VECTOR_KIND = np.array([_KINDS.index(tuple(sorted((abs(int(a)), abs(int(b))))))
 
 
 def _domination_table(values: np.ndarray) -> np.ndarray:
-    """:func:`_cached_domination_table` sized for the largest of ``values``."""
+    """:func:`_cached_domination_table` sized for the largest of ``values`` (at least 1)."""
     max_r2 = int(values.max()) if values.size else 1
     return _cached_domination_table(1 << max(max_r2, 1).bit_length())
 
@@ -92,6 +94,15 @@ def _cached_domination_table(max_r2: int) -> np.ndarray:
     return need
 
 
+@njit(cache=True, inline="always")
+def _dominated_by(r2, need, vectors, kind, r, c, v, i) -> bool:
+    """Whether the disk at ``(r, c)`` + ``vectors[i]`` contains the one at ``(r, c)``."""
+    rr, cc = r + vectors[i, 0], c + vectors[i, 1]
+    if rr < 0 or cc < 0 or rr >= r2.shape[0] or cc >= r2.shape[1]:
+        return False
+    return r2[rr, cc] >= need[v, kind[i]]
+
+
 @njit(cache=True)
 def _anchors(r2: np.ndarray, need: np.ndarray, vectors: np.ndarray, kind: np.ndarray) -> np.ndarray:
     """Centres of maximal disks: pixels whose disk no nearby pixel's disk contains.
@@ -102,18 +113,19 @@ def _anchors(r2: np.ndarray, need: np.ndarray, vectors: np.ndarray, kind: np.nda
     """
     h, w = r2.shape
     anchor = np.zeros((h, w), dtype=np.bool_)
+    last = 0  # the vector that found the previous pixel dominated: tried first
     for r in range(1, h - 1):
         for c in range(1, w - 1):
             v = r2[r, c]
             if v == 0:
                 continue
+            if _dominated_by(r2, need, vectors, kind, r, c, v, last):
+                continue
             dominated = False
             for i in range(vectors.shape[0]):
-                rr, cc = r + vectors[i, 0], c + vectors[i, 1]
-                if rr < 0 or cc < 0 or rr >= h or cc >= w:
-                    continue
-                if r2[rr, cc] >= need[v, kind[i]]:
+                if _dominated_by(r2, need, vectors, kind, r, c, v, i):
                     dominated = True
+                    last = i
                     break
             anchor[r, c] = not dominated
     return anchor
@@ -138,29 +150,51 @@ def _ordered_thinning(fg, r2, anchor, simple) -> None:
 
     A pixel found not simple leaves the queue; it comes back (at the current level)
     when a neighbour is deleted, which is what keeps the order by distance exact.
+    Each bucket is FIFO: first its initial pixels in raster order (a counting sort,
+    contiguous, where linked-list appends scatter over memory), then the pixels
+    queued again, in a linked list.
     """
     h, w = fg.shape
     n = h * w
     max_level = r2.max()
-    cap = 9 * n + 1
-    nxt = np.full(cap, -1, dtype=np.int64)
+    flat = r2.ravel()
+    anchored = anchor.ravel()  # once: ravel() inside the loop costs ~60 ns a pixel
+    start = np.zeros(max_level + 2, dtype=np.int64)
+    for p in range(n):
+        if flat[p] > 0 and not anchored[p]:
+            start[flat[p] + 1] += 1
+    for lvl in range(max_level + 1):
+        start[lvl + 1] += start[lvl]
+    fill = start[:-1].copy()
+    initial = np.empty(start[max_level + 1], dtype=np.int64)
+    queued = np.zeros(n, dtype=np.bool_)
+    for p in range(n):
+        if flat[p] > 0 and not anchored[p]:
+            initial[fill[flat[p]]] = p
+            fill[flat[p]] += 1
+            queued[p] = True
+    cap = 8 * n + 1  # each deletion re-queues at most 8 neighbours
+    # uninitialised: _enqueue writes a slot before it is read, and untouched pages
+    # of these large buffers then cost nothing
+    nxt = np.empty(cap, dtype=np.int64)
     item = np.empty(cap, dtype=np.int64)
     head = np.full(max_level + 1, -1, dtype=np.int64)
     tail = np.full(max_level + 1, -1, dtype=np.int64)
-    queued = np.zeros(n, dtype=np.bool_)
     used = 0
-    flat = r2.ravel()
-    for p in range(n):
-        if flat[p] > 0 and not anchor.ravel()[p]:
-            used = _enqueue(item, nxt, head, tail, used, p, flat[p])
-            queued[p] = True
     for lvl in range(max_level + 1):
-        while head[lvl] >= 0:
-            slot = head[lvl]
-            head[lvl] = nxt[slot]
-            if head[lvl] < 0:
-                tail[lvl] = -1
-            p = item[slot]
+        k = start[lvl]
+        while True:
+            if k < start[lvl + 1]:
+                p = initial[k]
+                k += 1
+            elif head[lvl] >= 0:
+                slot = head[lvl]
+                head[lvl] = nxt[slot]
+                if head[lvl] < 0:
+                    tail[lvl] = -1
+                p = item[slot]
+            else:
+                break
             queued[p] = False
             r, c = p // w, p % w
             if not fg[r, c] or not simple[neighbourhood_code(fg, r, c)]:
@@ -175,69 +209,6 @@ def _ordered_thinning(fg, r2, anchor, simple) -> None:
 
 
 @njit(cache=True)
-def _paint(cover, rows, cols, r2s, delta: int) -> None:
-    for k in range(rows.size):
-        _paint_one(cover, rows[k], cols[k], r2s[k], delta)
-
-
-@njit(cache=True, inline="always")
-def _paint_one(cover, r, c, v, delta) -> None:
-    h = isqrt(v - 1)
-    for dy in range(-h, h + 1):
-        w = disk_half_width(v, dy)
-        row = cover[r + dy]
-        for x in range(c - w, c + w + 1):
-            row[x] += delta
-
-
-@njit(cache=True)
-def _loss(cover, r, c, v) -> int:
-    """Pixels only the disk at (r, c) covers: what removing it would lose."""
-    n = 0
-    h = isqrt(v - 1)
-    for dy in range(-h, h + 1):
-        w = disk_half_width(v, dy)
-        row = cover[r + dy]
-        for x in range(c - w, c + w + 1):
-            if row[x] == 1:
-                n += 1
-    return n
-
-
-@njit(cache=True)
-def _covered_twice(cover, r, c, v) -> bool:
-    """Whether every pixel of the disk at (r, c) is covered at least twice."""
-    h = isqrt(v - 1)
-    for dy in range(-h, h + 1):
-        w = disk_half_width(v, dy)
-        row = cover[r + dy]
-        for x in range(c - w, c + w + 1):
-            if row[x] < 2:
-                return False
-    return True
-
-
-@njit(cache=True)
-def _drop_redundant_anchors(anchor, r2, rows, cols) -> None:
-    """Un-anchor centres whose disk the other anchors' disks already cover.
-
-    Visited smallest radius first (boundary noise makes many small, redundant
-    maximal disks, each of which would otherwise pull a spur into the axis). The union
-    of the remaining anchors' disks is unchanged: still the whole shape.
-    """
-    cover = np.zeros(anchor.shape, dtype=np.int32)
-    r2s = np.empty(rows.size, dtype=np.int64)
-    for k in range(rows.size):
-        r2s[k] = r2[rows[k], cols[k]]
-    _paint(cover, rows, cols, r2s, 1)
-    for k in range(rows.size):
-        r, c, v = rows[k], cols[k], r2s[k]
-        if _covered_twice(cover, r, c, v):
-            anchor[r, c] = False
-            _paint_one(cover, r, c, v, -1)
-
-
-@njit(cache=True)
 def _thin(fg, r2, rows, cols, simple, degree) -> None:
     """Make the anchored skeleton one pixel thin.
 
@@ -246,11 +217,10 @@ def _thin(fg, r2, rows, cols, simple, degree) -> None:
     only lower the coverage, so a pixel's loss never decreases: a min-heap with lazy
     re-evaluation of the popped key gives exactly that greedy order.
     """
-    cover = np.zeros(fg.shape, dtype=np.int32)
     r2s = np.empty(rows.size, dtype=np.int64)
     for k in range(rows.size):
         r2s[k] = r2[rows[k], cols[k]]
-    _paint(cover, rows, cols, r2s, 1)
+    cover, bmin, bcnt, lazy = coverage(fg.shape[0], fg.shape[1], rows, cols, r2s)
     n = rows.size
     rank = np.full(fg.shape, -1, dtype=np.int64)
     for k in range(n):
@@ -262,7 +232,7 @@ def _thin(fg, r2, rows, cols, simple, degree) -> None:
     for k in range(n):
         code = neighbourhood_code(fg, rows[k], cols[k])
         if degree[code] >= 2 and simple[code]:
-            loss = _loss(cover, rows[k], cols[k], r2[rows[k], cols[k]])
+            loss = disk_loss(cover, bmin, bcnt, lazy, rows[k], cols[k], r2s[k])
             size = heap_push(heap, size, loss * big + k)
             inheap[k] = True
     while size > 0:
@@ -276,13 +246,13 @@ def _thin(fg, r2, rows, cols, simple, degree) -> None:
         if degree[code] < 2 or not simple[code]:
             continue  # comes back when a neighbour changes
         v = r2[r, c]
-        loss = _loss(cover, r, c, v)
+        loss = disk_loss(cover, bmin, bcnt, lazy, r, c, v)
         if loss > key // big:
             size = heap_push(heap, size, loss * big + k)
             inheap[k] = True
             continue
         fg[r, c] = False
-        _paint_one(cover, r, c, v, -1)
+        disk_remove(cover, bmin, bcnt, lazy, r, c, v)
         for i in range(8):
             rr, cc = r + NEIGHBOURS[i, 0], c + NEIGHBOURS[i, 1]
             q = rank[rr, cc]
@@ -290,7 +260,7 @@ def _thin(fg, r2, rows, cols, simple, degree) -> None:
                 continue
             qcode = neighbourhood_code(fg, rr, cc)
             if degree[qcode] >= 2 and simple[qcode]:
-                qloss = _loss(cover, rr, cc, r2[rr, cc])
+                qloss = disk_loss(cover, bmin, bcnt, lazy, rr, cc, r2s[q])
                 size = heap_push(heap, size, qloss * big + q)
                 inheap[q] = True
 
@@ -387,11 +357,11 @@ def medial_axis(padded: np.ndarray, r2: np.ndarray | None = None) -> MedialAxis:
     """
     if r2 is None:
         r2 = squared_distance(padded)
-    need = _domination_table(r2[r2 > 0])
+    need = _domination_table(r2)  # sized by the maximum: no need to select the shape
     anchor = _anchors(r2, need, VECTORS, VECTOR_KIND)
     ar, ac = np.nonzero(anchor)
     order = np.lexsort((ac, ar, r2[ar, ac]))
-    _drop_redundant_anchors(anchor, r2, ar[order].astype(np.int64), ac[order].astype(np.int64))
+    drop_redundant_anchors(anchor, r2, ar[order].astype(np.int64), ac[order].astype(np.int64))
     fg = padded.astype(np.bool_).copy()
     _ordered_thinning(fg, r2, anchor, SIMPLE)
     rows, cols = np.nonzero(fg)

@@ -4,9 +4,9 @@ Starting from the medial axis ``M``, end branches are removed one at a time, eac
 time the one whose removal gives the smallest target ``λ = α·AR + LR``; the
 skeleton of the whole sequence with the smallest ``λ`` is the answer.
 
-Each step costs only the disks that change: :class:`~skelprune.reconstruction.Coverage`
+Each step costs only the owners that change: :class:`~skelprune.reconstruction.Coverage`
 keeps the area each branch alone covers, so the candidates' lost areas are read,
-not recomputed. The naive oracle in ``tests/oracle.py`` recomputes everything from
+not recomputed; a removed or merged branch costs the area of the union of its disks. The naive oracle in ``tests/oracle.py`` recomputes everything from
 scratch and must agree exactly.
 """
 

@@ -225,23 +225,34 @@ class Coverage:
 
     def remove(self, points: np.ndarray) -> int:
         """Remove the disks of ``points``; returns the newly uncovered area."""
-        lost = 0
-        for b in self._owners(np.asarray(points, np.int64)):
-            lost += _remove_owner(self.c, self.s, self.runs[b], b, self.exclusive)
-            self.runs[b] = self.runs[b][:0]
-            self.count[b] = 0
-        self.lost += lost
-        return lost
+        return sum(self.remove_label(b) for b in self._owners(np.asarray(points, np.int64)))
 
     def relabel(self, points: np.ndarray, new: int) -> None:
         """Move ``points`` to owner ``new`` (two branches merged into one)."""
         points = np.asarray(points, np.int64)
-        points = points[self.labels[points] != new]
-        for b in self._owners(points):
-            self.exclusive[new] += _merge_owner(self.c, self.s, self.runs[b], self.runs[new],
-                                                b, new)
-            self.runs[new] = union(self.runs[new], self.runs[b])
-            self.runs[b] = self.runs[b][:0]
-            self.count[new] += self.count[b]
-            self.count[b] = 0
-        self.labels[points] = new
+        for b in self._owners(points[self.labels[points] != new]):
+            self.merge_label(b, new)
+
+    def remove_label(self, old: int) -> int:
+        """Remove the disks of all points labelled ``old``; returns the newly uncovered area.
+
+        What :meth:`remove` does, without looking at the points: the pruning knows the
+        label of the branch it removes.
+        """
+        lost = _remove_owner(self.c, self.s, self.runs[old], old, self.exclusive)
+        self.runs[old] = self.runs[old][:0]
+        self.count[old] = 0
+        self.lost += lost
+        return lost
+
+    def merge_label(self, old: int, new: int) -> None:
+        """Give all points labelled ``old`` the label ``new``."""
+        if old == new or self.count[old] == 0:
+            return
+        self.exclusive[new] += _merge_owner(self.c, self.s, self.runs[old], self.runs[new],
+                                            old, new)
+        self.runs[new] = union(self.runs[new], self.runs[old])
+        self.runs[old] = self.runs[old][:0]
+        self.count[new] += self.count[old]
+        self.count[old] = 0
+        self.labels[self.labels == old] = new

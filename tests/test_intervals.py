@@ -111,7 +111,7 @@ def brute_state(rows, cols, r2, labels, alive, n_labels):
     return count, exclusive, int((count == 0).sum())
 
 
-@pytest.mark.parametrize("seed", range(12))
+@pytest.mark.parametrize("seed", range(16))
 def test_coverage_against_brute_force(seed):
     """Random removals and merges of whole owners keep the exact coverage."""
     rng = np.random.default_rng(300 + seed)
@@ -135,13 +135,19 @@ def test_coverage_against_brute_force(seed):
         live = np.unique(labels[alive])
         a, b = rng.choice(live, 2, replace=False)
         pts = np.flatnonzero(alive & (labels == a))
+        by_label = rng.random() < 0.5  # the points API or the labels API
         if rng.random() < 0.5:
             before = cov.lost
-            assert cov.remove(pts) == cov.lost - before
+            gone = cov.remove_label(int(a)) if by_label else cov.remove(pts)
+            assert gone == cov.lost - before
             alive[pts] = False
         else:
-            cov.relabel(rng.permutation(pts), int(b))
+            if by_label:
+                cov.merge_label(int(a), int(b))
+            else:
+                cov.relabel(rng.permutation(pts), int(b))
             labels[pts] = b
+        np.testing.assert_array_equal(cov.labels, labels)
         check()
 
 

@@ -4,9 +4,10 @@ Starting from the medial axis ``M``, end branches are removed one at a time, eac
 time the one whose removal gives the smallest target ``λ = α·AR + LR``; the
 skeleton of the whole sequence with the smallest ``λ`` is the answer.
 
-Each step costs only the disks that change: :class:`~skelprune.reconstruction.Coverage`
+Each step costs only the owners that change: :class:`~skelprune.reconstruction.Coverage`
 keeps the area each branch alone covers, so the candidates' lost areas are read,
-not recomputed. The naive oracle in ``tests/oracle.py`` recomputes everything from
+not recomputed, and a removed or merged branch costs the area of the union of its
+disks. The naive oracle in ``tests/oracle.py`` recomputes everything from
 scratch and must agree exactly.
 """
 
@@ -188,9 +189,6 @@ def bayesian_sequence(
                           np.flatnonzero(mask & (cov.c == 0)))
     if alpha is None and order is None:
         return seq
-    # Coverage numbers points by their rank among the alive ones.
-    rank = np.full(graph.rows.size, -1, np.int64)
-    rank[alive] = np.arange(alive.size)
     # Per-branch arrays, so that one compiled call ranks all candidates of a step.
     is_end = np.zeros(nb, np.bool_)
     bna = np.array([br.na for br in graph.branches], np.int64)
@@ -213,12 +211,15 @@ def bayesian_sequence(
             pick = order[len(seq.removed)]
         else:
             break
-        cov.remove(rank[graph.branches[pick].points])
+        # Coverage works on labels: a branch's points all carry its label, and a merge
+        # moves whole owners (the junction cluster and the absorbed branch).
+        cov.remove_label(pick + 1)
         merged = graph.remove_end_branch(pick)
         is_end[pick] = False
         if merged is not None:
-            kept, absorbed, _, moved = merged
-            cov.relabel(rank[moved], kept + 1)
+            kept, absorbed, jid, _ = merged
+            cov.merge_label(nb + 1 + jid, kept + 1)
+            cov.merge_label(absorbed + 1, kept + 1)
             is_end[absorbed] = False
             bna[kept], bnd[kept] = graph.branches[kept].na, graph.branches[kept].nd
             mark_end(kept)

@@ -1,11 +1,12 @@
 """Reconstruction of a shape from skeleton disks, and its area term (SPEC §2.2).
 
 Besides the plain reconstruction, :class:`Coverage` keeps, for every pixel, how many
-skeleton disks cover it and the sum and the sum of squares of their owners' labels.
-A pixel is covered by one owner ``b`` only iff ``s1 == c*b`` and ``s2 == c*b*b``
-(equality in the Cauchy–Schwarz inequality), so the area each end branch alone
-covers, the area its removal would lose, is kept up to date exactly with work
-proportional to the disks that change.
+owners (branches or junction clusters) cover it with their disks and the sum of their
+labels: a pixel has one owner iff the count is 1, and the sum is then that owner. So
+the area each end branch alone covers, the area its removal would lose, is kept up to
+date exactly. Each owner's disks are held as one union, a set of row runs
+(:mod:`skelprune._intervals`): removing or merging an owner costs the area of its union
+once, not the area of every one of its overlapping disks.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import numpy as np
 from numba import njit
 
 from ._digital import disk_half_width, isqrt
+from ._intervals import owner_runs, union
 
 __all__ = ["Coverage", "count_covered", "reconstruction", "reconstruction_error"]
 
@@ -93,104 +95,91 @@ def _count_covered(py, px, rows, cols, r2):
     return n
 
 
-# Kernels index a 1-D view of each disk row: measured faster than both slice updates
-# and 2-D indexing (no per-row slice objects, no 2-D address arithmetic).
+# Coverage counts owners, not disks: each owner (a branch, or a junction cluster) paints
+# the union of its disks once, as a run set (skelprune._intervals). Kernels index a 1-D
+# view of each row: measured faster than slice updates and 2-D indexing.
 
 
 @njit(cache=True)
-def _paint_labels(c, s1, s2, rows, cols, r2, lab):
-    for k in range(rows.size):
-        lb = lab[k]
-        lb2 = lb * lb
-        v = r2[k]
-        h = isqrt(v - 1)
-        for dy in range(-h, h + 1):
-            w = disk_half_width(v, dy)
-            r = rows[k] + dy
-            cr, s1r, s2r = c[r], s1[r], s2[r]
-            for q in range(cols[k] - w, cols[k] + w + 1):
+def _paint_owners(c, s, runs, offsets):
+    for b in range(offsets.size - 1):
+        for i in range(offsets[b], offsets[b + 1]):
+            cr, sr = c[runs[i, 0]], s[runs[i, 0]]
+            for q in range(runs[i, 1], runs[i, 2] + 1):
                 cr[q] += 1
-                s1r[q] += lb
-                s2r[q] += lb2
+                sr[q] += b
 
 
 @njit(cache=True)
-def _remove(c, s1, s2, stamp, tick, excl, pts, rows, cols, r2, lab):
-    """Remove the disks of ``pts``; return the pixels left uncovered.
+def _remove_owner(c, s, runs, lab, excl):
+    """Take owner ``lab`` off the pixels of its run set; return the pixels left uncovered.
 
-    A pixel's remaining owners are all one label ``b`` iff ``c·s2 == s1²``
-    (Cauchy–Schwarz), a test without division; labels and counts stay far below
-    2**31, so the products cannot overflow.
+    Each pixel is visited once (a run set is disjoint), so the pixels left with one
+    owner are credited to it at once, without stamps.
     """
-    for k in pts:
-        lb = lab[k]
-        lb2 = lb * lb
-        v = r2[k]
-        h = isqrt(v - 1)
-        for dy in range(-h, h + 1):
-            w = disk_half_width(v, dy)
-            r = rows[k] + dy
-            cr, s1r, s2r = c[r], s1[r], s2[r]
-            for q in range(cols[k] - w, cols[k] + w + 1):
-                cr[q] -= 1
-                s1r[q] -= lb
-                s2r[q] -= lb2
     lost = 0
-    for k in pts:
-        v = r2[k]
-        h = isqrt(v - 1)
-        for dy in range(-h, h + 1):
-            w = disk_half_width(v, dy)
-            r = rows[k] + dy
-            cr, s1r, s2r, st = c[r], s1[r], s2[r], stamp[r]
-            for q in range(cols[k] - w, cols[k] + w + 1):
-                # The cheap owner test first: most pixels keep several owners.
-                n = cr[q]
-                x = s1r[q]
-                if n == 0:
-                    if st[q] != tick:
-                        st[q] = tick
-                        lost += 1
-                elif n * s2r[q] == x * x and st[q] != tick:
-                    st[q] = tick
-                    excl[x // n] += 1
+    for i in range(runs.shape[0]):
+        cr, sr = c[runs[i, 0]], s[runs[i, 0]]
+        for q in range(runs[i, 1], runs[i, 2] + 1):
+            cr[q] -= 1
+            sr[q] -= lab
+            n = cr[q]
+            if n == 0:
+                lost += 1
+            elif n == 1:
+                excl[sr[q]] += 1
     return lost
 
 
 @njit(cache=True)
-def _relabel(c, s1, s2, stamp, tick, excl, pts, rows, cols, r2, lab, new):
-    """Give the points ``pts`` the label ``new``, updating single-owner areas."""
-    for k in pts:
-        old = lab[k]
-        d1 = new - old
-        d2 = new * new - old * old
-        v = r2[k]
-        h = isqrt(v - 1)
-        for dy in range(-h, h + 1):
-            w = disk_half_width(v, dy)
-            r = rows[k] + dy
-            s1r, s2r = s1[r], s2[r]
-            for q in range(cols[k] - w, cols[k] + w + 1):
-                s1r[q] += d1
-                s2r[q] += d2
-        lab[k] = new
-    nn = new * new
-    for k in pts:
-        v = r2[k]
-        h = isqrt(v - 1)
-        for dy in range(-h, h + 1):
-            w = disk_half_width(v, dy)
-            r = rows[k] + dy
-            cr, s1r, s2r, st = c[r], s1[r], s2[r], stamp[r]
-            for q in range(cols[k] - w, cols[k] + w + 1):
-                n = cr[q]
-                if s1r[q] == n * new and s2r[q] == n * nn and st[q] != tick:
-                    st[q] = tick
-                    excl[new] += 1
+def _merge_owner(c, s, moved, kept, old, new):
+    """Owner ``old`` (run set ``moved``) becomes owner ``new`` (run set ``kept``).
+
+    Pixels both cover lose one owner; the others change label. Returns how many pixels
+    of ``moved`` are left with the single owner ``new``: none was before, as ``old``
+    covered them too.
+    """
+    single = 0
+    d = new - old
+    j = 0
+    for i in range(moved.shape[0]):
+        r, lo, hi = moved[i, 0], moved[i, 1], moved[i, 2]
+        # The first run of kept not wholly before this one (kept is sorted too).
+        while j < kept.shape[0] and (kept[j, 0] < r or (kept[j, 0] == r and kept[j, 2] < lo)):
+            j += 1
+        cr, sr = c[r], s[r]
+        k = j
+        q = lo
+        while q <= hi:
+            if k < kept.shape[0] and kept[k, 0] == r and kept[k, 1] <= q:
+                # q lies in kept[k]: covered by both owners
+                end = min(hi, kept[k, 2])
+                for p in range(q, end + 1):
+                    cr[p] -= 1
+                    sr[p] -= old
+                    if cr[p] == 1:
+                        single += 1
+                k += 1
+            else:
+                end = hi
+                if k < kept.shape[0] and kept[k, 0] == r and kept[k, 1] <= hi:
+                    end = kept[k, 1] - 1
+                for p in range(q, end + 1):
+                    sr[p] += d
+                    if cr[p] == 1:
+                        single += 1
+            q = end + 1
+    return single
 
 
 class Coverage:
     """Incremental coverage of a shape by labelled skeleton disks.
+
+    Points with one label form one owner (a branch or a junction cluster); a pixel
+    counts its distinct owners ``c`` and the sum ``s`` of their labels, so it has a
+    single owner iff ``c == 1``, and that owner is ``s``. :meth:`remove` and
+    :meth:`relabel` take whole owners (all the points of a label, else ValueError);
+    :meth:`remove_label` and :meth:`merge_label` do the same given the label.
 
     Parameters
     ----------
@@ -209,6 +198,21 @@ class Coverage:
         Pixels of ``D`` no disk covers, ``Λ(D \\ R(S))``.
     exclusive : (n_labels,) int64
         Pixels covered by the disks of one label only: what removing it would lose.
+        Exact for the labels still in use; stale for removed or merged ones.
+    c : (H, W) int32
+        Number of owners covering each pixel.
+
+    Examples
+    --------
+    Two disjoint disks of 13 pixels, labels 1 and 2, in a 9 x 12 shape:
+
+    >>> cov = Coverage(np.ones((9, 12), bool), np.array([4, 4]), np.array([3, 8]),
+    ...                np.array([5, 5]), np.array([1, 2]), 3)
+    >>> cov.exclusive.tolist(), cov.lost
+    ([0, 13, 13], 82)
+    >>> cov.merge_label(2, 1)
+    >>> cov.exclusive[1], cov.remove_label(1), cov.lost
+    (np.int64(26), 26, 108)
     """
 
     def __init__(self, mask, rows, cols, r2, labels, n_labels: int) -> None:
@@ -216,32 +220,52 @@ class Coverage:
         self.cols = np.asarray(cols, np.int64)
         self.r2 = np.asarray(r2, np.int64)
         self.labels = np.asarray(labels, np.int64).copy()
-        shape = mask.shape
-        self.c = np.zeros(shape, np.int32)
-        self.s1 = np.zeros(shape, np.int64)
-        self.s2 = np.zeros(shape, np.int64)
-        self.stamp = np.zeros(shape, np.int32)
-        self.tick = 0
-        _paint_labels(self.c, self.s1, self.s2, self.rows, self.cols, self.r2, self.labels)
-        n = self.c.astype(np.int64)
-        covered = n > 0
-        owner = np.where(covered, self.s1 // np.maximum(n, 1), -1)
-        single = covered & (self.s1 == n * owner) & (self.s2 == n * owner * owner)
-        self.exclusive = np.bincount(owner[single], minlength=n_labels).astype(np.int64)
-        self.lost = int((mask & ~covered).sum())
+        self.count = np.bincount(self.labels, minlength=n_labels)
+        runs, offsets = owner_runs(self.rows, self.cols, self.r2, self.labels, n_labels)
+        self.runs = [runs[offsets[b]:offsets[b + 1]] for b in range(n_labels)]
+        self.c = np.zeros(mask.shape, np.int32)
+        self.s = np.zeros(mask.shape, np.int64)
+        _paint_owners(self.c, self.s, runs, offsets)
+        self.exclusive = np.bincount(self.s[self.c == 1], minlength=n_labels).astype(np.int64)
+        self.lost = int((mask & (self.c == 0)).sum())
+
+    def _owners(self, points: np.ndarray) -> list[int]:
+        """Labels of ``points``, which must be all the points of those labels."""
+        labs, n = np.unique(self.labels[points], return_counts=True)
+        if (n != self.count[labs]).any():
+            raise ValueError("Coverage takes whole owners: all the points of a label")
+        return labs.tolist()
 
     def remove(self, points: np.ndarray) -> int:
         """Remove the disks of ``points``; returns the newly uncovered area."""
-        self.tick += 1
-        lost = _remove(self.c, self.s1, self.s2, self.stamp, self.tick, self.exclusive,
-                       np.asarray(points, np.int64), self.rows, self.cols, self.r2,
-                       self.labels)
-        self.lost += lost
-        return lost
+        return sum(self.remove_label(b) for b in self._owners(np.asarray(points, np.int64)))
 
     def relabel(self, points: np.ndarray, new: int) -> None:
         """Move ``points`` to owner ``new`` (two branches merged into one)."""
-        self.tick += 1
-        _relabel(self.c, self.s1, self.s2, self.stamp, self.tick, self.exclusive,
-                 np.asarray(points, np.int64), self.rows, self.cols, self.r2, self.labels,
-                 new)
+        points = np.asarray(points, np.int64)
+        for b in self._owners(points[self.labels[points] != new]):
+            self.merge_label(b, new)
+
+    def remove_label(self, old: int) -> int:
+        """Remove the disks of all points labelled ``old``; returns the newly uncovered area.
+
+        What :meth:`remove` does, without looking at the points: the pruning knows the
+        label of the branch it removes.
+        """
+        lost = _remove_owner(self.c, self.s, self.runs[old], old, self.exclusive)
+        self.runs[old] = self.runs[old][:0]
+        self.count[old] = 0
+        self.lost += lost
+        return lost
+
+    def merge_label(self, old: int, new: int) -> None:
+        """Give all points labelled ``old`` the label ``new``."""
+        if old == new or self.count[old] == 0:
+            return
+        self.exclusive[new] += _merge_owner(self.c, self.s, self.runs[old], self.runs[new],
+                                            old, new)
+        self.runs[new] = union(self.runs[new], self.runs[old])
+        self.runs[old] = self.runs[old][:0]
+        self.count[new] += self.count[old]
+        self.count[old] = 0
+        self.labels[self.labels == old] = new

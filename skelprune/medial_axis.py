@@ -21,7 +21,6 @@ import numpy as np
 from numba import njit
 from scipy import ndimage
 
-from ._coverage import coverage, disk_loss, disk_remove, drop_redundant_anchors
 from ._digital import (
     DEGREE,
     NEIGHBOURS,
@@ -31,6 +30,7 @@ from ._digital import (
     heap_push,
     neighbourhood_code,
 )
+from ._disk_counts import coverage, disk_loss, disk_remove, drop_redundant_anchors
 
 __all__ = ["DEGREE", "SIMPLE", "MedialAxis", "medial_axis", "squared_distance"]
 

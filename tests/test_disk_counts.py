@@ -1,4 +1,4 @@
-"""Coverage kernels (skelprune._coverage) and the redundant-anchor pass against plain
+"""Coverage kernels (skelprune._disk_counts) and the redundant-anchor pass against plain
 per-pixel counts."""
 
 from __future__ import annotations
@@ -8,7 +8,8 @@ import importlib
 import numpy as np
 import pytest
 
-from skelprune._coverage import (
+from skelprune._digital import disk_half_width, isqrt
+from skelprune._disk_counts import (
     coverage,
     disk_loss,
     disk_remove,
@@ -16,7 +17,6 @@ from skelprune._coverage import (
     last_cover,
     true_counts,
 )
-from skelprune._digital import disk_half_width, isqrt
 from skelprune.api import components
 from skelprune.perturb import boundary_noise
 

@@ -22,13 +22,13 @@ from numba import njit
 
 from ._digital import disk_half_width, isqrt
 
-__all__ = ["BLOCK", "Coverage", "coverage", "disk_loss", "disk_remove",
+__all__ = ["BLOCK", "DiskCounts", "coverage", "disk_loss", "disk_remove",
            "drop_redundant_anchors", "last_cover"]
 
 BLOCK = 16
 
 # (cover, bmin, bcnt, lazy): the arrays of one coverage count, see the module docstring.
-Coverage = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+DiskCounts = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
 @njit(cache=True)

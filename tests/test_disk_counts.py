@@ -1,4 +1,4 @@
-"""Coverage kernels (skelprune._disk_counts) and the redundant-anchor pass against plain
+"""Disk-count kernels (skelprune._disk_counts) and the redundant-anchor pass against plain
 per-pixel counts."""
 
 from __future__ import annotations

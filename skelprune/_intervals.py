@@ -71,16 +71,22 @@ def _disk_runs_into(out, m, rows, cols, r2, pts, head, link, prow, plo, phi):
     key = (prow[:n] << _SHIFT) | plo[:n]
     start = m
     for j in np.argsort(key):
-        r, lo, hi = prow[j], plo[j], phi[j]
-        if m > start and out[m - 1, 0] == r and lo <= out[m - 1, 2] + 1:
-            if hi > out[m - 1, 2]:
-                out[m - 1, 2] = hi
-        else:
-            out[m, 0] = r
-            out[m, 1] = lo
-            out[m, 2] = hi
-            m += 1
+        m = _append_run(out, m, start, prow[j], plo[j], phi[j])
     return m
+
+
+@njit(cache=True)
+def _append_run(out, m, first, r, lo, hi):
+    """Append run ``(r, lo, hi)`` to ``out[:m]`` (runs in order), merging it into the last
+    run (if that is at or after ``first``) when they touch; returns the new length."""
+    if m > first and out[m - 1, 0] == r and lo <= out[m - 1, 2] + 1:
+        if hi > out[m - 1, 2]:
+            out[m - 1, 2] = hi
+        return m
+    out[m, 0] = r
+    out[m, 1] = lo
+    out[m, 2] = hi
+    return m + 1
 
 
 @njit(cache=True)
@@ -143,12 +149,5 @@ def union(a, b):
         else:
             r, lo, hi = b[j, 0], b[j, 1], b[j, 2]
             j += 1
-        if m > 0 and out[m - 1, 0] == r and lo <= out[m - 1, 2] + 1:
-            if hi > out[m - 1, 2]:
-                out[m - 1, 2] = hi
-        else:
-            out[m, 0] = r
-            out[m, 1] = lo
-            out[m, 2] = hi
-            m += 1
+        m = _append_run(out, m, 0, r, lo, hi)
     return out[:m].copy()

@@ -48,12 +48,6 @@ RUN --mount=type=secret,id=cacert,required=false \
     && /opt/venv/bin/pip check \
     && /opt/venv/bin/python -c "import service, skelprune"
 
-# Compile every numba kernel once, here, into a cache that ships with the image: the
-# server copies it into NUMBA_CACHE_DIR at start (SKELPRUNE_NUMBA_CACHE_SEED), so a new
-# container loads compiled code instead of compiling for tens of seconds. The cache is
-# keyed on the installed files' paths and time stamps, which the runtime stage keeps.
-RUN NUMBA_CACHE_DIR=/opt/numba-cache NUMBA_NUM_THREADS=1 \
-    /opt/venv/bin/python -c "from service.jobs import warmup; warmup()"
 
 # ---------------------------------------------------------------------------------------
 # runtime: the base image, the virtual environment, an unprivileged user
@@ -69,7 +63,14 @@ RUN groupadd --gid 10001 skelprune \
        --home-dir /nonexistent --shell /usr/sbin/nologin skelprune
 
 COPY --from=build /opt/venv /opt/venv
-COPY --from=build /opt/numba-cache /opt/numba-cache
+
+# Compile every numba kernel once, here, into a cache that ships with the image: the
+# server copies it into NUMBA_CACHE_DIR at start (SKELPRUNE_NUMBA_CACHE_SEED), so a new
+# container loads compiled code instead of compiling for a minute. numba keys the cache
+# on each source file's time stamp, which a COPY between stages may change: so it is
+# built in this stage, on the files as they are in the image.
+RUN NUMBA_CACHE_DIR=/opt/numba-cache NUMBA_NUM_THREADS=1 \
+    /opt/venv/bin/python -c "from service.jobs import warmup; warmup()"
 
 # The worker pool gives the parallelism: one BLAS/OpenMP/numba thread per worker process.
 # numba compiles with cache=True; its cache goes to a writable place, not the read-only

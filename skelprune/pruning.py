@@ -107,7 +107,8 @@ class PruningSequence:
     area: int
     alpha: float | None
     lbar: float
-    #: Flat indices (into the mask) of the pixels of ``D`` that ``S(0)`` misses.
+    #: Flat indices (into the mask) of the pixels of ``D`` that ``S(0)`` misses; recorded
+    #: only when asked for (``bayesian_sequence(..., uncovered=True)``).
     uncovered: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
 
     @property
@@ -154,6 +155,7 @@ def bayesian_sequence(
     alpha: float | None,
     lbar: float,
     order: list[int] | None = None,
+    uncovered: bool = False,
 ) -> PruningSequence:
     """Remove end branches until none is left; record every step.
 
@@ -172,6 +174,8 @@ def bayesian_sequence(
         Instead of choosing by λ, remove exactly these end branches in this order
         (e.g. :func:`remove_unsupported` run on a twin graph, for ``method="dce"``),
         recording every step the same way.
+    uncovered : bool
+        Also record which pixels ``S(0)`` misses (``PruningSequence.uncovered``).
     """
     area = int(mask.sum())
     nb = len(graph.branches)
@@ -185,8 +189,9 @@ def bayesian_sequence(
     alive = graph.alive_points()
     cov = Coverage(mask, graph.rows[alive], graph.cols[alive], r2[alive], labels[alive],
                    nb + len(graph.junctions) + 1)
-    seq = PruningSequence([], [cov.lost], [graph.na], [graph.nd], area, alpha, lbar,
-                          np.flatnonzero(mask & (cov.c == 0)))
+    seq = PruningSequence([], [cov.lost], [graph.na], [graph.nd], area, alpha, lbar)
+    if uncovered:
+        seq.uncovered = np.flatnonzero(mask & (cov.c == 0))
     if alpha is None and order is None:
         return seq
     # Per-branch arrays, so that one compiled call ranks all candidates of a step.

@@ -177,9 +177,9 @@ class Coverage:
 
     Points with one label form one owner (a branch or a junction cluster); a pixel
     counts its distinct owners ``c`` and the sum ``s`` of their labels, so it has a
-    single owner iff ``c == 1``, and that owner is ``s``. :meth:`remove` and
-    :meth:`relabel` take whole owners (all the points of a label, else ValueError);
-    :meth:`remove_label` and :meth:`merge_label` do the same given the label.
+    single owner iff ``c == 1``, and that owner is ``s``. Owners are removed and merged
+    whole, by label (:meth:`remove_label`, :meth:`merge_label`): a branch's points always
+    share its label, and a merge moves whole owners.
 
     Parameters
     ----------
@@ -216,12 +216,9 @@ class Coverage:
     """
 
     def __init__(self, mask, rows, cols, r2, labels, n_labels: int) -> None:
-        self.rows = np.asarray(rows, np.int64)
-        self.cols = np.asarray(cols, np.int64)
-        self.r2 = np.asarray(r2, np.int64)
-        self.labels = np.asarray(labels, np.int64).copy()
-        self.count = np.bincount(self.labels, minlength=n_labels)
-        runs, offsets = owner_runs(self.rows, self.cols, self.r2, self.labels, n_labels)
+        runs, offsets = owner_runs(np.asarray(rows, np.int64), np.asarray(cols, np.int64),
+                                   np.asarray(r2, np.int64), np.asarray(labels, np.int64),
+                                   n_labels)
         self.runs = [runs[offsets[b]:offsets[b + 1]] for b in range(n_labels)]
         self.c = np.zeros(mask.shape, np.int32)
         self.s = np.zeros(mask.shape, np.int64)
@@ -229,43 +226,21 @@ class Coverage:
         self.exclusive = np.bincount(self.s[self.c == 1], minlength=n_labels).astype(np.int64)
         self.lost = int((mask & (self.c == 0)).sum())
 
-    def _owners(self, points: np.ndarray) -> list[int]:
-        """Labels of ``points``, which must be all the points of those labels."""
-        labs, n = np.unique(self.labels[points], return_counts=True)
-        if (n != self.count[labs]).any():
-            raise ValueError("Coverage takes whole owners: all the points of a label")
-        return labs.tolist()
-
-    def remove(self, points: np.ndarray) -> int:
-        """Remove the disks of ``points``; returns the newly uncovered area."""
-        return sum(self.remove_label(b) for b in self._owners(np.asarray(points, np.int64)))
-
-    def relabel(self, points: np.ndarray, new: int) -> None:
-        """Move ``points`` to owner ``new`` (two branches merged into one)."""
-        points = np.asarray(points, np.int64)
-        for b in self._owners(points[self.labels[points] != new]):
-            self.merge_label(b, new)
-
     def remove_label(self, old: int) -> int:
         """Remove the disks of all points labelled ``old``; returns the newly uncovered area.
 
-        What :meth:`remove` does, without looking at the points: the pruning knows the
-        label of the branch it removes.
+        The pruning knows the label of the branch it removes, so no point is looked at.
         """
         lost = _remove_owner(self.c, self.s, self.runs[old], old, self.exclusive)
         self.runs[old] = self.runs[old][:0]
-        self.count[old] = 0
         self.lost += lost
         return lost
 
     def merge_label(self, old: int, new: int) -> None:
         """Give all points labelled ``old`` the label ``new``."""
-        if old == new or self.count[old] == 0:
+        if old == new or len(self.runs[old]) == 0:
             return
         self.exclusive[new] += _merge_owner(self.c, self.s, self.runs[old], self.runs[new],
                                             old, new)
         self.runs[new] = union(self.runs[new], self.runs[old])
         self.runs[old] = self.runs[old][:0]
-        self.count[new] += self.count[old]
-        self.count[old] = 0
-        self.labels[self.labels == old] = new

@@ -135,26 +135,12 @@ def test_coverage_against_brute_force(seed):
         live = np.unique(labels[alive])
         a, b = rng.choice(live, 2, replace=False)
         pts = np.flatnonzero(alive & (labels == a))
-        by_label = rng.random() < 0.5  # the points API or the labels API
         if rng.random() < 0.5:
             before = cov.lost
-            gone = cov.remove_label(int(a)) if by_label else cov.remove(pts)
+            gone = cov.remove_label(int(a))
             assert gone == cov.lost - before
             alive[pts] = False
         else:
-            if by_label:
-                cov.merge_label(int(a), int(b))
-            else:
-                cov.relabel(rng.permutation(pts), int(b))
+            cov.merge_label(int(a), int(b))
             labels[pts] = b
-        np.testing.assert_array_equal(cov.labels, labels)
         check()
-
-
-def test_coverage_takes_whole_owners():
-    rows, cols, r2 = np.array([10, 11, 30]), np.array([10, 11, 30]), np.array([9, 9, 9])
-    cov = Coverage(np.ones(SHAPE, bool), rows, cols, r2, np.array([1, 1, 2]), 3)
-    with pytest.raises(ValueError, match="whole owners"):
-        cov.remove(np.array([0]))
-    cov.relabel(np.array([2, 0, 1]), 2)  # points already labelled 2 are left alone
-    assert cov.exclusive[2] == (cov.c == 1).sum()

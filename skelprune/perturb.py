@@ -18,7 +18,8 @@ from typing import Literal
 
 import numpy as np
 from scipy import ndimage as ndi
-from skimage.measure import find_contours
+
+from ._contours import boundary_polygons
 
 __all__ = [
     "PERTURBATIONS",
@@ -38,16 +39,12 @@ _EIGHT = np.ones((3, 3), bool)
 def _rings(mask: np.ndarray) -> list[np.ndarray]:
     """Boundary polygons (row, col) of the union of the pixel squares, shape on the left.
 
-    Marching squares gives the crack midpoints; at each turn the pixel corner is put back,
+    The crack polygons of :func:`~skelprune._contours.boundary_polygons` give the
+    midpoints; at each turn the pixel corner is put back,
     so the polygon has exact right-angled corners (holes wind the other way round).
     """
-    padded = np.pad(np.asarray(mask, dtype=bool), 1).astype(np.float64)
     rings = []
-    for c in find_contours(padded, 0.5, fully_connected="high", positive_orientation="high"):
-        if len(c) > 1 and np.array_equal(c[0], c[-1]):
-            c = c[:-1]
-        if len(c) < 3:
-            continue
+    for c, _ in boundary_polygons(np.asarray(mask, dtype=bool)):
         b = np.roll(c, -1, axis=0)
         turn = np.all(c != b, axis=1)
         half = np.abs(c - np.round(c)) > 0.25  # which coordinate of a vertex is on a border
@@ -56,7 +53,7 @@ def _rings(mask: np.ndarray) -> list[np.ndarray]:
         pos = np.arange(len(c)) + np.r_[0, np.cumsum(turn)[:-1]]
         out[pos] = c
         out[pos[turn] + 1] = corner[turn]
-        rings.append(out - 1.0)
+        rings.append(out)
     return rings
 
 

@@ -40,8 +40,8 @@ def _rings(mask: np.ndarray) -> list[np.ndarray]:
     """Boundary polygons (row, col) of the union of the pixel squares, shape on the left.
 
     The crack polygons of :func:`~skelprune._contours.boundary_polygons` give the
-    midpoints; at each turn the pixel corner is put back,
-    so the polygon has exact right-angled corners (holes wind the other way round).
+    midpoints; at each turn the pixel corner is put back, so the polygon has exact
+    right-angled corners (holes wind the other way round).
     """
     rings = []
     for c, _ in boundary_polygons(np.asarray(mask, dtype=bool)):

@@ -31,7 +31,11 @@ BLOCK = 16
 DiskCounts = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
-@njit(cache=True)
+# inline="always": the thinning calls this inside compiled code and tests call it from
+# Python. As a separately compiled callee loaded from numba's cache, its Python entry
+# fails to box the returned arrays ("NRT_adapt_ndarray_to_python: 'descr' is NULL");
+# inlined, the dispatcher only ever compiles for Python callers.
+@njit(cache=True, inline="always")
 def coverage(shape_h: int, shape_w: int, rows, cols, r2s):
     """Counts of the disks ``(rows[k], cols[k], r2s[k])`` over an ``(h, w)`` grid.
 

@@ -23,11 +23,11 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from ._generating import SegmentRaster
 from .dce import (
     COARSE_PIXEL_THRESHOLD,
     BoundaryPartition,
     boundary_partition,
-    generating_segments,
 )
 from .graph import BranchGraph
 from .pruning import remove_unsupported
@@ -152,22 +152,57 @@ def _convex_vertices(partition: BoundaryPartition) -> tuple[np.ndarray, np.ndarr
             np.asarray(positions, np.float64).reshape(-1, 2))
 
 
-def _point_vertices(labels: np.ndarray, before: np.ndarray, after: np.ndarray,
-                    n_segments: int) -> np.ndarray:
-    """Per skeleton point: the convex vertex its two generating segments meet at.
+class _Generators:
+    """Generating segments of skeleton points, scanned only when a branch is asked about.
 
-    -1 for a point with a single generating segment, -2 for one with three or more,
-    or with two that do not meet at a convex vertex.
+    The support test and the corner rule only ever read points of end branches (and of
+    branches a merge makes), and the rims of the large interior disks are the expensive
+    scans: each branch's points are scanned once, when first asked for.
+
+    ``supported[p]``: two or more segments generate ``p``; ``first[p]``: the first
+    segment found; ``vertex[p]``: the convex vertex its two generating segments meet at,
+    -1 for a point with a single generating segment, -2 for one with three or more, or
+    with two that do not meet at a convex vertex.
     """
-    vertex_of = np.full((n_segments, n_segments), -2, np.int64)
-    ids = np.arange(len(after))
-    vertex_of[before, after] = ids
-    vertex_of[after, before] = ids
-    out = np.full(len(labels), -1, np.int64)
-    two = (labels[:, 1] != -1) & (labels[:, 2] == -1)
-    out[two] = vertex_of[labels[two, 0], labels[two, 1]]
-    out[labels[:, 2] != -1] = -2
-    return out
+
+    def __init__(self, graph: BranchGraph, r2: np.ndarray, partition: BoundaryPartition,
+                 before: np.ndarray, after: np.ndarray) -> None:
+        self.graph = graph
+        self.raster = SegmentRaster(partition, np.stack([graph.rows, graph.cols], axis=1), r2)
+        n = graph.rows.size
+        self.known = np.zeros(n, np.bool_)
+        self.supported = np.zeros(n, np.bool_)
+        self.first = np.full(n, -1, np.int64)
+        self.vertex = np.full(n, -1, np.int64)
+        m = partition.n_segments
+        self.vertex_of = np.full((m, m), -2, np.int64)
+        ids = np.arange(len(after))
+        self.vertex_of[before, after] = ids
+        self.vertex_of[after, before] = ids
+        self.ready: dict[int, int] = {}  # branch -> its point count when scanned
+
+    def scan(self, branches: list[int]) -> None:
+        """Make sure every point of ``branches`` has been scanned (one compiled call)."""
+        todo = [b for b in branches
+                if self.ready.get(b) != len(self.graph.branches[b].points)]
+        if not todo:
+            return
+        pts = np.concatenate([np.asarray(self.graph.branches[b].points, np.int64)
+                              for b in todo])
+        pts = pts[~self.known[pts]]
+        for b in todo:
+            self.ready[b] = len(self.graph.branches[b].points)
+        if pts.size == 0:
+            return
+        labels = self.raster.labels(pts)
+        self.known[pts] = True
+        self.first[pts] = labels[:, 0]
+        self.supported[pts] = labels[:, 1] != -1
+        two = (labels[:, 1] != -1) & (labels[:, 2] == -1)
+        vertex = np.full(len(pts), -1, np.int64)
+        vertex[two] = self.vertex_of[labels[two, 0], labels[two, 1]]
+        vertex[labels[:, 2] != -1] = -2
+        self.vertex[pts] = vertex
 
 
 @numba.njit(cache=True)
@@ -196,9 +231,9 @@ class _Claims:
     meet there. Only merges change a branch, and a merge changes its point count.
     """
 
-    def __init__(self, graph: BranchGraph, vertex: np.ndarray, first: np.ndarray,
-                 before: np.ndarray, after: np.ndarray, positions: np.ndarray) -> None:
-        self.graph, self.vertex, self.first = graph, vertex, first
+    def __init__(self, graph: BranchGraph, generators: _Generators, before: np.ndarray,
+                 after: np.ndarray, positions: np.ndarray) -> None:
+        self.graph, self.generators = graph, generators
         self.before, self.after, self.positions = before, after, positions
         self.cache: dict[int, tuple[int, int, float]] = {}  # b -> (n points, vertex, d2)
 
@@ -206,7 +241,9 @@ class _Claims:
         pts = self.graph.branches[b].points
         hit = self.cache.get(b)
         if hit is None or hit[0] != len(pts):
-            v = _claimed_vertex(np.asarray(pts, np.int64), self.vertex, self.first,
+            gen = self.generators
+            gen.scan([b])
+            v = _claimed_vertex(np.asarray(pts, np.int64), gen.vertex, gen.first,
                                 self.before, self.after)
             d2 = 0.0
             if v >= 0:
@@ -250,16 +287,20 @@ def coarse_dce(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> list[int
         The removed branch ids, in order (replayable on a fresh graph).
     """
     partition = boundary_partition(mask, pixel_threshold=coarse_threshold(mask))
-    labels = generating_segments(np.stack([graph.rows, graph.cols], axis=1), r2, partition)
-    supported = labels[:, 1] != -1
     before, after, positions = _convex_vertices(partition)
-    vertex = _point_vertices(labels, before, after, partition.n_segments)
-    removed = remove_unsupported(graph, supported)
-    claims = _Claims(graph, vertex, labels[:, 0], before, after, positions)
+    gen = _Generators(graph, r2, partition, before, after)
+    gen.scan(graph.end_branches())  # all at once: one compiled call
+
+    def scan(b: int) -> None:
+        gen.scan([b])
+
+    removed = remove_unsupported(graph, gen.supported, prepare=scan)
+    claims = _Claims(graph, gen, before, after, positions)
     while surplus := claims.surplus():
         # one at a time: a removal can merge branches and change other claims
         merged = graph.remove_end_branch(surplus[0])
         removed.append(surplus[0])
         if merged is not None:  # only the merged branch can have lost its support
-            removed += remove_unsupported(graph, supported, candidates=[merged[0]])
+            removed += remove_unsupported(graph, gen.supported, candidates=[merged[0]],
+                                          prepare=scan)
     return removed

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import heapq
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -236,7 +237,8 @@ def bayesian_sequence(
 
 
 def remove_unsupported(graph: BranchGraph, supported: np.ndarray,
-                       candidates: list[int] | None = None) -> list[int]:
+                       candidates: list[int] | None = None,
+                       prepare: Callable[[int], None] | None = None) -> list[int]:
     """DCE pruning on the graph alone: remove, smallest endpoint (row, col) first,
     every end branch none of whose points is supported, until each has one.
 
@@ -244,11 +246,17 @@ def remove_unsupported(graph: BranchGraph, supported: np.ndarray,
     reconstruction is kept up to date. A branch's support only changes when it
     absorbs another, so candidates wait in a heap and only merged branches are
     looked at again. ``candidates`` restricts the first look to those branches (when
-    the caller knows no other end branch can be unsupported).
+    the caller knows no other end branch can be unsupported). ``prepare(b)``, if given,
+    is called before the support of branch ``b`` is first read (when it is pushed), so
+    that a caller can fill ``supported`` lazily.
     """
 
     def push(b: int) -> None:
-        if graph.is_end_branch(b) and not supported[graph.branches[b].points].any():
+        if not graph.is_end_branch(b):
+            return
+        if prepare is not None:
+            prepare(b)
+        if not supported[graph.branches[b].points].any():
             p = graph.endpoint(b)
             heapq.heappush(heap, (int(graph.rows[p]), int(graph.cols[p]), b, p))
 

@@ -140,9 +140,34 @@ def _evolve(xy: np.ndarray, n_keep: int, threshold: float) -> np.ndarray:
     heap = np.arange(n)
     pos = np.arange(n)
     size = n
-    for j in range(n // 2 - 1, -1, -1):
-        _sift_down(heap, pos, key, j, size)
     count = n
+    if threshold >= 0.0:
+        # Vertices on a straight run (relevance exactly 0: crack coordinates are halves,
+        # so the cross products are exact) go first whatever the stop, and removing one
+        # leaves every other key at 0 or at its value with the nearest non-zero
+        # neighbours. So drop them all at once, unless fewer than 3 would be left.
+        size = 0
+        for i in range(n):
+            if key[i] > 0.0:
+                heap[size] = i
+                size += 1
+        if size >= 3:
+            for t in range(size):
+                i = heap[t]
+                prev[i] = heap[(t - 1) % size]
+                nxt[i] = heap[(t + 1) % size]
+                pos[i] = t
+            for i in range(n):
+                alive[i] = key[i] > 0.0
+            for t in range(size):
+                i = heap[t]
+                key[i] = _relevance(xy, prev[i], i, nxt[i], perimeter)
+            count = size
+        else:
+            heap = np.arange(n)
+            size = n
+    for j in range(size // 2 - 1, -1, -1):
+        _sift_down(heap, pos, key, j, size)
     while count > 3:
         i = heap[0]
         if count <= n_keep and key[i] > threshold:

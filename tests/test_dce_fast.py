@@ -124,6 +124,51 @@ def test_holes_border_and_several_components():
     assert_same_polygons(~m)  # the background as the shape: the image border is a boundary
 
 
+# --- evolve_polygon: the heap (with straight runs dropped first) equals a plain DCE -----
+
+
+def reference_evolution(xy: np.ndarray, n_keep: int, threshold: float) -> list[int]:
+    """DCE as defined: rescan every live vertex, delete the least (relevance, index).
+
+    Relevances come from the library's own kernel, so that this checks the evolution
+    (deletion order, stop rules, the straight-run shortcut), not the float formula.
+    """
+    from skelprune.dce import _relevance
+
+    d = np.diff(xy, axis=0, append=xy[:1])
+    perimeter = float(np.hypot(d[:, 0], d[:, 1]).sum()) or 1.0
+    live = list(range(len(xy)))
+    while len(live) > 3:
+        m = len(live)
+        keys = [(_relevance(xy, live[t - 1], live[t], live[(t + 1) % m], perimeter), live[t])
+                for t in range(m)]
+        key, i = min(keys)
+        if m <= n_keep and key > threshold:
+            break
+        live.remove(i)
+    return live
+
+
+EVOLUTION_CASES = [(None, 0.0), (None, 0.002), (None, 0.01), (16, 0.01), (16, None), (5, None),
+                   (40, 0.0)]
+
+
+@pytest.mark.parametrize(("n_vertices", "threshold"), EVOLUTION_CASES)
+def test_evolution_equals_plain_dce(n_vertices, threshold):
+    from skelprune.dce import evolve_polygon
+
+    masks = [load(K216[7]), load(K99[40]), blobs(5, size=40, n=3, holes=1),
+             rectangle_with_holes(), np.ones((3, 9), bool)]
+    masks.append(np.zeros((9, 9), bool))
+    masks[-1][4, 1:8] = masks[-1][1:8, 4] = True  # a plus: few vertices off straight runs
+    for m in masks:
+        for xy, _ in _boundary_polygons(m):
+            n_keep = len(xy) if n_vertices is None else max(3, n_vertices)
+            thr = -np.inf if threshold is None else threshold
+            got = evolve_polygon(xy, n_vertices=n_vertices, threshold=threshold)
+            assert got.tolist() == sorted(reference_evolution(xy, n_keep, thr))
+
+
 # --- generated_in_several_segments: the annulus scan equals the full-square scan --------
 
 

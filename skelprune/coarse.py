@@ -20,6 +20,8 @@ Neither rule is a user parameter: both are fixed once, here.
 
 from __future__ import annotations
 
+from itertools import chain
+
 import numba
 import numpy as np
 
@@ -152,12 +154,20 @@ def _convex_vertices(partition: BoundaryPartition) -> tuple[np.ndarray, np.ndarr
             np.asarray(positions, np.float64).reshape(-1, 2))
 
 
+def _flatten(graph: BranchGraph, branches: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """The points of ``branches`` end to end, and the ``len(branches) + 1`` offsets."""
+    lists = [graph.branches[b].points for b in branches]
+    offsets = np.zeros(len(lists) + 1, np.int64)
+    np.cumsum(np.fromiter(map(len, lists), np.int64, len(lists)), out=offsets[1:])
+    return np.fromiter(chain.from_iterable(lists), np.int64, int(offsets[-1])), offsets
+
+
 class _Generators:
     """Generating segments of skeleton points, scanned only when a branch is asked about.
 
     The support test and the corner rule only ever read points of end branches (and of
     branches a merge makes), and the rims of the large interior disks are the expensive
-    scans: each branch's points are scanned once, when first asked for.
+    scans: each point is scanned once, when a branch holding it is first asked about.
 
     ``supported[p]``: two or more segments generate ``p``; ``first[p]``: the first
     segment found; ``vertex[p]``: the convex vertex its two generating segments meet at,
@@ -181,17 +191,9 @@ class _Generators:
         self.vertex_of[after, before] = ids
         self.ready: dict[int, int] = {}  # branch -> its point count when scanned
 
-    def scan(self, branches: list[int]) -> None:
-        """Make sure every point of ``branches`` has been scanned (one compiled call)."""
-        todo = [b for b in branches
-                if self.ready.get(b) != len(self.graph.branches[b].points)]
-        if not todo:
-            return
-        pts = np.concatenate([np.asarray(self.graph.branches[b].points, np.int64)
-                              for b in todo])
+    def scan_points(self, pts: np.ndarray) -> None:
+        """Scan the points of ``pts`` not scanned yet (one compiled call)."""
         pts = pts[~self.known[pts]]
-        for b in todo:
-            self.ready[b] = len(self.graph.branches[b].points)
         if pts.size == 0:
             return
         labels = self.raster.labels(pts)
@@ -204,24 +206,49 @@ class _Generators:
         vertex[labels[:, 2] != -1] = -2
         self.vertex[pts] = vertex
 
+    def scan_branches(self, branches: list[int]) -> np.ndarray:
+        """Scan all points of ``branches``; whether each has a supported point."""
+        flat, offsets = _flatten(self.graph, branches)
+        self.scan_points(flat)
+        for b in branches:
+            self.ready[b] = len(self.graph.branches[b].points)
+        if not branches:
+            return np.zeros(0, np.bool_)
+        return np.logical_or.reduceat(self.supported[flat], offsets[:-1])
+
+    def scan(self, b: int) -> None:
+        """Scan branch ``b``'s points, unless done since it last changed."""
+        pts = self.graph.branches[b].points
+        if self.ready.get(b) != len(pts):
+            self.scan_points(np.asarray(pts, np.int64))
+            self.ready[b] = len(pts)
+
 
 @numba.njit(cache=True)
-def _claimed_vertex(points: np.ndarray, vertex: np.ndarray, first: np.ndarray,
-                    before: np.ndarray, after: np.ndarray) -> int:
-    """The one convex vertex all of a branch's points are generated at, or -1."""
-    v = -1
-    for p in points:
-        if vertex[p] == -2 or (v >= 0 and vertex[p] >= 0 and vertex[p] != v):
-            return -1
-        if vertex[p] >= 0:
-            v = vertex[p]
-    if v < 0:
-        return -1
-    for p in points:
-        if vertex[p] == -1 and first[p] >= 0 and first[p] != before[v] \
-                and first[p] != after[v]:
-            return -1
-    return v
+def _claimed_vertices(flat: np.ndarray, offsets: np.ndarray, vertex: np.ndarray,
+                      first: np.ndarray, before: np.ndarray, after: np.ndarray) -> np.ndarray:
+    """Per branch (points ``flat[offsets[k]:offsets[k + 1]]``): the one convex vertex all
+    of its points are generated at, or -1."""
+    out = np.full(offsets.size - 1, -1, np.int64)
+    for k in range(offsets.size - 1):
+        v = -1
+        for t in range(offsets[k], offsets[k + 1]):
+            p = flat[t]
+            if vertex[p] == -2 or (v >= 0 and vertex[p] >= 0 and vertex[p] != v):
+                v = -1
+                break
+            if vertex[p] >= 0:
+                v = vertex[p]
+        if v < 0:
+            continue
+        for t in range(offsets[k], offsets[k + 1]):
+            p = flat[t]
+            if vertex[p] == -1 and first[p] >= 0 and first[p] != before[v] \
+                    and first[p] != after[v]:
+                v = -1
+                break
+        out[k] = v
+    return out
 
 
 class _Claims:
@@ -237,28 +264,33 @@ class _Claims:
         self.before, self.after, self.positions = before, after, positions
         self.cache: dict[int, tuple[int, int, float]] = {}  # b -> (n points, vertex, d2)
 
-    def claim(self, b: int) -> tuple[int, float]:
-        pts = self.graph.branches[b].points
-        hit = self.cache.get(b)
-        if hit is None or hit[0] != len(pts):
-            gen = self.generators
-            gen.scan([b])
-            v = _claimed_vertex(np.asarray(pts, np.int64), gen.vertex, gen.first,
-                                self.before, self.after)
+    def _update(self, branches: list[int]) -> None:
+        """Claims of ``branches`` (scanned already), in one compiled call."""
+        gen, graph = self.generators, self.graph
+        flat, offsets = _flatten(graph, branches)
+        claimed = _claimed_vertices(flat, offsets, gen.vertex, gen.first, self.before,
+                                    self.after)
+        for b, v in zip(branches, claimed.tolist(), strict=True):
             d2 = 0.0
             if v >= 0:
-                p = self.graph.endpoint(b)
-                dr = self.graph.rows[p] - self.positions[v, 0]
-                dc = self.graph.cols[p] - self.positions[v, 1]
+                p = graph.endpoint(b)
+                dr = graph.rows[p] - self.positions[v, 0]
+                dc = graph.cols[p] - self.positions[v, 1]
                 d2 = float(dr * dr + dc * dc)
-            hit = self.cache[b] = (len(pts), v, d2)
-        return hit[1], hit[2]
+            self.cache[b] = (len(graph.branches[b].points), v, d2)
 
     def surplus(self) -> list[int]:
         """Every claimant but the one ending nearest its vertex (ties: lower id)."""
+        ends = self.graph.end_branches()
+        stale = [b for b in ends if (hit := self.cache.get(b)) is None
+                 or hit[0] != len(self.graph.branches[b].points)]
+        if stale:
+            for b in stale:
+                self.generators.scan(b)
+            self._update(stale)
         by_vertex: dict[int, list[tuple[float, int]]] = {}
-        for b in self.graph.end_branches():
-            v, d2 = self.claim(b)
+        for b in ends:
+            _, v, d2 = self.cache[b]
             if v >= 0:
                 by_vertex.setdefault(v, []).append((d2, b))
         return [b for c in by_vertex.values() if len(c) > 1 for _, b in sorted(c)[1:]]
@@ -289,12 +321,11 @@ def coarse_dce(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> list[int
     partition = boundary_partition(mask, pixel_threshold=coarse_threshold(mask))
     before, after, positions = _convex_vertices(partition)
     gen = _Generators(graph, r2, partition, before, after)
-    gen.scan(graph.end_branches())  # all at once: one compiled call
-
-    def scan(b: int) -> None:
-        gen.scan([b])
-
-    removed = remove_unsupported(graph, gen.supported, prepare=scan)
+    ends = graph.end_branches()
+    supported = gen.scan_branches(ends)  # all at once: one compiled call
+    unsupported = [b for b, ok in zip(ends, supported.tolist(), strict=True) if not ok]
+    removed = remove_unsupported(graph, gen.supported, candidates=unsupported,
+                                 prepare=gen.scan)
     claims = _Claims(graph, gen, before, after, positions)
     while surplus := claims.surplus():
         # one at a time: a removal can merge branches and change other claims
@@ -302,5 +333,5 @@ def coarse_dce(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> list[int
         removed.append(surplus[0])
         if merged is not None:  # only the merged branch can have lost its support
             removed += remove_unsupported(graph, gen.supported, candidates=[merged[0]],
-                                          prepare=scan)
+                                          prepare=gen.scan)
     return removed

@@ -169,61 +169,71 @@ def _raster(bp: np.ndarray, seg: np.ndarray, pts: np.ndarray, r2: np.ndarray,
 
 
 @numba.njit(cache=True)
-def _add_label(out: np.ndarray, k: int, found: int, lab: int) -> int:
+def _add_label(out: np.ndarray, found: int, lab: int) -> int:
     for j in range(found):
-        if out[k, j] == lab:
+        if out[j] == lab:
             return found
-    out[k, found] = lab
+    out[found] = lab
     return found + 1
 
 
 @numba.njit(cache=True)
 def _rim_labels(seg_lo: np.ndarray, seg_hi: np.ndarray, pts: np.ndarray, r2_all: np.ndarray,
                 index: np.ndarray, tolerance: float, limit: int) -> np.ndarray:
-    # No background pixel is nearer than r(s), so the generating points all lie in
-    # r <= d <= r + tolerance. Only that annulus r2 <= d2 <= o2 is scanned, row by row,
-    # as two column runs per row (the same integer/float comparisons as a test of every
-    # pixel of the square), and a point stops as soon as `limit` distinct labels are seen.
     out = np.full((index.shape[0], limit), -1, np.int64)
     for k in range(index.shape[0]):
         i = index[k]
-        r2 = r2_all[i]
-        outer = np.sqrt(r2) + tolerance
-        o2 = outer * outer
-        reach = int(outer)
-        found = 0
-        r, c = pts[i, 0], pts[i, 1]
-        for dy in range(-reach, reach + 1):
-            dy2 = dy * dy
-            if dy2 > o2:
-                continue
-            # widest dx with dy2 + dx^2 <= o2, narrowest with dy2 + dx^2 >= r2 (the
-            # float square roots are only a first guess, fixed up with the exact tests)
-            dx_hi = int(np.sqrt(o2 - dy2))
-            while dy2 + (dx_hi + 1) * (dx_hi + 1) <= o2:
-                dx_hi += 1
-            while dx_hi > 0 and dy2 + dx_hi * dx_hi > o2:
-                dx_hi -= 1
-            dx_lo = 0
-            if r2 > dy2:
-                dx_lo = int(np.sqrt(r2 - dy2))
-                while dx_lo > 0 and dy2 + (dx_lo - 1) * (dx_lo - 1) >= r2:
-                    dx_lo -= 1
-                while dy2 + dx_lo * dx_lo < r2:
-                    dx_lo += 1
-            if dx_lo > dx_hi:
-                continue
-            row_lo, row_hi = seg_lo[r + dy], seg_hi[r + dy]
-            for q in range(c - dx_hi, c - max(dx_lo, 1) + 1):  # left run, without dx = 0
-                if row_hi[q] >= 0 and found < limit:
-                    found = _add_label(out, k, found, row_lo[q])
-                    if found < limit:
-                        found = _add_label(out, k, found, row_hi[q])
-            for q in range(c + dx_lo, c + dx_hi + 1):  # right run
-                if row_hi[q] >= 0 and found < limit:
-                    found = _add_label(out, k, found, row_lo[q])
-                    if found < limit:
-                        found = _add_label(out, k, found, row_hi[q])
-            if found == limit:
-                break  # enough labels: more cannot change the answer asked for
+        rim_labels(seg_lo, seg_hi, pts[i, 0], pts[i, 1], r2_all[i], tolerance, out[k])
     return out
+
+
+@numba.njit(cache=True)
+def rim_labels(seg_lo: np.ndarray, seg_hi: np.ndarray, r: int, c: int, r2: int,
+               tolerance: float, out: np.ndarray) -> None:
+    """Fill ``out`` (-1 on entry) with the distinct labels on the rim of one disk.
+
+    For compiled callers only (a kernel both compiled and Python callers use can fail
+    to load from numba's cache). No background pixel is nearer than r(s), so the
+    generating points all lie in r <= d <= r + tolerance. Only that annulus
+    r2 <= d2 <= o2 is scanned, row by row, as two column runs per row (the same
+    integer/float comparisons as a test of every pixel of the square), and the scan
+    stops as soon as ``out`` is full.
+    """
+    limit = out.shape[0]
+    outer = np.sqrt(r2) + tolerance
+    o2 = outer * outer
+    reach = int(outer)
+    found = 0
+    for dy in range(-reach, reach + 1):
+        dy2 = dy * dy
+        if dy2 > o2:
+            continue
+        # widest dx with dy2 + dx^2 <= o2, narrowest with dy2 + dx^2 >= r2 (the float
+        # square roots are only a first guess, fixed up with the exact tests)
+        dx_hi = int(np.sqrt(o2 - dy2))
+        while dy2 + (dx_hi + 1) * (dx_hi + 1) <= o2:
+            dx_hi += 1
+        while dx_hi > 0 and dy2 + dx_hi * dx_hi > o2:
+            dx_hi -= 1
+        dx_lo = 0
+        if r2 > dy2:
+            dx_lo = int(np.sqrt(r2 - dy2))
+            while dx_lo > 0 and dy2 + (dx_lo - 1) * (dx_lo - 1) >= r2:
+                dx_lo -= 1
+            while dy2 + dx_lo * dx_lo < r2:
+                dx_lo += 1
+        if dx_lo > dx_hi:
+            continue
+        row_lo, row_hi = seg_lo[r + dy], seg_hi[r + dy]
+        for q in range(c - dx_hi, c - max(dx_lo, 1) + 1):  # left run, without dx = 0
+            if row_hi[q] >= 0 and found < limit:
+                found = _add_label(out, found, row_lo[q])
+                if found < limit:
+                    found = _add_label(out, found, row_hi[q])
+        for q in range(c + dx_lo, c + dx_hi + 1):  # right run
+            if row_hi[q] >= 0 and found < limit:
+                found = _add_label(out, found, row_lo[q])
+                if found < limit:
+                    found = _add_label(out, found, row_hi[q])
+        if found == limit:
+            return  # enough labels: more cannot change the answer asked for

@@ -25,7 +25,7 @@ from itertools import chain
 import numba
 import numpy as np
 
-from ._generating import SegmentRaster
+from ._generating import SegmentRaster, rim_labels
 from .dce import (
     COARSE_PIXEL_THRESHOLD,
     BoundaryPartition,
@@ -155,28 +155,32 @@ def _convex_vertices(partition: BoundaryPartition) -> tuple[np.ndarray, np.ndarr
 
 
 def _flatten(graph: BranchGraph, branches: list[int]) -> tuple[np.ndarray, np.ndarray]:
-    """The points of ``branches`` end to end, and the ``len(branches) + 1`` offsets."""
-    lists = [graph.branches[b].points for b in branches]
+    """The points of end ``branches``, each from its junction end, and the offsets."""
+    lists = [br.points[::-1] if br.node[0] is None else br.points
+             for br in (graph.branches[b] for b in branches)]
     offsets = np.zeros(len(lists) + 1, np.int64)
     np.cumsum(np.fromiter(map(len, lists), np.int64, len(lists)), out=offsets[1:])
     return np.fromiter(chain.from_iterable(lists), np.int64, int(offsets[-1])), offsets
 
 
-class _Generators:
-    """Generating segments of skeleton points, scanned only when a branch is asked about.
+class _EndBranches:
+    """Support and corner claim of end branches, from rims scanned only when needed.
 
-    The support test and the corner rule only ever read points of end branches (and of
-    branches a merge makes), and the rims of the large interior disks are the expensive
-    scans: each point is scanned once, when a branch holding it is first asked about.
+    A branch is *supported* when two or more segments generate one of its points. It
+    *claims* convex vertex ``v`` when its generating segments are exactly the two that
+    meet at ``v``. Both are answered in one compiled pass per batch of branches, which
+    scans a point's disk rim only when the answer still depends on it: from the
+    junction end, where a third segment usually settles both at once, so the large
+    interior disks are mostly never scanned. Only merges change a branch, and a merge
+    changes its point count: that is the cache key.
 
-    ``supported[p]``: two or more segments generate ``p``; ``first[p]``: the first
-    segment found; ``vertex[p]``: the convex vertex its two generating segments meet at,
-    -1 for a point with a single generating segment, -2 for one with three or more, or
-    with two that do not meet at a convex vertex.
+    ``supported[p]`` is exact for every scanned point, and a branch's support is the
+    ``any`` of it over the branch's points (an unscanned point reads False, and a
+    branch that stopped early did so on a supported point).
     """
 
     def __init__(self, graph: BranchGraph, r2: np.ndarray, partition: BoundaryPartition,
-                 before: np.ndarray, after: np.ndarray) -> None:
+                 before: np.ndarray, after: np.ndarray, positions: np.ndarray) -> None:
         self.graph = graph
         self.raster = SegmentRaster(partition, np.stack([graph.rows, graph.cols], axis=1), r2)
         n = graph.rows.size
@@ -189,111 +193,101 @@ class _Generators:
         ids = np.arange(len(after))
         self.vertex_of[before, after] = ids
         self.vertex_of[after, before] = ids
-        self.ready: dict[int, int] = {}  # branch -> its point count when scanned
-
-    def scan_points(self, pts: np.ndarray) -> None:
-        """Scan the points of ``pts`` not scanned yet (one compiled call)."""
-        pts = pts[~self.known[pts]]
-        if pts.size == 0:
-            return
-        labels = self.raster.labels(pts)
-        self.known[pts] = True
-        self.first[pts] = labels[:, 0]
-        self.supported[pts] = labels[:, 1] != -1
-        two = (labels[:, 1] != -1) & (labels[:, 2] == -1)
-        vertex = np.full(len(pts), -1, np.int64)
-        vertex[two] = self.vertex_of[labels[two, 0], labels[two, 1]]
-        vertex[labels[:, 2] != -1] = -2
-        self.vertex[pts] = vertex
-
-    def scan_branches(self, branches: list[int]) -> np.ndarray:
-        """Scan all points of ``branches``; whether each has a supported point."""
-        flat, offsets = _flatten(self.graph, branches)
-        self.scan_points(flat)
-        for b in branches:
-            self.ready[b] = len(self.graph.branches[b].points)
-        if not branches:
-            return np.zeros(0, np.bool_)
-        return np.logical_or.reduceat(self.supported[flat], offsets[:-1])
-
-    def scan(self, b: int) -> None:
-        """Scan branch ``b``'s points, unless done since it last changed."""
-        pts = self.graph.branches[b].points
-        if self.ready.get(b) != len(pts):
-            self.scan_points(np.asarray(pts, np.int64))
-            self.ready[b] = len(pts)
-
-
-@numba.njit(cache=True)
-def _claimed_vertices(flat: np.ndarray, offsets: np.ndarray, vertex: np.ndarray,
-                      first: np.ndarray, before: np.ndarray, after: np.ndarray) -> np.ndarray:
-    """Per branch (points ``flat[offsets[k]:offsets[k + 1]]``): the one convex vertex all
-    of its points are generated at, or -1."""
-    out = np.full(offsets.size - 1, -1, np.int64)
-    for k in range(offsets.size - 1):
-        v = -1
-        for t in range(offsets[k], offsets[k + 1]):
-            p = flat[t]
-            if vertex[p] == -2 or (v >= 0 and vertex[p] >= 0 and vertex[p] != v):
-                v = -1
-                break
-            if vertex[p] >= 0:
-                v = vertex[p]
-        if v < 0:
-            continue
-        for t in range(offsets[k], offsets[k + 1]):
-            p = flat[t]
-            if vertex[p] == -1 and first[p] >= 0 and first[p] != before[v] \
-                    and first[p] != after[v]:
-                v = -1
-                break
-        out[k] = v
-    return out
-
-
-class _Claims:
-    """Which convex vertex each end branch claims, cached until the branch changes.
-
-    A branch claims a vertex when its generating segments are exactly the two that
-    meet there. Only merges change a branch, and a merge changes its point count.
-    """
-
-    def __init__(self, graph: BranchGraph, generators: _Generators, before: np.ndarray,
-                 after: np.ndarray, positions: np.ndarray) -> None:
-        self.graph, self.generators = graph, generators
         self.before, self.after, self.positions = before, after, positions
-        self.cache: dict[int, tuple[int, int, float]] = {}  # b -> (n points, vertex, d2)
+        self.cache: dict[int, tuple[int, bool, int, float]] = {}  # b -> (n, sup, v, d2)
 
-    def _update(self, branches: list[int]) -> None:
-        """Claims of ``branches`` (scanned already), in one compiled call."""
-        gen, graph = self.generators, self.graph
-        flat, offsets = _flatten(graph, branches)
-        claimed = _claimed_vertices(flat, offsets, gen.vertex, gen.first, self.before,
-                                    self.after)
-        for b, v in zip(branches, claimed.tolist(), strict=True):
+    def update(self, branches: list[int]) -> None:
+        """Bring the cached answers of ``branches`` up to date (one compiled call)."""
+        graph = self.graph
+        stale = [b for b in branches if (hit := self.cache.get(b)) is None
+                 or hit[0] != len(graph.branches[b].points)]
+        if not stale:
+            return
+        flat, offsets = _flatten(graph, stale)
+        sup, claimed = _branch_states(
+            flat, offsets, self.raster.seg_lo, self.raster.seg_hi, self.raster.local,
+            self.raster.r2, self.raster.tolerance, self.known, self.first, self.supported,
+            self.vertex, self.vertex_of, self.before, self.after)
+        for b, ok, v in zip(stale, sup.tolist(), claimed.tolist(), strict=True):
             d2 = 0.0
             if v >= 0:
                 p = graph.endpoint(b)
                 dr = graph.rows[p] - self.positions[v, 0]
                 dc = graph.cols[p] - self.positions[v, 1]
                 d2 = float(dr * dr + dc * dc)
-            self.cache[b] = (len(graph.branches[b].points), v, d2)
+            self.cache[b] = (len(graph.branches[b].points), ok, v, d2)
+
+    def prepare(self, b: int) -> None:
+        """For :func:`remove_unsupported`: make ``supported`` answer for branch ``b``."""
+        self.update([b])
+
+    def unsupported(self, branches: list[int]) -> list[int]:
+        self.update(branches)
+        return [b for b in branches if not self.cache[b][1]]
 
     def surplus(self) -> list[int]:
         """Every claimant but the one ending nearest its vertex (ties: lower id)."""
         ends = self.graph.end_branches()
-        stale = [b for b in ends if (hit := self.cache.get(b)) is None
-                 or hit[0] != len(self.graph.branches[b].points)]
-        if stale:
-            for b in stale:
-                self.generators.scan(b)
-            self._update(stale)
+        self.update(ends)
         by_vertex: dict[int, list[tuple[float, int]]] = {}
         for b in ends:
-            _, v, d2 = self.cache[b]
+            _, _, v, d2 = self.cache[b]
             if v >= 0:
                 by_vertex.setdefault(v, []).append((d2, b))
         return [b for c in by_vertex.values() if len(c) > 1 for _, b in sorted(c)[1:]]
+
+
+@numba.njit(cache=True)
+def _branch_states(flat: np.ndarray, offsets: np.ndarray, seg_lo: np.ndarray,
+                   seg_hi: np.ndarray, local: np.ndarray, r2: np.ndarray, tolerance: float,
+                   known: np.ndarray, first: np.ndarray, supported: np.ndarray,
+                   vertex: np.ndarray, vertex_of: np.ndarray, before: np.ndarray,
+                   after: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per branch (points ``flat[offsets[k]:offsets[k + 1]]``): supported, claimed vertex.
+
+    Scans (and records in ``known``/``first``/``supported``/``vertex``) each point
+    not scanned yet, until both answers are settled: a supported point and a point
+    that rules out every claim (three segments, or two that meet at no convex vertex
+    or at another vertex than the branch's).
+    """
+    nb = offsets.size - 1
+    sup = np.zeros(nb, np.bool_)
+    claimed = np.full(nb, -1, np.int64)
+    labels = np.empty(3, np.int64)
+    for k in range(nb):
+        v = -1
+        can_claim = True
+        for t in range(offsets[k], offsets[k + 1]):
+            p = flat[t]
+            if not known[p]:
+                labels[:] = -1
+                rim_labels(seg_lo, seg_hi, local[p, 0], local[p, 1], r2[p], tolerance,
+                           labels)
+                known[p] = True
+                first[p] = labels[0]
+                supported[p] = labels[1] != -1
+                if labels[2] != -1:
+                    vertex[p] = -2
+                elif labels[1] != -1:
+                    vertex[p] = vertex_of[labels[0], labels[1]]
+            sup[k] |= supported[p]
+            if vertex[p] == -2 or (v >= 0 and vertex[p] >= 0 and vertex[p] != v):
+                can_claim = False
+            elif vertex[p] >= 0:
+                v = vertex[p]
+            if sup[k] and not can_claim:
+                break
+        if not can_claim or v < 0:
+            continue
+        # every point was scanned: those of one segment must lie on one of v's two
+        for t in range(offsets[k], offsets[k + 1]):
+            p = flat[t]
+            if vertex[p] == -1 and first[p] >= 0 and first[p] != before[v] \
+                    and first[p] != after[v]:
+                v = -1
+                break
+        claimed[k] = v
+    return sup, claimed
 
 
 def coarse_dce(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> list[int]:
@@ -319,19 +313,15 @@ def coarse_dce(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> list[int
         The removed branch ids, in order (replayable on a fresh graph).
     """
     partition = boundary_partition(mask, pixel_threshold=coarse_threshold(mask))
-    before, after, positions = _convex_vertices(partition)
-    gen = _Generators(graph, r2, partition, before, after)
-    ends = graph.end_branches()
-    supported = gen.scan_branches(ends)  # all at once: one compiled call
-    unsupported = [b for b, ok in zip(ends, supported.tolist(), strict=True) if not ok]
-    removed = remove_unsupported(graph, gen.supported, candidates=unsupported,
-                                 prepare=gen.scan)
-    claims = _Claims(graph, gen, before, after, positions)
-    while surplus := claims.surplus():
+    ends = _EndBranches(graph, r2, partition, *_convex_vertices(partition))
+    removed = remove_unsupported(graph, ends.supported,
+                                 candidates=ends.unsupported(graph.end_branches()),
+                                 prepare=ends.prepare)
+    while surplus := ends.surplus():
         # one at a time: a removal can merge branches and change other claims
         merged = graph.remove_end_branch(surplus[0])
         removed.append(surplus[0])
         if merged is not None:  # only the merged branch can have lost its support
-            removed += remove_unsupported(graph, gen.supported, candidates=[merged[0]],
-                                          prepare=gen.scan)
+            removed += remove_unsupported(graph, ends.supported, candidates=[merged[0]],
+                                          prepare=ends.prepare)
     return removed

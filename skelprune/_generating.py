@@ -148,14 +148,16 @@ def generating_segments(
 def _raster(bp: np.ndarray, seg: np.ndarray, pts: np.ndarray, r2: np.ndarray,
             tolerance: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     # Segment labels on a raster (a boundary pixel can border two segments: keep the
-    # smallest and largest label), with margins that hold the largest disk's rim; and
-    # the points in the raster's frame.
-    lo_r = min(bp[:, 0].min(), pts[:, 0].min())
-    lo_c = min(bp[:, 1].min(), pts[:, 1].min())
-    reach = int(np.ceil(np.sqrt(float(r2.max())) + tolerance)) + 1
-    o_r, o_c = lo_r - reach, lo_c - reach
-    h = max(bp[:, 0].max(), pts[:, 0].max()) - o_r + reach + 1
-    w = max(bp[:, 1].max(), pts[:, 1].max()) - o_c + reach + 1
+    # smallest and largest label) that holds every point's scan square, whose half-side
+    # is at most ceil(r + tolerance) + 1; and the points in the raster's frame.
+    lo_r, lo_c = bp[:, 0].min(), bp[:, 1].min()
+    hi_r, hi_c = bp[:, 0].max(), bp[:, 1].max()
+    for k in range(pts.shape[0]):
+        reach = int(np.ceil(np.sqrt(float(r2[k])) + tolerance)) + 1
+        lo_r, hi_r = min(lo_r, pts[k, 0] - reach), max(hi_r, pts[k, 0] + reach)
+        lo_c, hi_c = min(lo_c, pts[k, 1] - reach), max(hi_c, pts[k, 1] + reach)
+    o_r, o_c = lo_r, lo_c
+    h, w = hi_r - lo_r + 1, hi_c - lo_c + 1
     seg_lo = np.full((h, w), np.iinfo(np.int64).max, np.int64)
     seg_hi = np.full((h, w), -1, np.int64)
     for k in range(bp.shape[0]):

@@ -42,6 +42,7 @@ def main() -> None:
         log_level=settings.log_level,
         log_config=logging_config(settings.log_level),  # JSON lines on stderr
         access_log=False,  # the service writes its own access log, with request IDs
+        # http: uvicorn's default picks httptools (the service extra) and falls back to h11
         # a drain after SIGTERM is bounded: below the orchestrator's grace period
         timeout_graceful_shutdown=settings.shutdown_timeout,
     )

@@ -23,6 +23,7 @@ __all__ = [
     "Readiness",
     "SkeletonGeoJSON",
     "polygon_request_adapter",
+    "query_parameters",
 ]
 
 STRICT = ConfigDict(strict=True, extra="forbid")
@@ -68,6 +69,26 @@ class PruneQuery(BaseModel):
         None, description="Polygon input only: repair self-intersections with "
         "shapely `make_valid` (default true) or refuse them (false).",
     )
+
+
+def query_parameters(model: type[BaseModel]) -> list[dict[str, Any]]:
+    """OpenAPI ``parameters`` for a query-options model whose fields are all optional.
+
+    The route parses its query string itself (one validation of the whole model, see
+    ``routes.parse_query``) instead of declaring the model to FastAPI, so the document
+    gets the parameters from here, in the form FastAPI would give them.
+    """
+    properties = model.model_json_schema()["properties"]
+    params = []
+    for name, field in model.model_fields.items():
+        key = field.alias or name
+        schema = {k: v for k, v in properties[key].items() if not (k == "default" and v is None)}
+        param: dict[str, Any] = {"name": key, "in": "query", "required": False,
+                                 "schema": schema}
+        if field.description:
+            param["description"] = field.description
+        params.append(param)
+    return params
 
 
 # ---------------------------------------------------------------- input: GeoJSON

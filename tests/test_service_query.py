@@ -1,0 +1,110 @@
+"""The query options of ``POST /v1/prune``: ``routes.parse_query`` against FastAPI's own
+handling of ``Annotated[PruneQuery, Query()]``, which it replaces (same values, same
+errors), and its place before every other check of the request."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+from urllib.parse import urlencode
+
+import pytest
+from fastapi import FastAPI, Query, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from fastapi.testclient import TestClient
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from starlette.datastructures import QueryParams
+
+from service.app import create_app
+from service.routes import parse_query
+from service.schemas import PruneQuery
+from service.settings import Settings
+
+pytestmark = pytest.mark.timeout(120)
+
+
+def _reference_app() -> FastAPI:
+    """The declaration ``parse_query`` replaced, answering with the values or the errors."""
+    app = FastAPI()
+
+    @app.get("/q")
+    async def q(query: Annotated[PruneQuery, Query()]) -> dict[str, Any]:
+        return {"ok": query.model_dump()}
+
+    async def errors(request: Request, exc: Exception) -> JSONResponse:
+        assert isinstance(exc, RequestValidationError)
+        return JSONResponse({"errors": _shown(exc)})
+
+    app.add_exception_handler(RequestValidationError, errors)
+    return app
+
+
+def _shown(exc: RequestValidationError) -> list[dict[str, Any]]:
+    # what the problem+json handler puts in a 422 answer (service/errors.py)
+    return [{"loc": [str(p) for p in e["loc"]], "msg": e["msg"], "type": e["type"]}
+            for e in exc.errors()]
+
+
+@pytest.fixture(scope="module")
+def reference() -> TestClient:
+    return TestClient(_reference_app())
+
+
+def ours(query_string: str) -> dict[str, Any]:
+    try:
+        return {"ok": parse_query(QueryParams(query_string)).model_dump()}
+    except RequestValidationError as exc:
+        return {"errors": _shown(exc)}
+
+
+CASES = [
+    "",
+    "beta=3.5&method=dce&coarse=none&dce_threshold=0.02&curve=false&overlay=1"
+    "&pixel_size=0.5&longest_side=64&repair=off",
+    "beta=1&beta=2",  # the last one wins
+    "beta=x&beta=2",
+    "beta=2&beta=x",
+    "betta=9",
+    "betta=9&betta=10&beta=0",
+    "BETA=3",
+    "beta=",
+    "beta",
+    "&&beta=4&",
+    "beta=nan&dce_threshold=-inf&longest_side=8.5&curve=maybe&method=MAGIC",
+    "longest_side=8.0&curve=yes&overlay=0&repair=TRUE",
+    "longest_side=1e3",
+    "beta=%39&method=b%61yesian",
+    "x=1&y=2&z=3&beta=-1",
+]
+
+
+@pytest.mark.parametrize("query_string", CASES)
+def test_parse_query_matches_fastapi(reference: TestClient, query_string: str) -> None:
+    assert ours(query_string) == reference.get(f"/q?{query_string}").json()
+
+
+KEYS = st.sampled_from([*PruneQuery.model_fields, "betta", "Beta", "", "a b", "é"])
+VALUES = st.sampled_from(["", "0", "1", "-1", "2.5", "1e400", "nan", "true", "off", "dce",
+                          "none", "bayesian", "64", "x", " 9 "])
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.tuples(KEYS, VALUES), max_size=6))
+def test_parse_query_matches_fastapi_on_random_queries(
+    reference: TestClient, pairs: list[tuple[str, str]]
+) -> None:
+    query_string = urlencode(pairs)
+    assert ours(query_string) == reference.get(f"/q?{query_string}").json()
+
+
+def test_bad_options_are_refused_before_anything_else() -> None:
+    # No worker pool is started (no lifespan): the answer comes before any job.
+    client = TestClient(create_app(Settings(workers=1)), raise_server_exceptions=False)
+    for headers in ({"content-type": "text/plain"}, {"accept": "text/html"},
+                    {"content-type": "image/png", "content-encoding": "gzip"}):
+        resp = client.post("/v1/prune?beta=0&betta=1", content=b"x", headers=headers)
+        assert resp.status_code == 422, resp.text
+        assert resp.headers["content-type"] == "application/problem+json"
+        assert [e["loc"] for e in resp.json()["errors"]] == [["query", "beta"],
+                                                             ["query", "betta"]]

@@ -25,9 +25,12 @@ from itertools import chain
 import numba
 import numpy as np
 
-from ._contours import trace_boundaries
 from ._generating import SegmentRaster, rim_labels
-from .dce import COARSE_PIXEL_THRESHOLD, BoundaryPartition, partition_traced
+from .dce import (
+    COARSE_PIXEL_THRESHOLD,
+    BoundaryPartition,
+    boundary_partition,
+)
 from .graph import BranchGraph
 from .pruning import remove_unsupported
 
@@ -116,54 +119,6 @@ def _opening_closing_changes(m: np.ndarray) -> tuple[int, int]:
     return perimeter, changed
 
 
-@numba.njit(cache=True)
-def _inside(mask: np.ndarray, r: int, c: int) -> bool:
-    return 0 <= r < mask.shape[0] and 0 <= c < mask.shape[1] and mask[r, c]
-
-
-@numba.njit(cache=True)
-def _eroded(mask: np.ndarray, r: int, c: int) -> bool:
-    return (_inside(mask, r, c) and _inside(mask, r - 1, c) and _inside(mask, r + 1, c)
-            and _inside(mask, r, c - 1) and _inside(mask, r, c + 1))
-
-
-@numba.njit(cache=True)
-def _dilated(mask: np.ndarray, r: int, c: int) -> bool:
-    return (_inside(mask, r, c) or _inside(mask, r - 1, c) or _inside(mask, r + 1, c)
-            or _inside(mask, r, c - 1) or _inside(mask, r, c + 1))
-
-
-@numba.njit(cache=True)
-def _boundary_changes(mask: np.ndarray, bg: np.ndarray) -> tuple[int, int]:
-    """The counts of :func:`_opening_closing_changes` from the boundary alone.
-
-    Only pixels next to the boundary can change: a shape pixel the opening removes is
-    not eroded, so it has a background 4-neighbour, and a background pixel the closing
-    adds is dilated, so it has a shape 4-neighbour; ``bg`` (the traced boundary points,
-    background pixels 4-adjacent to the shape, possibly outside the image and repeated)
-    reaches both. Costs O(boundary) instead of two passes over the image.
-    """
-    h, w = mask.shape
-    seen = np.zeros((h + 2, w + 2), np.uint8)  # 1: background seen, 2: shape seen
-    perimeter = 0
-    changed = 0
-    for k in range(bg.shape[0]):
-        r, c = bg[k, 0], bg[k, 1]
-        if not seen[r + 1, c + 1] & 1:
-            seen[r + 1, c + 1] |= 1
-            changed += (_dilated(mask, r, c) and _dilated(mask, r - 1, c)
-                        and _dilated(mask, r + 1, c) and _dilated(mask, r, c - 1)
-                        and _dilated(mask, r, c + 1))
-        for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
-            fr, fc = r + dr, c + dc
-            if _inside(mask, fr, fc) and not seen[fr + 1, fc + 1] & 2:
-                seen[fr + 1, fc + 1] |= 2
-                perimeter += 1  # a shape pixel next to the background is never eroded
-                changed += not (_eroded(mask, fr - 1, fc) or _eroded(mask, fr + 1, fc)
-                                or _eroded(mask, fr, fc - 1) or _eroded(mask, fr, fc + 1))
-    return perimeter, changed
-
-
 def coarse_threshold(mask: np.ndarray) -> float:
     """DCE stop of the coarse stage, in pixels of relevance, for this shape.
 
@@ -175,11 +130,8 @@ def coarse_threshold(mask: np.ndarray) -> float:
     >>> coarse_threshold(m)
     2.0
     """
-    return _threshold(boundary_roughness(mask))
-
-
-def _threshold(roughness: float) -> float:
-    return COARSE_PIXEL_THRESHOLD + ROUGHNESS_GAIN * max(0.0, roughness - ROUGHNESS_FLOOR)
+    excess = max(0.0, boundary_roughness(mask) - ROUGHNESS_FLOOR)
+    return COARSE_PIXEL_THRESHOLD + ROUGHNESS_GAIN * excess
 
 
 def _convex_vertices(partition: BoundaryPartition) -> tuple[np.ndarray, np.ndarray,
@@ -364,12 +316,7 @@ def coarse_dce(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> list[int
     list of int
         The removed branch ids, in order (replayable on a fresh graph).
     """
-    mask = np.ascontiguousarray(mask, dtype=np.bool_)
-    traced = trace_boundaries(mask)
-    # coarse_threshold(mask), from the traced boundary instead of the whole image
-    perimeter, changed = _boundary_changes(mask, traced[1])
-    threshold = _threshold(changed / perimeter if perimeter else 0.0)
-    partition = partition_traced(traced, pixel_threshold=threshold)
+    partition = boundary_partition(mask, pixel_threshold=coarse_threshold(mask))
     ends = _EndBranches(graph, r2, partition, *_convex_vertices(partition))
     removed = remove_unsupported(graph, ends.supported,
                                  candidates=ends.unsupported(graph.end_branches()),

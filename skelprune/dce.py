@@ -309,18 +309,7 @@ def boundary_partition(
     >>> part.n_segments, part.points.shape
     (4, (120, 2))
     """
-    traced = trace_boundaries(np.ascontiguousarray(mask, dtype=np.bool_))
-    return partition_traced(traced, n_vertices, threshold, pixel_threshold)
-
-
-def partition_traced(
-    traced: tuple[np.ndarray, np.ndarray, np.ndarray],
-    n_vertices: int | None = None,
-    threshold: float | None = None,
-    pixel_threshold: float | None = None,
-) -> BoundaryPartition:
-    """:func:`boundary_partition` of boundaries already traced by ``trace_boundaries``."""
-    xy, bg, bounds = traced
+    xy, bg, bounds = trace_boundaries(np.ascontiguousarray(mask, dtype=np.bool_))
     if len(bounds) < 2:
         raise ValueError("mask has no foreground pixel")
     seg = np.empty(len(xy), np.int64)

@@ -221,24 +221,3 @@ def test_lazy_coarse_stage_equals_the_eager_reference(name, mask):
             continue
         slow = BranchGraph(ma.rows, ma.cols, crop.shape)
         assert coarse_dce(fast, crop, ma.r2) == reference_coarse(slow, crop, ma.r2)
-
-
-def _roughness_masks():
-    rng = np.random.default_rng(3)
-    out = [load(p) for p in SHAPES[::3]]
-    out += [boundary_noise(m, "uniform", 1.5, rng=k) for k, m in enumerate(out[:4])]
-    out += [rng.random(rng.integers(1, 15, 2)) < rng.uniform(0.2, 0.9) for _ in range(120)]
-    return out
-
-
-def test_roughness_from_the_traced_boundary_equals_the_image_passes():
-    """coarse_dce counts the opening/closing changes from the boundary points only."""
-    from skelprune._contours import trace_boundaries
-    from skelprune.coarse import _boundary_changes, _opening_closing_changes
-
-    for m in _roughness_masks():  # includes shapes touching the image border
-        m = np.ascontiguousarray(m, bool)
-        padded = np.zeros((m.shape[0] + 4, m.shape[1] + 4), bool)
-        padded[2:-2, 2:-2] = m
-        got = _boundary_changes(m, trace_boundaries(m)[1]) if m.any() else (0, 0)
-        assert got == _opening_closing_changes(padded)

@@ -183,7 +183,7 @@ def _find(nxt, x) -> int:
     return root
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # called from compiled code and from tests: see coverage
 def last_cover(shape_h: int, shape_w: int, rows, cols, r2s) -> np.ndarray:
     """For every pixel, the largest ``k`` whose disk ``(rows[k], cols[k], r2s[k])``
     covers it, -1 where none does.

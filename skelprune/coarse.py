@@ -175,10 +175,6 @@ class _EndBranches:
     junction end, where a third segment usually settles both at once, so the large
     interior disks are mostly never scanned. Only merges change a branch, and a merge
     changes its point count: that is the cache key.
-
-    ``supported[p]`` is exact for every scanned point, and a branch's support is the
-    ``any`` of it over the branch's points (an unscanned point reads False, and a
-    branch that stopped early did so on a supported point).
     """
 
     def __init__(self, graph: BranchGraph, r2: np.ndarray, partition: BoundaryPartition,
@@ -219,11 +215,9 @@ class _EndBranches:
                 d2 = float(dr * dr + dc * dc)
             self.cache[b] = (len(graph.branches[b].points), ok, v, d2)
 
-    def prepare(self, b: int) -> None:
-        """For :func:`remove_unsupported`: make ``supported`` answer for branch ``b``."""
-        hit = self.cache.get(b)
-        if hit is None or hit[0] != len(self.graph.branches[b].points):
-            self.update([b])
+    def is_supported(self, b: int) -> bool:
+        self.update([b])
+        return self.cache[b][1]
 
     def unsupported(self, branches: list[int]) -> list[int]:
         self.update(branches)
@@ -318,14 +312,12 @@ def coarse_dce(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> list[int
     """
     partition = boundary_partition(mask, pixel_threshold=coarse_threshold(mask))
     ends = _EndBranches(graph, r2, partition, *_convex_vertices(partition))
-    removed = remove_unsupported(graph, ends.supported,
-                                 candidates=ends.unsupported(graph.end_branches()),
-                                 prepare=ends.prepare)
+    removed = remove_unsupported(graph, ends.is_supported,
+                                 candidates=ends.unsupported(graph.end_branches()))
     while surplus := ends.surplus():
         # one at a time: a removal can merge branches and change other claims
         merged = graph.remove_end_branch(surplus[0])
         removed.append(surplus[0])
         if merged is not None:  # only the merged branch can have lost its support
-            removed += remove_unsupported(graph, ends.supported, candidates=[merged[0]],
-                                          prepare=ends.prepare)
+            removed += remove_unsupported(graph, ends.is_supported, candidates=[merged[0]])
     return removed

@@ -236,27 +236,28 @@ def bayesian_sequence(
     return seq
 
 
-def remove_unsupported(graph: BranchGraph, supported: np.ndarray,
-                       candidates: list[int] | None = None,
-                       prepare: Callable[[int], None] | None = None) -> list[int]:
+def remove_unsupported(graph: BranchGraph,
+                       supported: np.ndarray | Callable[[int], bool],
+                       candidates: list[int] | None = None) -> list[int]:
     """DCE pruning on the graph alone: remove, smallest endpoint (row, col) first,
     every end branch none of whose points is supported, until each has one.
 
     Used as the coarse stage, whose steps are not part of the Bayesian curve, so no
     reconstruction is kept up to date. A branch's support only changes when it
     absorbs another, so candidates wait in a heap and only merged branches are
-    looked at again. ``candidates`` restricts the first look to those branches (when
-    the caller knows no other end branch can be unsupported). ``prepare(b)``, if given,
-    is called before the support of branch ``b`` is first read (when it is pushed), so
-    that a caller can fill ``supported`` lazily.
+    looked at again. ``supported`` is a per-point bool array, or a function that tells
+    whether branch ``b`` (as it is now) is supported, for a caller that works the
+    answer out lazily. ``candidates`` restricts the first look to those branches (when
+    the caller knows no other end branch can be unsupported).
     """
+    if callable(supported):
+        is_supported = supported
+    else:
+        def is_supported(b: int) -> bool:
+            return bool(supported[graph.branches[b].points].any())
 
     def push(b: int) -> None:
-        if not graph.is_end_branch(b):
-            return
-        if prepare is not None:
-            prepare(b)
-        if not supported[graph.branches[b].points].any():
+        if graph.is_end_branch(b) and not is_supported(b):
             p = graph.endpoint(b)
             heapq.heappush(heap, (int(graph.rows[p]), int(graph.cols[p]), b, p))
 
@@ -267,8 +268,7 @@ def remove_unsupported(graph: BranchGraph, supported: np.ndarray,
     while heap:
         _, _, b, p = heapq.heappop(heap)
         # stale: removed, absorbed, or grown by a merge since it was pushed
-        if not graph.is_end_branch(b) or graph.endpoint(b) != p \
-                or supported[graph.branches[b].points].any():
+        if not graph.is_end_branch(b) or graph.endpoint(b) != p or is_supported(b):
             continue
         merged = graph.remove_end_branch(b)
         removed.append(b)

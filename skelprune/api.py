@@ -8,6 +8,7 @@ from typing import Literal
 import numpy as np
 from scipy import ndimage
 
+from ._orientation import Orientation, canonical_orientation
 from .coarse import coarse_dce
 from .dce import (
     DCE_THRESHOLD,
@@ -22,7 +23,7 @@ from .pruning import bayesian_sequence, choose_step, normalisation, remove_unsup
 from .reconstruction import count_covered
 from .result import ComponentResult, GraphSummary, PruneResult
 
-__all__ = ["METHODS", "components", "prune"]
+__all__ = ["METHODS", "components", "oriented", "prune"]
 
 METHODS = ("bayesian", "dce")
 COARSE = (None, "dce")
@@ -41,6 +42,17 @@ def components(mask: np.ndarray) -> list[tuple[np.ndarray, tuple[int, int]]]:
         crop = np.pad(labels[sl] == k, 1)
         out.append((crop, (sl[0].start - 1, sl[1].start - 1)))
     return out
+
+
+def oriented(crop: np.ndarray) -> tuple[np.ndarray, Orientation]:
+    """The crop in its canonical orientation, and that orientation.
+
+    The frame in which :func:`prune_component` works, and so in which the graph, the
+    branch ids and the ``(row, col)`` tie rules of SPEC §2.3–2.4 of a
+    :class:`~skelprune.result.ComponentResult` are.
+    """
+    orientation = canonical_orientation(crop)
+    return np.ascontiguousarray(orientation.apply(crop)), orientation
 
 
 def _check_options(beta: float, method: str, coarse: str | None,
@@ -73,7 +85,12 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
 
     With ``coarse="dce"`` the Bayesian sequence (and so its curve, ``chosen_step``,
     ``α`` and ``ℓ̄``) starts from the DCE-pruned skeleton.
+
+    Everything runs in the crop's canonical orientation (:func:`oriented`), ties
+    included, so that a shape turned by 90° or mirrored gets the turned or mirrored
+    skeleton; the result maps its points back.
     """
+    crop, orientation = oriented(crop)
     r2img = squared_distance(crop)
     ma = medial_axis(crop, r2img)
     graph = BranchGraph(ma.rows, ma.cols, crop.shape)
@@ -119,7 +136,7 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
             final.remove_end_branch(b)
     return ComponentResult(
         origin=origin, area=int(crop.sum()), r2=ma.r2, medial_axis=summary, graph=final,
-        sequence=seq, chosen_step=chosen, ma_rer=ma_rer,
+        sequence=seq, chosen_step=chosen, ma_rer=ma_rer, orientation=orientation,
     )
 
 

@@ -206,6 +206,7 @@ class BranchGraph:
     def __init__(self, rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int]) -> None:
         self.rows = np.asarray(rows, dtype=np.int64)
         self.cols = np.asarray(cols, dtype=np.int64)
+        self.shape = (int(shape[0]), int(shape[1]))
         index = _point_index(self.rows, self.cols, shape)
         self.nbr, self.degree = _neighbours(self.rows, self.cols, index)
         self.extra_na = 0  # steps inside dissolved junction clusters, a running total
@@ -265,6 +266,7 @@ class BranchGraph:
         """
         g = object.__new__(BranchGraph)
         g.rows, g.cols, g.nbr, g.degree = self.rows, self.cols, self.nbr, self.degree
+        g.shape = self.shape
         g.extra_na, g.extra_nd = self.extra_na, self.extra_nd
         g.na, g.nd = self.na, self.nd
         g.branches = [Branch(list(b.points), list(b.node), list(b.attach), b.na, b.nd,

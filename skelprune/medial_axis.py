@@ -31,6 +31,8 @@ from ._digital import (
     neighbourhood_code,
 )
 from ._disk_counts import coverage, disk_loss, disk_remove, drop_redundant_anchors
+from ._orientation import canonical_orientation
+from .errors import InvalidImageError
 
 __all__ = ["DEGREE", "SIMPLE", "MedialAxis", "medial_axis", "squared_distance"]
 
@@ -337,6 +339,10 @@ class MedialAxis:
 def medial_axis(padded: np.ndarray, r2: np.ndarray | None = None) -> MedialAxis:
     """Medial axis of a shape given with a background border.
 
+    The axis is computed in the shape's canonical orientation
+    (:mod:`skelprune._orientation`) and mapped back, so that a shape turned by 90° or
+    mirrored gets exactly the turned or mirrored axis.
+
     Parameters
     ----------
     padded : (H, W) bool array
@@ -348,25 +354,50 @@ def medial_axis(padded: np.ndarray, r2: np.ndarray | None = None) -> MedialAxis:
     -------
     MedialAxis
 
+    Raises
+    ------
+    InvalidImageError
+        When a border pixel belongs to the shape (pad it first, as
+        :func:`skelprune.api.components` does).
+
     Examples
     --------
     >>> m = np.zeros((9, 15), bool); m[2:7, 2:13] = True
     >>> ma = medial_axis(m)
     >>> sorted(set(ma.rows.tolist()))[:1]
     [4]
+    >>> t = medial_axis(np.ascontiguousarray(m.T))
+    >>> bool(np.array_equal(np.sort(t.rows * 9 + t.cols), np.sort(ma.cols * 9 + ma.rows)))
+    True
     """
+    padded = np.asarray(padded, dtype=bool)
+    if padded[0].any() or padded[-1].any() or padded[:, 0].any() or padded[:, -1].any():
+        # the kernels look one pixel beyond every shape pixel, without bounds checks
+        raise InvalidImageError("the shape touches the array border: pad it with one "
+                                "background pixel first")
     if r2 is None:
         r2 = squared_distance(padded)
+    o = canonical_orientation(padded)
+    rows, cols = _medial_axis_pixels(np.ascontiguousarray(o.apply(padded), dtype=np.bool_),
+                                     np.ascontiguousarray(o.apply(r2)))
+    rows, cols = o.points_back(rows, cols, padded.shape)
+    order = np.argsort(rows * padded.shape[1] + cols)  # raster order
+    rows, cols = rows[order], cols[order]
+    return MedialAxis(rows, cols, r2[rows, cols])
+
+
+def _medial_axis_pixels(padded: np.ndarray, r2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rows and columns of the medial axis, computed in the given frame."""
     need = _domination_table(r2)  # sized by the maximum: no need to select the shape
     anchor = _anchors(r2, need, VECTORS, VECTOR_KIND)
     ar, ac = np.nonzero(anchor)
     order = np.lexsort((ac, ar, r2[ar, ac]))
     drop_redundant_anchors(anchor, r2, ar[order].astype(np.int64), ac[order].astype(np.int64))
-    fg = padded.astype(np.bool_).copy()
+    fg = padded.copy()
     _ordered_thinning(fg, r2, anchor, SIMPLE)
     rows, cols = np.nonzero(fg)
     order = np.lexsort((cols, rows, r2[rows, cols]))  # smallest radius first
     _thin(fg, r2, rows[order].astype(np.int64), cols[order].astype(np.int64), SIMPLE, DEGREE)
     _extend_ends(fg, r2, DEGREE)
     rows, cols = np.nonzero(fg)
-    return MedialAxis(rows.astype(np.int64), cols.astype(np.int64), r2[rows, cols])
+    return rows.astype(np.int64), cols.astype(np.int64)

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from ._orientation import IDENTITY_ORIENTATION, Orientation
 from .frame import IDENTITY, PixelFrame
 from .graph import BranchGraph
 from .pruning import PruningSequence
@@ -37,8 +38,9 @@ class GraphSummary:
 class ComponentResult:
     """Pruned skeleton of one 8-connected component.
 
-    Coordinates in ``graph``/``r2`` are in a padded crop; ``origin`` (row, col) maps
-    them to the image: ``image = crop + origin``.
+    Coordinates in ``graph``/``r2`` are in a padded crop seen in its canonical
+    ``orientation`` (see :func:`skelprune.api.oriented`); :meth:`image_coordinates` maps
+    them to the image: back to the crop's own orientation, then ``+ origin`` (row, col).
     """
 
     origin: tuple[int, int]
@@ -49,6 +51,17 @@ class ComponentResult:
     sequence: PruningSequence
     chosen_step: int
     ma_rer: float
+    orientation: Orientation = IDENTITY_ORIENTATION
+
+    def image_coordinates(self, rows: np.ndarray,
+                          cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Rows and columns of graph points in the image frame."""
+        o = self.orientation
+        shape = self.graph.shape
+        if o.swap:  # the graph's frame is the transposed crop
+            shape = (shape[1], shape[0])
+        rows, cols = o.points_back(rows, cols, shape)
+        return rows + self.origin[0], cols + self.origin[1]
 
     @property
     def alpha(self) -> float | None:
@@ -69,17 +82,16 @@ class ComponentResult:
     def points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Rows, cols (image frame) and squared radii of the pruned skeleton."""
         idx = self.graph.alive_points()
-        g = self.graph
-        return g.rows[idx] + self.origin[0], g.cols[idx] + self.origin[1], self.r2[idx]
+        rows, cols = self.image_coordinates(self.graph.rows[idx], self.graph.cols[idx])
+        return rows, cols, self.r2[idx]
 
     def skeleton_table(self) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
         """Nodes and branches of the pruned skeleton, in image pixel coordinates
         (the ``skeleton`` part of the document before any frame is applied)."""
         g, r2 = self.graph, self.r2
-        oy, ox = self.origin
-
-        xs = (g.cols + ox).astype(float).tolist()
-        ys = (g.rows + oy).astype(float).tolist()
+        rows, cols = self.image_coordinates(g.rows, g.cols)
+        xs = cols.astype(float).tolist()
+        ys = rows.astype(float).tolist()
         rs = np.sqrt(r2.astype(float)).tolist()
 
         def xyr(p: int) -> list[float]:

@@ -6,7 +6,7 @@ two additions, both measured in ``docs/stability-findings.md``:
 
 * **The DCE stop follows the boundary's own roughness.** DCE stops when the least
   relevance ``β·l1·l2/(l1 + l2)`` (lengths in pixels) exceeds a threshold. A bump's
-  relevance is about its height in pixels, so the threshold is a height: 2 px for a
+  relevance is about its height in pixels, so the threshold is a height: 2.5 px for a
   clean digital boundary, raised in proportion to the measured boundary roughness
   (:func:`boundary_roughness`) so that noise bumps, whose height grows with the noise,
   do not become convex DCE vertices that protect noise spurs.
@@ -128,7 +128,7 @@ def coarse_threshold(mask: np.ndarray) -> float:
     --------
     >>> m = np.zeros((40, 40), bool); m[5:35, 5:35] = True
     >>> coarse_threshold(m)
-    2.0
+    2.5
     """
     excess = max(0.0, boundary_roughness(mask) - ROUGHNESS_FLOOR)
     return COARSE_PIXEL_THRESHOLD + ROUGHNESS_GAIN * excess

@@ -18,7 +18,7 @@ from .dce import (
 )
 from .errors import EmptyMaskError, InvalidOptionError
 from .graph import BranchGraph
-from .medial_axis import medial_axis, squared_distance
+from .medial_axis import oriented_medial_axis, squared_distance
 from .pruning import bayesian_sequence, choose_step, normalisation, remove_unsupported
 from .reconstruction import count_covered
 from .result import ComponentResult, GraphSummary, PruneResult
@@ -92,7 +92,7 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
     """
     crop, orientation = oriented(crop)
     r2img = squared_distance(crop)
-    ma = medial_axis(crop, r2img)
+    ma = oriented_medial_axis(crop, r2img)
     graph = BranchGraph(ma.rows, ma.cols, crop.shape)
     summary = GraphSummary.of(graph)
     before: list[int] = []

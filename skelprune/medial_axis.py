@@ -31,10 +31,11 @@ from ._digital import (
     neighbourhood_code,
 )
 from ._disk_counts import coverage, disk_loss, disk_remove, drop_redundant_anchors
-from ._orientation import canonical_orientation
+from ._orientation import IDENTITY_ORIENTATION, canonical_orientation
 from .errors import InvalidImageError
 
-__all__ = ["DEGREE", "SIMPLE", "MedialAxis", "medial_axis", "squared_distance"]
+__all__ = ["DEGREE", "SIMPLE", "MedialAxis", "medial_axis", "oriented_medial_axis",
+           "squared_distance"]
 
 def squared_distance(padded: np.ndarray) -> np.ndarray:
     """Exact squared Euclidean distance of each pixel to the nearest background pixel.
@@ -378,11 +379,20 @@ def medial_axis(padded: np.ndarray, r2: np.ndarray | None = None) -> MedialAxis:
     if r2 is None:
         r2 = squared_distance(padded)
     o = canonical_orientation(padded)
-    rows, cols = _medial_axis_pixels(np.ascontiguousarray(o.apply(padded), dtype=np.bool_),
+    if o == IDENTITY_ORIENTATION:
+        return oriented_medial_axis(padded, r2)
+    rows, cols = _medial_axis_pixels(np.ascontiguousarray(o.apply(padded)),
                                      np.ascontiguousarray(o.apply(r2)))
     rows, cols = o.points_back(rows, cols, padded.shape)
     order = np.argsort(rows * padded.shape[1] + cols)  # raster order
     rows, cols = rows[order], cols[order]
+    return MedialAxis(rows, cols, r2[rows, cols])
+
+
+def oriented_medial_axis(padded: np.ndarray, r2: np.ndarray) -> MedialAxis:
+    """:func:`medial_axis` of a shape already in its canonical orientation
+    (:func:`skelprune.api.oriented`), without finding that orientation again."""
+    rows, cols = _medial_axis_pixels(np.asarray(padded, dtype=np.bool_), r2)
     return MedialAxis(rows, cols, r2[rows, cols])
 
 

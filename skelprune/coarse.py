@@ -47,7 +47,7 @@ __all__ = [
 #: many small corners); only the excess raises the DCE threshold ...
 ROUGHNESS_FLOOR: float = 0.15
 #: ... by this many pixels of relevance per unit of roughness (boundary noise N(0, 1)
-#: measures about 0.44, so its threshold is about 8 px; U(-1, 1) about 0.32, 5.4 px).
+#: measures about 0.44, so its threshold is about 8.3 px; U(-1, 1) about 0.32, 5.9 px).
 ROUGHNESS_GAIN: float = 20.0
 
 

@@ -43,19 +43,15 @@ SMALLEST = {
 }
 
 
-def _endpoints(mask: np.ndarray) -> int:
-    return sum(c.graph.n_endpoints() for c in prune(mask).components)
-
-
 def _smallest(shapes: list[tuple[str, np.ndarray]]) -> None:
     """Agreement under the smallest perturbations, and how often they change the area."""
-    clean = [_endpoints(m) for _, m in shapes]
+    clean = [prune(m).n_endpoints() for _, m in shapes]
     rows = []
     for name, perturb in SMALLEST.items():
         ok = changed = 0
         for (_, mask), k0 in zip(shapes, clean, strict=True):
             p = perturb(mask)
-            ok += _endpoints(p) == k0
+            ok += prune(p).n_endpoints() == k0
             changed += p.sum() != mask.sum()  # a turn by 90° or a mirror: never
         rows.append([name, len(shapes), f"{100 * changed / len(shapes):.0f} %",
                      f"{100 * ok / len(shapes):.0f} %"])

@@ -193,7 +193,8 @@ def main() -> None:
                 tput1.append(throughput(clients1, png, THROUGHPUT_JOBS))
                 tput2.append(throughput(clients2, png, THROUGHPUT_JOBS))
                 ratios.append(tput2[-1] / tput1[-1])
-            jobs = 2 * THROUGHPUT_ROUNDS * THROUGHPUT_JOBS + THROUGHPUT_ROUNDS * (2 + 4)
+            # every round: the jobs of both servers, plus each client's first request
+            jobs = THROUGHPUT_ROUNDS * (2 * THROUGHPUT_JOBS + len(clients1) + len(clients2))
             client_ms = 1000 * (time.process_time() - client0) / jobs
         finally:
             for c in clients1 + clients2:

@@ -89,21 +89,14 @@ def _append_run(out, m, first, r, lo, hi):
     return m + 1
 
 
-@njit(cache=True)
 def disk_runs(rows, cols, r2, pts):
     """Run set of the union of the disks ``|p - s|**2 < r2(s)`` of the points ``pts``.
 
     The disks must lie inside the array (non-negative pixel indices).
     """
-    n = _n_disk_rows(r2, pts)
-    height = 1
-    for k in pts:
-        height = max(height, rows[k] + isqrt(r2[k] - 1) + 1)
-    out = np.empty((n, 3), np.int64)
-    pool = np.empty((4, n), np.int64)
-    head = np.full(height, -1, np.int64)
-    m = _disk_runs_into(out, 0, rows, cols, r2, pts, head, pool[0], pool[1], pool[2], pool[3])
-    return out[:m].copy()
+    pts = np.asarray(pts, np.int64)
+    runs, _ = owner_runs(rows[pts], cols[pts], r2[pts], np.zeros(pts.size, np.int64), 1)
+    return runs
 
 
 @njit(cache=True)

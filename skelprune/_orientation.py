@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["IDENTITY_ORIENTATION", "Orientation", "canonical_orientation"]
+__all__ = ["IDENTITY_ORIENTATION", "Orientation", "canonical_orientation", "oriented"]
 
 
 @dataclass(frozen=True)
@@ -40,10 +40,9 @@ class Orientation:
         return a
 
     def points_back(self, rows: np.ndarray, cols: np.ndarray,
-                    shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
-        """Coordinates in the oriented array of ``shape`` (the original's shape) mapped
-        back to the original array."""
-        h, w = (shape[1], shape[0]) if self.swap else shape
+                    shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+        """Coordinates in the oriented array, of ``shape``, mapped back to the original."""
+        h, w = shape[0], shape[1]
         if self.flip_rows:
             rows = h - 1 - rows
         if self.flip_cols:
@@ -97,3 +96,14 @@ def canonical_orientation(mask: np.ndarray) -> Orientation:
         return a.shape, np.packbits(a).tobytes()
 
     return min(candidates, key=key)
+
+
+def oriented(mask: np.ndarray) -> tuple[np.ndarray, Orientation]:
+    """``mask`` in its canonical orientation (contiguous), and that orientation.
+
+    :func:`skelprune.api.prune_component` works in this frame: the graph, the branch ids
+    and the ``(row, col)`` tie rules of SPEC §2.3–2.4 of a
+    :class:`~skelprune.result.ComponentResult` are in it.
+    """
+    orientation = canonical_orientation(mask)
+    return np.ascontiguousarray(orientation.apply(mask)), orientation

@@ -8,7 +8,7 @@ from typing import Literal
 import numpy as np
 from scipy import ndimage
 
-from ._orientation import Orientation, canonical_orientation
+from ._orientation import oriented
 from .coarse import coarse_dce
 from .dce import (
     DCE_THRESHOLD,
@@ -42,17 +42,6 @@ def components(mask: np.ndarray) -> list[tuple[np.ndarray, tuple[int, int]]]:
         crop = np.pad(labels[sl] == k, 1)
         out.append((crop, (sl[0].start - 1, sl[1].start - 1)))
     return out
-
-
-def oriented(crop: np.ndarray) -> tuple[np.ndarray, Orientation]:
-    """The crop in its canonical orientation, and that orientation.
-
-    The frame in which :func:`prune_component` works, and so in which the graph, the
-    branch ids and the ``(row, col)`` tie rules of SPEC §2.3–2.4 of a
-    :class:`~skelprune.result.ComponentResult` are.
-    """
-    orientation = canonical_orientation(crop)
-    return np.ascontiguousarray(orientation.apply(crop)), orientation
 
 
 def _check_options(beta: float, method: str, coarse: str | None,

@@ -45,7 +45,7 @@ def overlay(variant: Variant, mask: np.ndarray) -> tuple[np.ndarray, int]:
         from .api import prune
 
         res = prune(mask, **variant.kwargs)
-        return res.render_overlay(), sum(c.graph.n_endpoints() for c in res.components)
+        return res.render_overlay(), res.n_endpoints()
     from .eval_baseline import skeletonize_cut
     from .reconstruction import reconstruction
     from .render import COLOURS

@@ -149,7 +149,7 @@ def measure(variant: Variant, mask: np.ndarray, with_ss: bool = False,
         res = prune(mask, **variant.kwargs)
         ms = 1000 * (time.perf_counter() - t)
         comps = res.components
-        endpoints = sum(c.graph.n_endpoints() for c in comps)
+        endpoints = res.n_endpoints()
         area = sum(c.area for c in comps)
         rer = sum(c.rer * c.area for c in comps) / area
         ss = max(comps, key=lambda c: c.area).ss if with_ss else None

@@ -315,13 +315,12 @@ class BranchGraph:
         return np.array(sorted(keep), dtype=np.int64)
 
     # -- mutation -----------------------------------------------------------------
-    def remove_end_branch(self, b: int) -> tuple[int, int, int, list[int]] | None:
+    def remove_end_branch(self, b: int) -> tuple[int, int, int] | None:
         """Remove end branch ``b``.
 
-        Returns ``None``, or, when its junction is dissolved, ``(kept, absorbed, jid,
-        moved)``: branch ``absorbed`` (maybe equal to ``kept`` for a loop) and the
-        junction's pixels now belong to branch ``kept``; ``moved`` lists the points
-        that changed owner.
+        Returns ``None``, or, when its junction ``jid`` is dissolved, ``(kept, absorbed,
+        jid)``: branch ``absorbed`` (maybe equal to ``kept`` for a loop) and the
+        junction's pixels now belong to branch ``kept``.
         """
         if not self.is_end_branch(b):
             raise ValueError(f"branch {b} is not an end branch")
@@ -378,7 +377,7 @@ class BranchGraph:
             path.append(u)
         return path[::-1], na, ndg
 
-    def _dissolve(self, jid: int) -> tuple[int, int, int, list[int]] | None:
+    def _dissolve(self, jid: int) -> tuple[int, int, int] | None:
         """A junction with at most two branch ends becomes ordinary points."""
         junc = self.junctions[jid]
         junc.alive = False
@@ -407,8 +406,9 @@ class BranchGraph:
             self.extra_na += na
             self.extra_nd += nd
             br.node, br.attach, br.loop = [None, None], [-1, -1], True
-            return b1, b1, jid, moved
-        # Keep the branch with more points so that the fewer points change owner.
+            return b1, b1, jid
+        # Keep the branch with more points: the absorbed one is the owner that
+        # Coverage.merge_label moves, at the cost of its disks' area.
         if len(self.branches[b2].points) > len(self.branches[b1].points):
             (b1, e1), (b2, e2) = (b2, e2), (b1, e1)
         k, a = self.branches[b1], self.branches[b2]
@@ -435,4 +435,4 @@ class BranchGraph:
         if far is not None:
             fj = self.junctions[far]
             fj.ends[fj.ends.index((b2, 1 - e2))] = (b1, 1)
-        return b1, b2, jid, list(junc.points) + ap
+        return b1, b2, jid

@@ -31,7 +31,7 @@ from ._digital import (
     neighbourhood_code,
 )
 from ._disk_counts import coverage, disk_loss, disk_remove, drop_redundant_anchors
-from ._orientation import IDENTITY_ORIENTATION, canonical_orientation
+from ._orientation import IDENTITY_ORIENTATION, oriented
 from .errors import InvalidImageError
 
 __all__ = ["DEGREE", "SIMPLE", "MedialAxis", "medial_axis", "oriented_medial_axis",
@@ -378,12 +378,11 @@ def medial_axis(padded: np.ndarray, r2: np.ndarray | None = None) -> MedialAxis:
                                 "background pixel first")
     if r2 is None:
         r2 = squared_distance(padded)
-    o = canonical_orientation(padded)
+    seen, o = oriented(padded)
     if o == IDENTITY_ORIENTATION:
         return oriented_medial_axis(padded, r2)
-    rows, cols = _medial_axis_pixels(np.ascontiguousarray(o.apply(padded)),
-                                     np.ascontiguousarray(o.apply(r2)))
-    rows, cols = o.points_back(rows, cols, padded.shape)
+    rows, cols = _medial_axis_pixels(seen, np.ascontiguousarray(o.apply(r2)))
+    rows, cols = o.points_back(rows, cols, seen.shape)
     order = np.argsort(rows * padded.shape[1] + cols)  # raster order
     rows, cols = rows[order], cols[order]
     return MedialAxis(rows, cols, r2[rows, cols])

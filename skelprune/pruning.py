@@ -223,7 +223,7 @@ def bayesian_sequence(
         merged = graph.remove_end_branch(pick)
         is_end[pick] = False
         if merged is not None:
-            kept, absorbed, jid, _ = merged
+            kept, absorbed, jid = merged
             cov.merge_label(nb + 1 + jid, kept + 1)
             cov.merge_label(absorbed + 1, kept + 1)
             is_end[absorbed] = False

@@ -56,11 +56,7 @@ class ComponentResult:
     def image_coordinates(self, rows: np.ndarray,
                           cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Rows and columns of graph points in the image frame."""
-        o = self.orientation
-        shape = self.graph.shape
-        if o.swap:  # the graph's frame is the transposed crop
-            shape = (shape[1], shape[0])
-        rows, cols = o.points_back(rows, cols, shape)
+        rows, cols = self.orientation.points_back(rows, cols, self.graph.shape)
         return rows + self.origin[0], cols + self.origin[1]
 
     @property
@@ -193,6 +189,10 @@ class PruneResult:
     @property
     def width(self) -> int:
         return int(self.mask.shape[1])
+
+    def n_endpoints(self) -> int:
+        """Endpoints of the pruned skeleton, all components together."""
+        return sum(c.graph.n_endpoints() for c in self.components)
 
     @property
     def height(self) -> int:

@@ -82,7 +82,7 @@ def test_points_back_inverts_apply(swap, flip_rows, flip_cols):
     a = np.arange(35).reshape(5, 7)
     seen = o.apply(a)
     rows, cols = np.nonzero(np.ones(seen.shape, bool))
-    back_r, back_c = o.points_back(rows, cols, a.shape)
+    back_r, back_c = o.points_back(rows, cols, seen.shape)
     np.testing.assert_array_equal(a[back_r, back_c], seen[rows, cols])
 
 

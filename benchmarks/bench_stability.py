@@ -23,6 +23,7 @@ from skelprune.eval_report import (
     rectangle_table,
     stability_markdown,
     targets_table,
+    tolerant_table,
 )
 from skelprune.eval_stability import load_dataset, run_stability
 
@@ -46,6 +47,8 @@ def main(argv: list[str] | None = None) -> None:
     for d in run.datasets:
         print(f"\nendpoint agreement, {d}\n")
         print(agreement_table(run, d))
+        print(f"\nendpoint count within ±1 / ±2 (not a target), {d}\n")
+        print(tolerant_table(run, d))
     print("\nnoisy rectangles\n")
     print(rectangle_table(run))
     print()

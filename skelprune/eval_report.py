@@ -17,6 +17,7 @@ __all__ = [
     "rectangle_table",
     "stability_markdown",
     "targets_table",
+    "tolerant_table",
 ]
 
 
@@ -43,6 +44,21 @@ def agreement_table(run: StabilityRun, dataset: str) -> str:
     rows.append(["**min**", *(pct(min(run.agreement(dataset, v, p)
                                        for p in run.perturbations)) for v in run.variants)])
     return markdown_table(["perturbation", *run.variants], rows)
+
+
+def tolerant_table(run: StabilityRun, dataset: str, within: tuple[int, ...] = (1, 2)) -> str:
+    """Share (%) of shapes whose endpoint count is off by at most 1 / 2, per variant."""
+    def cell(v: str, p: str | None) -> str:
+        def share(k: int) -> float:
+            if p is None:
+                return min(run.agreement(dataset, v, q, k) for q in run.perturbations)
+            return run.agreement(dataset, v, p, k)
+        return " / ".join(pct(share(k)) for k in within)
+
+    rows = [[p, *(cell(v, p) for v in run.variants)] for p in run.perturbations]
+    rows.append(["**min**", *(cell(v, None) for v in run.variants)])
+    head = " / ".join(f"±{k}" for k in within)
+    return markdown_table([f"perturbation ({head})", *run.variants], rows)
 
 
 def rectangle_table(run: StabilityRun) -> str:
@@ -107,6 +123,13 @@ def stability_markdown(run: StabilityRun, command: str) -> str:
     ]
     for d in run.datasets:
         parts += ["", f"### {d}", "", agreement_table(run, d)]
+    parts += ["", "### Off by at most one or two endpoints (not a target)", "",
+              "The same cases read loosely: the share of shapes whose endpoint count after "
+              "the perturbation is within ±1 / ±2 of the clean shape's. Reported so that a "
+              "missed agreement can be told apart from a different skeleton; the target "
+              "above is the exact count."]
+    for d in run.datasets:
+        parts += ["", f"#### {d}", "", tolerant_table(run, d)]
     if run.rects:
         parts += ["", "## Noisy rectangles (the paper's Table 2)", "",
                   "Share of rectangles whose skeleton has 4 endpoints / mean eq. 13 error "

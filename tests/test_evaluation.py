@@ -70,6 +70,11 @@ def test_identity_perturbation_agrees_and_shares_are_fractions() -> None:
         share = run.agreement("kimia216", v, "gaussian-1.5")
         assert 0.0 <= share <= 1.0
         assert run.disagreements("kimia216", v, "rotate-0") == []
+        # the loose reading counts every exact agreement, and exactly the
+        # disagreements that are off by at most one endpoint on top
+        off = [abs(k - k0) for _, k0, k in run.disagreements("kimia216", v, "gaussian-1.5")]
+        loose = run.agreement("kimia216", v, "gaussian-1.5", within=1)
+        assert round(loose * 3) == round(share * 3) + sum(d <= 1 for d in off)
         assert set(run.meets_targets(v)) == {"agreement", "rectangles", "rer"}
     # the clean rectangle: four endpoints and its skeleton on the exact medial axis
     assert run.rect_share4("none", "bayesian") == 1.0

@@ -192,8 +192,8 @@ def last_cover(shape_h: int, shape_w: int, rows, cols, r2s) -> np.ndarray:
     union-find per row skips the painted runs, so the cost is the painted area plus
     the disks' heights.
     """
-    last = np.full((shape_h, shape_w), -1, dtype=np.int64)
-    nxt = np.empty((shape_h, shape_w + 1), dtype=np.int64)
+    last = np.full((shape_h, shape_w), -1, dtype=np.int32)
+    nxt = np.empty((shape_h, shape_w + 1), dtype=np.int32)
     for y in range(shape_h):
         for x in range(shape_w + 1):
             nxt[y, x] = x

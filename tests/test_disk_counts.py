@@ -93,3 +93,20 @@ def test_drop_redundant_anchors_matches_plain_counts(case):
         _drop_plainly(plain, r2, rows, cols)
         assert np.array_equal(fast, plain)
         assert 0 < fast.sum() < anchor.sum()
+
+
+@pytest.mark.parametrize("size", [1, 2, 64, 256])
+def test_domination_table_is_the_containment_threshold(size):
+    """``need[R, v]``: the least r2 whose disk at offset ``v`` holds the disk of radius² R,
+    worked out here from the definition: test every candidate r2 against every pixel."""
+    need = ma._cached_domination_table(size)
+    assert need.shape == (size + 1, len(ma._KINDS))
+    reach = isqrt(size) + 1
+    dy, dx = np.mgrid[-reach:reach + 1, -reach:reach + 1]
+    d2 = dy * dy + dx * dx
+    for big_r in range(1, size + 1):
+        inside = d2 < big_r
+        for j, (a, b) in enumerate(ma._KINDS):
+            far = ((dy - a) ** 2 + (dx - b) ** 2)[inside]
+            least = next(t for t in range(1, 4 * size + 64) if (far < t).all())
+            assert need[big_r, j] == least, (big_r, (a, b))

@@ -11,7 +11,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["DEGREE", "NEIGHBOURS", "SIMPLE", "disk_half_width", "disk_offsets", "isqrt"]
+__all__ = ["DEGREE", "NEIGHBOURS", "SIMPLE", "disk_half_width", "isqrt"]
 
 # Neighbour order used by every lookup table: clockwise from the top-left.
 NEIGHBOURS = np.array(
@@ -85,22 +85,6 @@ def _build_tables() -> tuple[np.ndarray, np.ndarray]:
 
 
 SIMPLE, DEGREE = _build_tables()
-
-
-def disk_offsets(max_r2: int) -> tuple[np.ndarray, np.ndarray]:
-    """Integer offsets sorted by squared length, and the disk size for each ``r2``.
-
-    ``offsets[:count[r2]]`` are exactly the offsets ``o`` with ``|o|**2 < r2``.
-    """
-    r = int(np.ceil(np.sqrt(max(max_r2, 1)))) + 1
-    dy, dx = np.mgrid[-r : r + 1, -r : r + 1]
-    d2 = (dy * dy + dx * dx).ravel()
-    keep = d2 < max(max_r2, 1)
-    d2, dy, dx = d2[keep], dy.ravel()[keep], dx.ravel()[keep]
-    order = np.lexsort((dx, dy, d2))
-    offsets = np.stack([dy[order], dx[order]], axis=1).astype(np.int64)
-    count = np.searchsorted(d2[order], np.arange(max(max_r2, 1) + 1), side="left")
-    return offsets, count.astype(np.int64)
 
 
 @njit(cache=True)

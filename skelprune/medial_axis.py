@@ -94,7 +94,7 @@ def _cached_domination_table(max_r2: int) -> np.ndarray:
 @njit(cache=True)
 def _farthest_points(max_r2: int, kinds: np.ndarray) -> np.ndarray:
     # Bucketed by |o|² instead of sorting the offsets by it: a running maximum over the
-    # buckets is then the maximum over each disk (4 s → 0.1 s for a 4096-px shape).
+    # buckets is then the maximum over each disk (1.4 s → 0.16 s for a 4096-px shape).
     nk = kinds.shape[0]
     need = np.full((max_r2 + 1, nk), -1, dtype=np.int64)  # row L + 1: offsets |o|² = L
     reach = 0

@@ -23,7 +23,6 @@ from skelprune.eval_report import (
     rectangle_table,
     stability_markdown,
     targets_table,
-    tolerant_table,
 )
 from skelprune.eval_stability import load_dataset, run_stability
 
@@ -48,7 +47,7 @@ def main(argv: list[str] | None = None) -> None:
         print(f"\nendpoint agreement, {d}\n")
         print(agreement_table(run, d))
         print(f"\nendpoint count within ±1 / ±2 (not a target), {d}\n")
-        print(tolerant_table(run, d))
+        print(agreement_table(run, d, within=(1, 2)))
     print("\nnoisy rectangles\n")
     print(rectangle_table(run))
     print()

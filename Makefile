@@ -17,12 +17,13 @@ setup: $(STAMP)
 run: $(STAMP)
 	$(BIN)/python -m service
 
-test: $(STAMP)
-	$(BIN)/ruff check skelprune service tests benchmarks
+test: lint
 	$(BIN)/python -m pytest -q
 
+# ruff for the Python, shellcheck for the shell scripts CI runs
 lint: $(STAMP)
 	$(BIN)/ruff check skelprune service tests benchmarks
+	$(BIN)/shellcheck scripts/*.sh .ci/run
 
 bench: $(STAMP)
 	$(BIN)/python -m benchmarks

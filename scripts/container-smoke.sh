@@ -8,7 +8,11 @@
 # mirror) with python3 and python3-venv, imported into the container storage. It is cached
 # under $SKELPRUNE_BASE_CACHE (default /var/tmp/skelprune-base) between runs.
 #
-# Usage: bash scripts/container-smoke.sh [--base-only]
+# Usage: bash scripts/container-smoke.sh [--base-only | --fresh]
+#   --base-only  make (or find) the base image and stop
+#   --fresh      the path of a new machine: ignore the cached base tarball and image, make
+#                the base from nothing in a temporary cache, then build, serve and stop
+#                (about 4 minutes more; run it before a release)
 # Environment:
 #   SKELPRUNE_BASE_CACHE   where the base root filesystem tarball is cached
 #   SKELPRUNE_SMOKE_PNG    the PNG to POST (default: the first of ../shared/data/kimia216)
@@ -26,11 +30,21 @@ CONTAINER=skelprune-smoke-$$
 STORE=(--storage-driver=vfs)
 PODMAN=(podman "${STORE[@]}" --runtime runc --cgroup-manager=cgroupfs)
 BASE_ONLY=0
-[[ ${1:-} == --base-only ]] && BASE_ONLY=1
+FRESH=0
+case ${1:-} in
+    '') ;;
+    --base-only) BASE_ONLY=1 ;;
+    --fresh) FRESH=1 ;;
+    *) printf 'usage: %s [--base-only | --fresh]\n' "$0" >&2; exit 2 ;;
+esac
 
 START=$(date +%s)
 log() { printf '[container-smoke +%ss] %s\n' "$(($(date +%s) - START))" "$*" >&2; }
 die() { log "FAIL: $*"; exit 1; }
+# Any command that stops the script under `set -e` says which one and where: a silent
+# exit 1 after a long step is the failure this guards against. (-E: functions too.)
+set -E
+trap 'rc=$?; log "FAIL: line $LINENO: \`$BASH_COMMAND\` exited $rc"; exit "$rc"' ERR
 
 [[ $(id -u) -eq 0 ]] || die "must run as root (debootstrap, buildah --isolation=chroot)"
 
@@ -68,18 +82,22 @@ debian_mirror() {
 
 # apt's proxy setting, if any, for debootstrap (which honours http_proxy).
 apt_proxy() {
-    apt-config dump 2>/dev/null | sed -nE 's/^Acquire::http::Proxy "(.+)";$/\1/p' | head -n1
+    { apt-config dump 2>/dev/null || true; } \
+        | sed -nE 's/^Acquire::http::Proxy "(.+)";$/\1/p' | head -n1 || true
 }
 
 # --- base image --------------------------------------------------------------------------
 # Remove a (possibly half-made) root filesystem: unmount whatever an interrupted debootstrap
 # left mounted inside it (proc, sys, ...) and never cross into another file system.
 remove_rootfs() {
-    local dir=$1 mnt
+    local dir=$1 mnt mounts
     [[ -e $dir ]] || return 0
-    findmnt -rn -o TARGET 2>/dev/null | grep -F "$dir/" | sort -r | while read -r mnt; do
-        umount -l "$mnt" || true
-    done
+    # No mount below $dir is the normal case: grep then exits 1, which must not count as a
+    # failure (under pipefail it would end the script), so its status is ignored here.
+    mounts=$(findmnt -rn -o TARGET 2>/dev/null | grep -F "$dir/" | sort -r || true)
+    while read -r mnt; do
+        if [[ -n $mnt ]]; then umount -l "$mnt" || true; fi
+    done <<<"$mounts"
     rm -rf --one-file-system "${dir:?}"
 }
 
@@ -142,6 +160,11 @@ pip_setting() {
 }
 
 ensure_tools
+if ((FRESH)); then
+    BASE_CACHE=$(mktemp -d /var/tmp/skelprune-base-fresh.XXXXXX)
+    log "--fresh: removing $BASE_IMAGE, making the base in $BASE_CACHE"
+    "${PODMAN[@]}" rmi -f "$BASE_IMAGE" >/dev/null 2>&1 || true
+fi
 make_base
 if ((BASE_ONLY)); then
     log "base image ready: $BASE_IMAGE"
@@ -163,6 +186,7 @@ cleanup() {
         "${PODMAN[@]}" rmi -f "$IMAGE" >/dev/null 2>&1 || true
     fi
     rm -rf "$WORK"
+    if ((FRESH)); then rm -rf --one-file-system "${BASE_CACHE:?}"; fi
     if ((rc == 0)); then log "OK"; else log "FAILED (exit $rc)"; fi
     exit "$rc"
 }

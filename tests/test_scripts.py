@@ -52,9 +52,7 @@ def test_a_failing_command_says_where_it_stopped(tmp_path: Path) -> None:
     # The script's ERR trap, run as the script sets it up: a silent exit is what it prevents.
     text = SCRIPT.read_text()
     setup = "\n".join(
-        line
-        for line in text.splitlines()
-        if line.startswith(("START=", "log()", "trap 'rc=$?"))
+        line for line in text.splitlines() if line.startswith(("START=", "log()", "trap 'rc=$?"))
     )
     done = _run_strict(setup + "\nfalse\necho unreachable\n")
     assert done.returncode == 1

@@ -24,10 +24,10 @@ import numpy as np
 
 from skelprune import prune
 from skelprune.api import components, oriented
-from skelprune.coarse import coarse_dce
-from skelprune.eval_stability import PERTURBATIONS, _rng, load_dataset
+from skelprune.evaluation.perturb import rescale, rotate
+from skelprune.evaluation.stability import PERTURBATIONS, _rng, load_dataset
 from skelprune.graph import BranchGraph
-from skelprune.perturb import rescale, rotate
+from skelprune.pruning.coarse import coarse_dce
 
 from .common import DATA, table
 

@@ -17,10 +17,10 @@ from skimage.morphology import skeletonize
 
 import skelprune
 from skelprune.api import components
-from skelprune.eval_stability import PERTURBATIONS, _rng
+from skelprune.evaluation.stability import PERTURBATIONS, _rng
 from skelprune.graph import BranchGraph
 from skelprune.medial_axis import medial_axis, squared_distance
-from skelprune.pruning import bayesian_sequence, normalisation
+from skelprune.pruning.bayesian import bayesian_sequence, normalisation
 
 from .common import dataset, table, upscale
 
@@ -57,7 +57,7 @@ def from_medial_axis(m: np.ndarray) -> None:
 
 
 def _sequence_only(crop, naive: bool) -> float:
-    from tests.oracle import naive_sequence
+    from testkit.oracle import naive_sequence
 
     ma = medial_axis(crop, squared_distance(crop))
     g = BranchGraph(ma.rows, ma.cols, crop.shape)

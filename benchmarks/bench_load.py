@@ -43,7 +43,7 @@ import httpx
 import numpy as np
 from PIL import Image
 
-from tests.realserver import running_server, stop
+from testkit.realserver import running_server, stop
 
 from .common import DATA
 

@@ -39,8 +39,8 @@ import numpy as np
 from PIL import Image
 
 import skelprune
-from skelprune.io import read_mask
-from tests.realserver import running_server, stop
+from skelprune.io.png import read_mask
+from testkit.realserver import running_server, stop
 
 from .common import DATA, table, upscale
 

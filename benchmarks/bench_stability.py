@@ -1,10 +1,10 @@
 """Stability benchmark (SPEC §5, issue #3 part 2): which pruning variant keeps its endpoints.
 
-On kimia216 and kimia99, every perturbation of ``skelprune.perturb.PERTURBATIONS``: share
+On kimia216 and kimia99, every perturbation of ``skelprune.evaluation.perturb.PERTURBATIONS``: share
 of shapes whose endpoint count is unchanged, for ``coarse=None``, ``coarse="dce"``,
 ``method="dce"`` and the ``skeletonize`` + branch-cut baseline; the noisy rectangles of
 the paper's Table 2; median RER and ms a shape. The computation lives in
-``skelprune.eval_stability`` (``skelprune eval`` reports the same numbers).
+``skelprune.evaluation.stability`` (``skelprune eval`` reports the same numbers).
 
 ``python -m benchmarks stability`` runs everything (2 worker processes) and rewrites
 ``docs/stability.md``; ``python -m benchmarks.bench_stability --quick`` runs 20 shapes a
@@ -17,14 +17,14 @@ import argparse
 import sys
 from pathlib import Path
 
-from skelprune.eval_report import (
+from skelprune.evaluation.report import (
     agreement_table,
     clean_table,
     rectangle_table,
     stability_markdown,
     targets_table,
 )
-from skelprune.eval_stability import load_dataset, run_stability
+from skelprune.evaluation.stability import load_dataset, run_stability
 
 from .common import DATA
 

@@ -19,6 +19,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
+from service.logs import request_id_var
 from service.pool import (
     JobFailedError,
     JobTimeoutError,
@@ -26,7 +27,6 @@ from service.pool import (
     QueueFullError,
     WorkerCrashedError,
 )
-from service.security import request_id_var
 from skelprune.errors import (
     EmptyMaskError,
     ImageTooLargeError,

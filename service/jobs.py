@@ -14,9 +14,9 @@ from typing import Any, Literal
 import numpy as np
 
 from skelprune.errors import InvalidImageError
-from skelprune.frame import PixelFrame
-from skelprune.io import read_mask
-from skelprune.polygon import polygon_mask
+from skelprune.io.frame import PixelFrame
+from skelprune.io.png import read_mask
+from skelprune.io.polygon import polygon_mask
 
 __all__ = ["Job", "JobResult", "run_job", "warmup"]
 
@@ -35,7 +35,7 @@ class Job:
 
     Exactly one of ``png`` (PNG bytes) and ``geojson`` (a GeoJSON mapping) is set.
     ``prune_options`` go to :func:`skelprune.prune` unchanged; ``raster`` to
-    :func:`skelprune.polygon.polygon_mask`.
+    :func:`skelprune.io.polygon.polygon_mask`.
     """
 
     output: Output
@@ -65,7 +65,7 @@ def warmup() -> None:
     too, so that no job of any option meets a function still to be loaded.
     """
     import skelprune
-    from skelprune.perturb import boundary_noise
+    from skelprune.evaluation.perturb import boundary_noise
 
     mask = np.zeros((32, 44), dtype=bool)
     mask[4:28, 4:40] = True

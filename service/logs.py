@@ -11,13 +11,20 @@ no query string.
 
 from __future__ import annotations
 
+import contextvars
 import datetime as dt
 import json
 import logging
 import traceback
 from typing import Any
 
-__all__ = ["JsonFormatter", "logging_config"]
+#: The current request's ID: set by the request middleware (:mod:`service.security`),
+#: read by problem bodies and log records.
+request_id_var: contextvars.ContextVar[str | None] = contextvars.ContextVar(
+    "skelprune_request_id", default=None
+)
+
+__all__ = ["JsonFormatter", "logging_config", "request_id_var"]
 
 #: Attributes every LogRecord has; anything else on a record came in through ``extra``.
 _STANDARD = set(vars(logging.LogRecord("", 0, "", 0, "", (), None))) | {"message", "asctime"}

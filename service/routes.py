@@ -26,7 +26,7 @@ from service.schemas import (
 )
 from service.settings import Settings
 from skelprune.errors import ImageTooLargeError, InvalidOptionError
-from skelprune.io import png_size
+from skelprune.io.png import png_size
 
 __all__ = ["job_function", "negotiate", "parse_query", "router"]
 

@@ -13,7 +13,6 @@
 from __future__ import annotations
 
 import asyncio
-import contextvars
 import hmac
 import logging
 import re
@@ -22,12 +21,14 @@ import uuid
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from service.errors import problem_response
+from service.logs import request_id_var
+
 __all__ = [
     "OPEN_PATHS",
     "REQUEST_ID_HEADER",
     "ApiKeyMiddleware",
     "RequestContextMiddleware",
-    "request_id_var",
 ]
 
 access_log = logging.getLogger("service.access")
@@ -37,12 +38,6 @@ REQUEST_ID_HEADER = "X-Request-ID"
 #: Paths open without the API key: probes carry no credentials, and say nothing secret.
 OPEN_PATHS = frozenset({"/healthz", "/readyz"})
 _SANE_ID = re.compile(rb"^[A-Za-z0-9._:\-]{1,128}$")
-
-#: The current request's ID (set by RequestContextMiddleware, read by problem bodies).
-request_id_var: contextvars.ContextVar[str | None] = contextvars.ContextVar(
-    "skelprune_request_id", default=None
-)
-
 
 def _header(scope: Scope, name: bytes) -> bytes | None:
     for key, value in scope["headers"]:
@@ -88,7 +83,6 @@ class RequestContextMiddleware:
             # time (SKELPRUNE_SHUTDOWN_TIMEOUT): answer 503 rather than drop the line.
             if started:
                 raise
-            from service.errors import problem_response
 
             response = problem_response(
                 503, "the server shut down before this request finished; retry it",
@@ -105,7 +99,6 @@ class RequestContextMiddleware:
                       type(exc).__name__, exc_info=log.isEnabledFor(logging.DEBUG),
                       extra={"request_id": rid, "reference": ref})
             if not started:
-                from service.errors import problem_response
 
                 response = problem_response(
                     500, f"internal error (reference {ref}); the server log has the details",
@@ -153,7 +146,6 @@ class ApiKeyMiddleware:
         if any(matches):
             await self.app(scope, receive, send)
             return
-        from service.errors import problem_response
 
         challenge = 'Bearer realm="skelprune"'
         if presented:

@@ -19,11 +19,11 @@ from .errors import (
     InvalidPolygonError,
     SkelpruneError,
 )
-from .frame import PixelFrame
 from .graph import BranchGraph
+from .io.frame import PixelFrame
 from .medial_axis import MedialAxis, medial_axis, squared_distance
+from .output.document import ComponentResult, PruneResult
 from .reconstruction import reconstruction, reconstruction_error
-from .result import ComponentResult, PruneResult
 
 __version__ = "0.1.0"
 

@@ -103,7 +103,7 @@ def oriented(mask: np.ndarray) -> tuple[np.ndarray, Orientation]:
 
     :func:`skelprune.api.prune_component` works in this frame: the graph, the branch ids
     and the ``(row, col)`` tie rules of SPEC §2.3–2.4 of a
-    :class:`~skelprune.result.ComponentResult` are in it.
+    :class:`~skelprune.output.document.ComponentResult` are in it.
     """
     orientation = canonical_orientation(mask)
     return np.ascontiguousarray(orientation.apply(mask)), orientation

@@ -9,19 +9,19 @@ import numpy as np
 from scipy import ndimage
 
 from ._orientation import oriented
-from .coarse import coarse_dce
-from .dce import (
+from .errors import EmptyMaskError, InvalidOptionError
+from .graph import BranchGraph
+from .medial_axis import oriented_medial_axis, squared_distance
+from .output.document import ComponentResult, GraphSummary, PruneResult
+from .pruning.bayesian import bayesian_sequence, choose_step, normalisation, remove_unsupported
+from .pruning.coarse import coarse_dce
+from .pruning.dce import (
     DCE_THRESHOLD,
     DCE_VERTICES,
     boundary_partition,
     generated_in_several_segments,
 )
-from .errors import EmptyMaskError, InvalidOptionError
-from .graph import BranchGraph
-from .medial_axis import oriented_medial_axis, squared_distance
-from .pruning import bayesian_sequence, choose_step, normalisation, remove_unsupported
 from .reconstruction import count_covered
-from .result import ComponentResult, GraphSummary, PruneResult
 
 __all__ = ["METHODS", "components", "oriented", "prune"]
 
@@ -148,13 +148,13 @@ def prune(
         Bayesian pruning (the paper) or DCE contour-partition pruning (its ref. [10]).
     coarse : {"dce", None}
         For ``method="bayesian"``: start from a coarse skeleton, pruned by DCE contour
-        partition (:mod:`skelprune.coarse`; the default, as the paper's experiments
+        partition (:mod:`skelprune.pruning.coarse`; the default, as the paper's experiments
         did), or from the full medial axis (``None``). Chosen by the stability
         benchmark: see ``docs/stability-findings.md``. Ignored by ``method="dce"``,
         which is the DCE pruning itself.
     dce_threshold : float, optional
         For ``method="dce"``: the DCE stop threshold on relevance (scale-free: edge
-        lengths over the perimeter); default :data:`skelprune.dce.DCE_THRESHOLD`.
+        lengths over the perimeter); default :data:`skelprune.pruning.dce.DCE_THRESHOLD`.
 
     Returns
     -------

@@ -28,7 +28,7 @@ app = typer.Typer(add_completion=False, no_args_is_help=True,
 def _prune_file(path: str, beta: float, method: str, coarse: str | None,
                 curve: bool) -> dict[str, Any]:
     from .api import prune
-    from .io import read_mask
+    from .io.png import read_mask
 
     try:
         doc = prune(read_mask(path), beta=beta, method=method, coarse=coarse).to_dict(curve=curve)
@@ -58,7 +58,7 @@ def prune_command(
 ) -> None:
     """Prune the skeleton of each shape and print the result as JSON."""
     from .api import prune
-    from .io import read_mask
+    from .io.png import read_mask
 
     coarse = None if coarse in (None, "", "none", "null") else coarse
     inputs = _expand(files)
@@ -107,7 +107,7 @@ def eval_command(
                                             help="Noisy rectangles a noise kind.")] = 10,
 ) -> None:
     """Regenerate the evaluation report and figures (needs the bench extra: matplotlib)."""
-    from .evaluation import run_evaluation
+    from .evaluation.run import run_evaluation
 
     try:
         written = run_evaluation(out, data=data, limit=limit, workers=workers,

@@ -20,13 +20,28 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
+from numba.extending import register_jitable
 from scipy import ndimage
 
 from ._digital import NEIGHBOURS
 
-__all__ = ["SQRT2", "Branch", "BranchGraph"]
+__all__ = ["SQRT2", "Branch", "BranchGraph", "step_length"]
 
 SQRT2 = math.sqrt(2.0)
+
+
+@register_jitable
+def step_length(na, nd):
+    """Length of a digital path of ``na`` axial and ``nd`` diagonal steps (1 and √2).
+
+    The one definition of skeleton length, for Python (scalars or arrays) and compiled
+    code alike; keeping lengths as integer step counts until here makes two
+    implementations that do the same removals agree bit for bit.
+
+    >>> step_length(3, 2)
+    5.82842712474619
+    """
+    return na + nd * SQRT2
 
 
 @njit(cache=True)
@@ -175,7 +190,7 @@ class Branch:
 
     @property
     def length(self) -> float:
-        return self.na + self.nd * SQRT2
+        return step_length(self.na, self.nd)
 
 
 @dataclass
@@ -364,7 +379,7 @@ class BranchGraph:
                 if q < 0 or q not in members:
                     continue
                 step = self._step(u, q)
-                nd = d + step[0] + step[1] * SQRT2
+                nd = d + step_length(*step)
                 if nd < best.get(q, math.inf) - 1e-12:
                     best[q] = nd
                     prev[q] = (u, step)

@@ -1,0 +1,23 @@
+"""Input: PNG masks and GeoJSON polygons to boolean masks, and the pixel frame.
+
+The first stage of the pipeline (input → medial axis → graph → pruning → metrics →
+output). :func:`read_mask` decodes PNG files and arrays (:mod:`.png`),
+:func:`polygon_mask` rasterises GeoJSON polygons (:mod:`.polygon`), and
+:class:`PixelFrame` maps pixel results back to the polygon's coordinates (:mod:`.frame`).
+"""
+
+from .frame import IDENTITY, PixelFrame
+from .png import PNG_SIGNATURE, png_size, read_mask
+from .polygon import DEFAULT_LONGEST_SIDE, parse_geojson, polygon_mask, rasterize
+
+__all__ = [
+    "DEFAULT_LONGEST_SIDE",
+    "IDENTITY",
+    "PNG_SIGNATURE",
+    "PixelFrame",
+    "parse_geojson",
+    "png_size",
+    "polygon_mask",
+    "rasterize",
+    "read_mask",
+]

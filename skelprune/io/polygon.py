@@ -1,0 +1,354 @@
+"""GeoJSON polygons to a raster mask and the frame that maps pixels back.
+
+Accepted input: a ``Polygon`` or ``MultiPolygon`` geometry, a ``Feature`` holding one,
+or a ``FeatureCollection`` of such features (their union is one shape). Holes allowed.
+
+Validation, with the reason in the error:
+
+- every coordinate a finite number, positions of 2 or 3 numbers (a third, the altitude,
+  is ignored);
+- every ring closed (first position equal to the last) with at least 4 positions;
+- at most ``max_vertices`` positions in all;
+- self-intersecting or otherwise invalid geometry is **repaired** with shapely's
+  ``make_valid`` by default (a bow-tie becomes two triangles); ``repair=False`` refuses
+  it instead, with shapely's reason.
+
+Rasterisation: the polygon's bounding box is scaled so that its longer side spans
+``longest_side`` pixels (default 512), or uses the given ``pixel_size``, with a margin
+of ``margin`` background pixels (default 2) on every side. A pixel belongs to the shape
+iff its centre lies inside the polygon or on its boundary (OpenCV fills the interior,
+shapely decides the pixels next to an edge exactly).
+World y grows upwards, so row 0 is the top of the bounding box and the returned
+:class:`~skelprune.io.frame.PixelFrame` has ``flip_y=True``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Mapping
+from typing import Any
+
+import cv2
+import numpy as np
+import shapely
+from shapely.geometry import GeometryCollection, MultiPolygon, Polygon
+
+from skelprune.errors import ImageTooLargeError, InvalidOptionError, InvalidPolygonError
+from skelprune.io.frame import PixelFrame
+
+__all__ = [
+    "DEFAULT_LONGEST_SIDE",
+    "DEFAULT_MARGIN",
+    "parse_geojson",
+    "polygon_mask",
+    "rasterize",
+]
+
+DEFAULT_LONGEST_SIDE = 512
+DEFAULT_MARGIN = 2
+_SHIFT = 8  # fractional bits for cv2.fillPoly: sub-pixel vertex positions
+_MAX_SIDE = 1 << 20  # keeps fixed-point vertex coordinates inside int32
+
+
+def _geometries(obj: Any, where: str) -> Iterator[tuple[str, Mapping[str, Any]]]:
+    if not isinstance(obj, Mapping):
+        raise InvalidPolygonError(f"{where}: expected a GeoJSON object, got {type(obj).__name__}")
+    kind = obj.get("type")
+    if kind in ("Polygon", "MultiPolygon"):
+        yield where, obj
+    elif kind == "Feature":
+        geometry = obj.get("geometry")
+        if geometry is None:
+            raise InvalidPolygonError(f"{where}: Feature has no geometry")
+        yield from _geometries(geometry, f"{where}.geometry")
+    elif kind == "FeatureCollection":
+        features = obj.get("features")
+        if not isinstance(features, list) or not features:
+            raise InvalidPolygonError(f"{where}: FeatureCollection has no features")
+        for i, feature in enumerate(features):
+            if not isinstance(feature, Mapping) or feature.get("type") != "Feature":
+                raise InvalidPolygonError(f"{where}.features[{i}]: not a Feature")
+            yield from _geometries(feature, f"{where}.features[{i}]")
+    else:
+        raise InvalidPolygonError(
+            f"{where}: type {_show(kind)} is not Polygon, MultiPolygon, Feature or "
+            "FeatureCollection"
+        )
+
+
+def _finite(v: int | float) -> bool:
+    """True for a number that converts to a finite float (a huge int overflows)."""
+    try:
+        return math.isfinite(v)
+    except OverflowError:
+        return False
+
+
+def _areas(geom: Any) -> list[Polygon]:
+    """The non-empty polygons of any geometry (collections flattened)."""
+    return [g for g in shapely.get_parts(geom) if isinstance(g, Polygon) and not g.is_empty] + [
+        p for g in shapely.get_parts(geom) if isinstance(g, MultiPolygon | GeometryCollection)
+        for p in _areas(g)]
+
+
+def _bounds(geom: Any) -> tuple[float, float, float, float]:
+    return tuple(shapely.bounds(geom))  # type: ignore[return-value]
+
+
+def _show(v: Any) -> str:
+    """A short repr for error messages (a huge int has no repr past 4300 digits)."""
+    if isinstance(v, int) and not isinstance(v, bool) and not _finite(v):
+        return f"{'-' if v < 0 else ''}<integer of {v.bit_length()} bits>"
+    text = repr(v)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _ring(ring: Any, where: str) -> np.ndarray:
+    if not isinstance(ring, list | tuple):
+        raise InvalidPolygonError(f"{where}: a ring must be an array of positions")
+    if len(ring) < 4:
+        raise InvalidPolygonError(
+            f"{where}: a ring needs at least 4 positions (closed triangle), got {len(ring)}"
+        )
+    out = np.empty((len(ring), 2), dtype=np.float64)
+    for i, pos in enumerate(ring):
+        if not isinstance(pos, list | tuple) or not 2 <= len(pos) <= 3:
+            raise InvalidPolygonError(f"{where}[{i}]: a position must be [x, y] or [x, y, z]")
+        for v in pos:
+            if isinstance(v, bool) or not isinstance(v, int | float) or not _finite(v):
+                raise InvalidPolygonError(
+                    f"{where}[{i}]: coordinate {_show(v)} is not a finite number"
+                )
+        out[i] = pos[0], pos[1]
+    if not np.array_equal(out[0], out[-1]):
+        raise InvalidPolygonError(
+            f"{where}: ring is not closed, first position {out[0].tolist()} "
+            f"differs from last {out[-1].tolist()}"
+        )
+    return out
+
+
+def _count(coords: Any, multi: bool) -> int:
+    """Positions in a (Multi)Polygon's coordinates; malformed parts count as 0 here."""
+    if not isinstance(coords, list | tuple):
+        return 0
+    polys = coords if multi else [coords]
+    return sum(len(r) for p in polys if isinstance(p, list | tuple)
+               for r in p if isinstance(r, list | tuple))
+
+
+def _polygons(coords: Any, where: str, multi: bool) -> Iterator[tuple[str, list[np.ndarray]]]:
+    if not isinstance(coords, list | tuple) or not coords:
+        raise InvalidPolygonError(f"{where}: coordinates must be a non-empty array")
+    if multi:
+        for i, poly in enumerate(coords):
+            yield from _polygons(poly, f"{where}[{i}]", False)
+    else:
+        yield where, [_ring(r, f"{where}[{j}]") for j, r in enumerate(coords)]
+
+
+def parse_geojson(
+    obj: Mapping[str, Any], *, max_vertices: int | None = None, repair: bool = True
+) -> MultiPolygon:
+    """Validate a GeoJSON polygon object and return it as one valid shapely geometry.
+
+    Parameters
+    ----------
+    obj : Mapping
+        ``Polygon``, ``MultiPolygon``, ``Feature`` or ``FeatureCollection``.
+    max_vertices : int, optional
+        Refuse inputs with more positions than this, all rings together.
+    repair : bool
+        Repair invalid geometry (self-intersections, overlapping parts) with
+        ``shapely.make_valid``; if False, refuse it.
+
+    Returns
+    -------
+    shapely.geometry.MultiPolygon
+        The union of all polygons, valid, with non-zero area.
+
+    Raises
+    ------
+    InvalidPolygonError
+        With the reason and the JSON location of the offending part.
+    """
+    geometries = list(_geometries(obj, "$"))
+    if max_vertices is not None:
+        # Counted before any position is looked at, so a huge input is refused cheaply.
+        n_vertices = sum(_count(g.get("coordinates"), g["type"] == "MultiPolygon")
+                         for _, g in geometries)
+        if n_vertices > max_vertices:
+            raise InvalidPolygonError(
+                f"too many vertices: {n_vertices} positions, more than {max_vertices} allowed"
+            )
+    parts: list[tuple[str, Polygon]] = []
+    for where, geometry in geometries:
+        multi = geometry["type"] == "MultiPolygon"
+        for pwhere, rings in _polygons(geometry.get("coordinates"), f"{where}.coordinates", multi):
+            spans = [r.max(axis=0) / 2 - r.min(axis=0) / 2 for r in rings]  # halves: no overflow
+            if not all(np.all(sp < np.finfo(float).max / 2) for sp in spans):
+                # Spans beyond float range: GEOS would overflow on them.
+                raise InvalidPolygonError("coordinates span too large a range to rasterise")
+            poly = Polygon(rings[0], rings[1:])
+            if not poly.is_valid and not repair:
+                reason = shapely.is_valid_reason(poly)
+                raise InvalidPolygonError(f"{pwhere}: invalid polygon: {reason}")
+            parts.append((pwhere, poly))
+    areas: list[Polygon] = []
+    for pwhere, poly in parts:
+        try:
+            fixed = shapely.make_valid(poly)
+        except shapely.errors.GEOSException:
+            # The default ("linework") repair fails on some degenerate rings (e.g. an
+            # exterior collapsed to a point); the "structure" one treats rings as areas.
+            try:
+                fixed = shapely.make_valid(poly, method="structure", keep_collapsed=False)
+            except shapely.errors.GEOSException as exc:
+                raise InvalidPolygonError(
+                    f"{pwhere}: cannot repair the polygon: {exc}") from None
+        # make_valid may also yield lines and points (zero-area slivers), and GEOS refuses
+        # to union mixed dimensions: keep only the areas.
+        areas += _areas(fixed)
+    try:
+        geom = shapely.union_all(areas)
+    except shapely.errors.GEOSException:
+        # Nearly coincident edges can defeat the floating-point overlay; the snap-rounding
+        # one on a grid far below a pixel is robust.
+        extent = max((max(b[2] - b[0], b[3] - b[1]) for b in map(_bounds, areas)), default=0.0)
+        try:
+            geom = shapely.union_all(areas, grid_size=extent * 1e-9 or None)
+        except shapely.errors.GEOSException as exc:
+            raise InvalidPolygonError(f"cannot combine the polygons: {exc}") from None
+    if not geom.is_valid and not repair:  # e.g. two valid polygons overlapping
+        raise InvalidPolygonError(f"invalid geometry: {shapely.is_valid_reason(geom)}")
+    # make_valid may also yield lines and points (zero-area slivers); only areas are shapes.
+    polys = [g for g in shapely.get_parts(geom) if isinstance(g, Polygon) and not g.is_empty]
+    result = MultiPolygon(polys) if polys else MultiPolygon()
+    if result.is_empty or result.area <= 0:
+        raise InvalidPolygonError("polygon has zero area")
+    return result
+
+
+def rasterize(
+    geom: MultiPolygon,
+    *,
+    pixel_size: float | None = None,
+    longest_side: int | None = None,
+    margin: int = DEFAULT_MARGIN,
+    max_pixels: int | None = None,
+) -> tuple[np.ndarray, PixelFrame]:
+    """Fill a polygon into a boolean raster.
+
+    Parameters
+    ----------
+    geom : shapely.geometry.MultiPolygon
+        Valid polygonal geometry, e.g. from :func:`parse_geojson`.
+    pixel_size : float, optional
+        Side of a pixel in the polygon's units. Exclusive with ``longest_side``.
+    longest_side : int, optional
+        Pixels across the longer side of the bounding box (default 512).
+    margin : int
+        Background pixels added on every side.
+    max_pixels : int, optional
+        Refuse a raster larger than this (before allocating it).
+
+    Returns
+    -------
+    mask : numpy.ndarray
+        ``(H, W)`` boolean raster.
+    frame : PixelFrame
+        Maps pixel centres ``(col, row)`` back to polygon coordinates.
+    """
+    if pixel_size is not None and longest_side is not None:
+        raise InvalidOptionError("give pixel_size or longest_side, not both")
+    minx, miny, maxx, maxy = geom.bounds
+    extent = max(maxx - minx, maxy - miny)
+    if not math.isfinite(extent):
+        raise InvalidPolygonError("coordinates span too large a range to rasterise")
+    if pixel_size is None:
+        side = DEFAULT_LONGEST_SIDE if longest_side is None else longest_side
+        if isinstance(side, bool) or not isinstance(side, int) or side < 1:
+            raise InvalidOptionError(f"longest_side must be a positive integer, got {_show(side)}")
+        if side > _MAX_SIDE:
+            raise ImageTooLargeError(
+                f"longest_side {_show(side)} is over the limit of {_MAX_SIDE} pixels"
+            )
+        pixel_size = extent / side
+    elif not (math.isfinite(pixel_size) and pixel_size > 0):
+        raise InvalidOptionError(f"pixel_size must be a positive finite number, got {pixel_size}")
+    cols_f = (maxx - minx) / pixel_size
+    rows_f = (maxy - miny) / pixel_size
+    if not (cols_f <= _MAX_SIDE and rows_f <= _MAX_SIDE):  # also catches inf / nan
+        raise ImageTooLargeError(
+            f"raster of {cols_f:.3g}×{rows_f:.3g} pixels is too large; use a larger pixel_size"
+        )
+    scale = (1 << _SHIFT) / pixel_size if pixel_size > 0 else math.inf
+    if not math.isfinite(scale):
+        raise InvalidPolygonError(
+            f"polygon extent {extent:.3g} or pixel size {pixel_size:.3g} is too small to rasterise"
+        )
+    width = math.ceil(cols_f - 1e-9) + 2 * margin
+    height = math.ceil(rows_f - 1e-9) + 2 * margin
+    if max_pixels is not None and width * height > max_pixels:
+        raise ImageTooLargeError(
+            f"raster of {width}×{height} = {width * height} pixels exceeds the limit of "
+            f"{max_pixels}; use a larger pixel_size or a smaller longest_side"
+        )
+    # Pixel (col,row) covers [col-0.5, col+0.5]; the bbox starts at the margin's edge.
+    frame = PixelFrame(
+        x0=minx + (0.5 - margin) * pixel_size,
+        y0=maxy + (margin - 0.5) * pixel_size,
+        pixel_size=pixel_size,
+        flip_y=True,
+    )
+    canvas = np.zeros((height, width), dtype=np.uint8)
+    band = np.zeros_like(canvas)
+    for poly in geom.geoms:
+        pts = []
+        for ring in (poly.exterior, *poly.interiors):
+            xy = np.asarray(ring.coords)[:, :2]
+            col = (xy[:, 0] - frame.x0) * scale
+            row = (frame.y0 - xy[:, 1]) * scale
+            pts.append(np.round(np.stack([col, row], axis=1)).astype(np.int32))
+        # One call per polygon: even-odd over its rings leaves the holes empty, and
+        # islands inside another polygon's hole survive because nothing is erased.
+        cv2.fillPoly(canvas, pts, 1, lineType=cv2.LINE_8, shift=_SHIFT)
+        cv2.polylines(band, pts, True, 1, thickness=1, lineType=cv2.LINE_8, shift=_SHIFT)
+    # fillPoly counts every pixel its edges touch as inside (up to half a pixel of bias
+    # per side). Re-decide the pixels near an edge exactly: centre inside or on the
+    # boundary. Only the thin band is tested, so this costs little.
+    band = cv2.dilate(band, np.ones((3, 3), np.uint8))
+    rows, cols = np.nonzero(band)
+    shapely.prepare(geom)
+    xs = frame.x0 + cols * pixel_size
+    ys = frame.y0 - rows * pixel_size
+    canvas[rows, cols] = shapely.intersects_xy(geom, xs, ys)
+    return canvas.astype(bool), frame
+
+
+def polygon_mask(
+    obj: Mapping[str, Any],
+    *,
+    pixel_size: float | None = None,
+    longest_side: int | None = None,
+    margin: int = DEFAULT_MARGIN,
+    max_vertices: int | None = None,
+    max_pixels: int | None = None,
+    repair: bool = True,
+) -> tuple[np.ndarray, PixelFrame]:
+    """Validate and rasterise a GeoJSON polygon: :func:`parse_geojson` then :func:`rasterize`.
+
+    Examples
+    --------
+    >>> square = {"type": "Polygon",
+    ...           "coordinates": [[[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]]]}
+    >>> mask, frame = polygon_mask(square, pixel_size=1.0)
+    >>> mask.shape, int(mask.sum()), frame.point(2, 2)
+    ((14, 14), 100, (0.5, 9.5))
+    """
+    geom = parse_geojson(obj, max_vertices=max_vertices, repair=repair)
+    return rasterize(
+        geom, pixel_size=pixel_size, longest_side=longest_side, margin=margin,
+        max_pixels=max_pixels,
+    )
+

@@ -1,0 +1,278 @@
+"""Results of pruning and their serialisation (SPEC §3).
+
+``ComponentResult`` holds arrays (skan's "data" side); ``to_dict`` and
+``to_geojson`` are the reporting side, producing plain JSON types.
+"""
+
+from __future__ import annotations
+
+import base64
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .._orientation import IDENTITY_ORIENTATION, Orientation
+from ..graph import BranchGraph, step_length
+from ..io.frame import IDENTITY, PixelFrame
+from ..pruning.bayesian import PruningSequence
+from .render import encode_png, render_overlay
+
+__all__ = ["ComponentResult", "PruneResult"]
+
+
+@dataclass(frozen=True)
+class GraphSummary:
+    """Size of a skeleton graph, kept for the medial axis once pruning has begun."""
+
+    length: float
+    endpoints: int
+    branches: int
+
+    @classmethod
+    def of(cls, graph: BranchGraph) -> GraphSummary:
+        return cls(step_length(graph.na, graph.nd), graph.n_endpoints(),
+                   sum(1 for b in graph.branches if b.alive))
+
+
+@dataclass
+class ComponentResult:
+    """Pruned skeleton of one 8-connected component.
+
+    Coordinates in ``graph``/``r2`` are in a padded crop seen in its canonical
+    ``orientation`` (see :func:`skelprune.api.oriented`); :meth:`image_coordinates` maps
+    them to the image: back to the crop's own orientation, then ``+ origin`` (row, col).
+    """
+
+    origin: tuple[int, int]
+    area: int
+    r2: np.ndarray
+    medial_axis: GraphSummary
+    graph: BranchGraph
+    sequence: PruningSequence
+    chosen_step: int
+    ma_rer: float
+    orientation: Orientation = IDENTITY_ORIENTATION
+
+    def image_coordinates(self, rows: np.ndarray,
+                          cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Rows and columns of graph points in the image frame."""
+        rows, cols = self.orientation.points_back(rows, cols, self.graph.shape)
+        return rows + self.origin[0], cols + self.origin[1]
+
+    @property
+    def alpha(self) -> float | None:
+        return self.sequence.alpha
+
+    @property
+    def rer(self) -> float:
+        return float(self.sequence.ar[self.chosen_step])
+
+    @property
+    def ss(self) -> float:
+        return float(self.sequence.lr[self.chosen_step])
+
+    @property
+    def objective(self) -> float:
+        return float(self.sequence.objective[self.chosen_step])
+
+    def points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Rows, cols (image frame) and squared radii of the pruned skeleton."""
+        idx = self.graph.alive_points()
+        rows, cols = self.image_coordinates(self.graph.rows[idx], self.graph.cols[idx])
+        return rows, cols, self.r2[idx]
+
+    def skeleton_table(self) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+        """Nodes and branches of the pruned skeleton, in image pixel coordinates
+        (the ``skeleton`` part of the document before any frame is applied)."""
+        g, r2 = self.graph, self.r2
+        rows, cols = self.image_coordinates(g.rows, g.cols)
+        xs = cols.astype(float).tolist()
+        ys = rows.astype(float).tolist()
+        rs = np.sqrt(r2.astype(float)).tolist()
+
+        def xyr(p: int) -> list[float]:
+            return [xs[p], ys[p], rs[p]]
+
+        nodes: list[dict[str, Any]] = []
+        junction_node: dict[int, int] = {}
+        for j, junc in enumerate(g.junctions):
+            if not junc.alive:
+                continue
+            pts = sorted(junc.points, key=lambda p: (-r2[p], g.rows[p], g.cols[p]))
+            x, y, r = xyr(pts[0])
+            junction_node[j] = len(nodes)
+            nodes.append({"id": len(nodes), "x": x, "y": y, "radius": r, "kind": "junction",
+                          "points": [xyr(p) for p in sorted(junc.points)]})
+
+        def new_node(p: int, kind: str) -> int:
+            x, y, r = xyr(p)
+            nodes.append({"id": len(nodes), "x": x, "y": y, "radius": r, "kind": kind,
+                          "points": []})
+            return len(nodes) - 1
+
+        branches: list[dict[str, Any]] = []
+        for br in g.branches:
+            if not br.alive:
+                continue
+            if br.loop:
+                src = dst = new_node(br.points[0], "loop")
+            else:
+                ends = []
+                for e, p in ((0, br.points[0]), (1, br.points[-1])):
+                    if br.node[e] is not None:
+                        ends.append(junction_node[br.node[e]])
+                    elif e == 1 and len(br.points) == 1 and br.node[0] is None:
+                        ends.append(ends[0])  # a single point: one node
+                    else:
+                        ends.append(new_node(p, "endpoint"))
+                src, dst = ends
+            branches.append({"id": len(branches), "source": src, "target": dst,
+                             "length": float(br.length),
+                             "points": [xyr(p) for p in br.points]})
+        return nodes, branches
+
+    def to_dict(self, curve: bool = True, frame: PixelFrame = IDENTITY) -> dict[str, Any]:
+        nodes, branches = self.skeleton_table()
+
+        def mapped(pts: list[list[float]]) -> list[list[float]]:
+            return [[*frame.point(x, y), frame.distance(r)] for x, y, r in pts]
+
+        for n in nodes:
+            n["x"], n["y"] = frame.point(n["x"], n["y"])
+            n["radius"] = frame.distance(n["radius"])
+            n["points"] = mapped(n["points"])
+        for b in branches:
+            b["length"] = frame.distance(b["length"])
+            b["points"] = mapped(b["points"])
+        ma = self.medial_axis
+        seq = self.sequence
+        doc: dict[str, Any] = {
+            "area": self.area,
+            "alpha": None if self.alpha is None else float(self.alpha),
+            "rer": self.rer,
+            "ss": self.ss,
+            "objective": self.objective,
+            "medial_axis": {
+                "rer": float(self.ma_rer),
+                "length": frame.distance(ma.length),
+                "endpoints": ma.endpoints,
+                "branches": ma.branches,
+            },
+            "skeleton": {
+                "length": frame.distance(float(seq.length[self.chosen_step])),
+                "nodes": nodes,
+                "branches": branches,
+                "endpoints": [n["id"] for n in nodes if n["kind"] == "endpoint"],
+            },
+            "chosen_step": self.chosen_step,
+        }
+        if curve:
+            doc["curve"] = [
+                {"step": i, "length": frame.distance(float(L)), "ar": float(a),
+                 "lr": float(lr), "objective": float(o)}
+                for i, (L, a, lr, o) in enumerate(
+                    zip(seq.length, seq.ar, seq.lr, seq.objective, strict=True))
+            ]
+        return doc
+
+
+@dataclass
+class PruneResult:
+    """Result of :func:`skelprune.prune` for a whole image."""
+
+    mask: np.ndarray
+    method: str
+    beta: float
+    coarse: str | None
+    components: list[ComponentResult] = field(default_factory=list)
+
+    @property
+    def width(self) -> int:
+        return int(self.mask.shape[1])
+
+    def n_endpoints(self) -> int:
+        """Endpoints of the pruned skeleton, all components together."""
+        return sum(c.graph.n_endpoints() for c in self.components)
+
+    @property
+    def height(self) -> int:
+        return int(self.mask.shape[0])
+
+    def skeleton_points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Rows, cols and squared radii of all pruned-skeleton points (image frame)."""
+        parts = [c.points() for c in self.components]
+        if not parts:
+            e = np.zeros(0, np.int64)
+            return e, e, e
+        return tuple(np.concatenate(a) for a in zip(*parts, strict=True))  # type: ignore[return-value]
+
+    def to_dict(self, curve: bool = True, overlay: bool = False,
+                frame: PixelFrame = IDENTITY) -> dict[str, Any]:
+        """The output document of SPEC §3 (plain JSON types).
+
+        Examples
+        --------
+        >>> import skelprune
+        >>> m = np.zeros((20, 40), bool); m[5:15, 5:35] = True
+        >>> doc = skelprune.prune(m).to_dict()
+        >>> doc["width"], len(doc["components"][0]["skeleton"]["endpoints"])
+        (40, 4)
+        """
+        doc: dict[str, Any] = {
+            "width": self.width, "height": self.height, "method": self.method,
+            "beta": float(self.beta), "coarse": self.coarse,
+            "components": [c.to_dict(curve=curve, frame=frame) for c in self.components],
+        }
+        if overlay:
+            doc["overlay_png"] = base64.b64encode(self.overlay_png()).decode("ascii")
+        return doc
+
+    def to_geojson(self, frame: PixelFrame = IDENTITY) -> dict[str, Any]:
+        """GeoJSON FeatureCollection: branches as LineStrings, nodes as Points."""
+        features: list[dict[str, Any]] = []
+        for ci, comp in enumerate(self.to_dict(curve=False, frame=frame)["components"]):
+            sk = comp["skeleton"]
+            for br in sk["branches"]:
+                coords = [[p[0], p[1]] for p in br["points"]]
+                if len(coords) == 1:
+                    coords = coords * 2  # a LineString needs two positions
+                features.append({
+                    "type": "Feature",
+                    "geometry": {"type": "LineString", "coordinates": coords},
+                    "properties": {"component": ci, "kind": "branch", "id": br["id"],
+                                   "source": br["source"], "target": br["target"],
+                                   "length": br["length"],
+                                   "radii": [p[2] for p in br["points"]]},
+                })
+            for nd in sk["nodes"]:
+                features.append({
+                    "type": "Feature",
+                    "geometry": {"type": "Point", "coordinates": [nd["x"], nd["y"]]},
+                    "properties": {"component": ci, "kind": nd["kind"], "id": nd["id"],
+                                   "radius": nd["radius"]},
+                })
+        return {"type": "FeatureCollection", "features": features}
+
+    def render_overlay(self) -> np.ndarray:
+        """RGB overlay (:func:`~skelprune.output.render.render_overlay`), the mask's size.
+
+        Examples
+        --------
+        >>> import skelprune
+        >>> m = np.zeros((20, 40), bool); m[5:15, 5:35] = True
+        >>> skelprune.prune(m).render_overlay().shape
+        (20, 40, 3)
+        """
+        rows, cols, r2 = self.skeleton_points()
+        marks: dict[str, list[tuple[int, int]]] = {"endpoint": [], "junction": []}
+        for comp in self.components:
+            for n in comp.skeleton_table()[0]:
+                if n["kind"] in marks:
+                    marks[n["kind"]].append((int(n["y"]), int(n["x"])))
+        return render_overlay(self.mask, rows, cols, r2,
+                              np.array(marks["endpoint"], int).reshape(-1, 2),
+                              np.array(marks["junction"], int).reshape(-1, 2))
+
+    def overlay_png(self) -> bytes:
+        return encode_png(self.render_overlay())

@@ -1,0 +1,293 @@
+"""Bayesian skeleton pruning (SPEC §2.3–2.4, eqs. 7 and 9–11 of the paper).
+
+Starting from the medial axis ``M``, end branches are removed one at a time, each
+time the one whose removal gives the smallest target ``λ = α·AR + LR``; the
+skeleton of the whole sequence with the smallest ``λ`` is the answer.
+
+Each step costs only the owners that change: :class:`~skelprune.reconstruction.Coverage`
+keeps the area each branch alone covers, so the candidates' lost areas are read,
+not recomputed, and a removed or merged branch costs the area of the union of its
+disks. The naive oracle in ``testkit/oracle.py`` recomputes everything from
+scratch and must agree exactly.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+
+from ..graph import SQRT2, BranchGraph, step_length
+from ..reconstruction import Coverage
+
+__all__ = [
+    "Normalisation",
+    "PruningSequence",
+    "bayesian_sequence",
+    "choose_step",
+    "normalisation",
+    "objective",
+    "remove_unsupported",
+]
+
+
+def objective(lost: int, area: int, na: int, nd: int, alpha: float, lbar: float) -> float:
+    """``λ(S) = α·AR(S) + log(Γ(S) + 1)`` with ``Γ = length / ℓ̄`` (eq. 7)."""
+    return alpha * lost / area + math.log(step_length(na, nd) / lbar + 1.0)
+
+
+@dataclass(frozen=True)
+class Normalisation:
+    """Seed point, mean end-path length ``ℓ̄`` and ``α`` of a medial axis."""
+
+    seed: int
+    lbar: float
+    alpha: float | None
+
+
+def normalisation(graph: BranchGraph, r2: np.ndarray, beta: float) -> Normalisation:
+    """Seed ``o`` (largest radius; ties: smallest (row, col)), ``ℓ̄`` and ``α``.
+
+    ``α`` is ``None`` where pruning is undefined: no end branch or ``ℓ̄ = 0``.
+    """
+    rows, cols = graph.rows, graph.cols
+    seed = int(np.lexsort((cols, rows, -r2))[0])
+    ends = sorted({graph.endpoint(b) for b in range(len(graph.branches))
+                   if graph.is_end_branch(b)})
+    if not ends:
+        return Normalisation(seed, 0.0, None)
+    dist = _path_lengths(graph.nbr, seed)
+    lbar = float(np.mean(dist[ends]))
+    length = step_length(graph.na, graph.nd)
+    if not lbar > 0 or not length > 0:
+        return Normalisation(seed, lbar, None)
+    return Normalisation(seed, lbar, beta * math.log(length / lbar))
+
+
+@njit(cache=True)
+def _path_lengths(nbr, seed):
+    """Shortest path lengths along the skeleton from ``seed`` (Dijkstra; steps 1, √2).
+
+    Neighbour slots follow :data:`skelprune.medial_axis.NEIGHBOURS`: even slots are
+    diagonal.
+    """
+    dist = np.full(nbr.shape[0], np.inf)
+    dist[seed] = 0.0
+    heap = [(0.0, seed)]
+    while heap:
+        d, u = heapq.heappop(heap)
+        if d > dist[u]:
+            continue
+        for i in range(8):
+            q = nbr[u, i]
+            if q < 0:
+                continue
+            nd = d + (SQRT2 if i % 2 == 0 else 1.0)
+            if nd < dist[q]:
+                dist[q] = nd
+                heapq.heappush(heap, (nd, q))
+    return dist
+
+
+@dataclass
+class PruningSequence:
+    """The greedy removal sequence of one component.
+
+    ``removed[i]`` is the branch removed at step ``i + 1``; the per-step arrays have
+    one entry per skeleton ``S(0) = M, …, S(n)``.
+    """
+
+    removed: list[int]
+    lost: list[int]
+    na: list[int]
+    nd: list[int]
+    area: int
+    alpha: float | None
+    lbar: float
+    #: Flat indices (into the mask) of the pixels of ``D`` that ``S(0)`` misses; recorded
+    #: only when asked for (``bayesian_sequence(..., uncovered=True)``).
+    uncovered: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+
+    @property
+    def length(self) -> np.ndarray:
+        return step_length(np.asarray(self.na, float), np.asarray(self.nd, float))
+
+    @property
+    def ar(self) -> np.ndarray:
+        return np.asarray(self.lost, float) / self.area
+
+    @property
+    def lr(self) -> np.ndarray:
+        if not self.lbar > 0:
+            return np.zeros(len(self.lost))
+        return np.log(self.length / self.lbar + 1.0)
+
+    @property
+    def objective(self) -> np.ndarray:
+        if self.alpha is None:
+            return self.lr
+        return np.array([objective(lo, self.area, a, d, self.alpha, self.lbar)
+                         for lo, a, d in zip(self.lost, self.na, self.nd, strict=True)])
+
+
+def choose_step(objectives: np.ndarray) -> int:
+    """``argmin λ`` over the sequence; ties go to the later, simpler skeleton."""
+    best = 0
+    for i, v in enumerate(objectives):
+        if v <= objectives[best]:
+            best = i
+    return best
+
+
+def bayesian_sequence(
+    graph: BranchGraph,
+    mask: np.ndarray,
+    r2: np.ndarray,
+    alpha: float | None,
+    lbar: float,
+    order: list[int] | None = None,
+    uncovered: bool = False,
+) -> PruningSequence:
+    """Remove end branches until none is left; record every step.
+
+    Parameters
+    ----------
+    graph : BranchGraph
+        The skeleton to prune, from its current state; modified in place.
+    mask : (H, W) bool array
+        The shape ``D`` in the graph's frame.
+    r2 : (n,) int array
+        Squared radius of each graph point.
+    alpha, lbar : float
+        ``α`` and ``ℓ̄`` of the medial axis. Bayesian order (eqs. 9–11); with
+        ``alpha=None`` (degenerate shapes) nothing is removed.
+    order : list of int, optional
+        Instead of choosing by λ, remove exactly these end branches in this order
+        (e.g. :func:`remove_unsupported` run on a twin graph, for ``method="dce"``),
+        recording every step the same way.
+    uncovered : bool
+        Also record which pixels ``S(0)`` misses (``PruningSequence.uncovered``).
+    """
+    area = int(mask.sum())
+    nb = len(graph.branches)
+    labels = np.zeros(graph.rows.size, np.int64)
+    for b, br in enumerate(graph.branches):
+        if br.alive:
+            labels[br.points] = b + 1
+    for j, junc in enumerate(graph.junctions):
+        if junc.alive:
+            labels[junc.points] = nb + 1 + j
+    alive = graph.alive_points()
+    cov = Coverage(mask, graph.rows[alive], graph.cols[alive], r2[alive], labels[alive],
+                   nb + len(graph.junctions) + 1)
+    seq = PruningSequence([], [cov.lost], [graph.na], [graph.nd], area, alpha, lbar)
+    if uncovered:
+        seq.uncovered = np.flatnonzero(mask & (cov.c == 0))
+    if alpha is None and order is None:
+        return seq
+    # Per-branch arrays, so that one compiled call ranks all candidates of a step.
+    is_end = np.zeros(nb, np.bool_)
+    bna = np.array([br.na for br in graph.branches], np.int64)
+    bnd = np.array([br.nd for br in graph.branches], np.int64)
+    ep = np.zeros((nb, 2), np.int64)
+
+    def mark_end(b: int) -> None:
+        is_end[b] = graph.is_end_branch(b)
+        if is_end[b]:
+            p = graph.endpoint(b)
+            ep[b] = graph.rows[p], graph.cols[p]
+
+    for b in graph.ends:
+        mark_end(b)
+    while graph.ends:
+        if order is None:
+            pick = _pick(is_end, cov.exclusive, bna, bnd, ep, cov.lost, area, graph.na,
+                         graph.nd, alpha, lbar)
+        elif len(seq.removed) < len(order):
+            pick = order[len(seq.removed)]
+        else:
+            break
+        # Coverage works on labels: a branch's points all carry its label, and a merge
+        # moves whole owners (the junction cluster and the absorbed branch).
+        cov.remove_label(pick + 1)
+        merged = graph.remove_end_branch(pick)
+        is_end[pick] = False
+        if merged is not None:
+            kept, absorbed, jid = merged
+            cov.merge_label(nb + 1 + jid, kept + 1)
+            cov.merge_label(absorbed + 1, kept + 1)
+            is_end[absorbed] = False
+            bna[kept], bnd[kept] = graph.branches[kept].na, graph.branches[kept].nd
+            mark_end(kept)
+        seq.removed.append(pick)
+        seq.lost.append(cov.lost)
+        seq.na.append(graph.na)
+        seq.nd.append(graph.nd)
+    return seq
+
+
+def remove_unsupported(graph: BranchGraph,
+                       supported: np.ndarray | Callable[[int], bool],
+                       candidates: list[int] | None = None) -> list[int]:
+    """DCE pruning on the graph alone: remove, smallest endpoint (row, col) first,
+    every end branch none of whose points is supported, until each has one.
+
+    Used as the coarse stage, whose steps are not part of the Bayesian curve, so no
+    reconstruction is kept up to date. A branch's support only changes when it
+    absorbs another, so candidates wait in a heap and only merged branches are
+    looked at again. ``supported`` is a per-point bool array, or a function that tells
+    whether branch ``b`` (as it is now) is supported, for a caller that works the
+    answer out lazily. ``candidates`` restricts the first look to those branches (when
+    the caller knows no other end branch can be unsupported).
+    """
+    if callable(supported):
+        is_supported = supported
+    else:
+        def is_supported(b: int) -> bool:
+            return bool(supported[graph.branches[b].points].any())
+
+    def push(b: int) -> None:
+        if graph.is_end_branch(b) and not is_supported(b):
+            p = graph.endpoint(b)
+            heapq.heappush(heap, (int(graph.rows[p]), int(graph.cols[p]), b, p))
+
+    heap: list[tuple[int, int, int, int]] = []
+    for b in graph.end_branches() if candidates is None else candidates:
+        push(b)
+    removed: list[int] = []
+    while heap:
+        _, _, b, p = heapq.heappop(heap)
+        # stale: removed, absorbed, or grown by a merge since it was pushed
+        if not graph.is_end_branch(b) or graph.endpoint(b) != p or is_supported(b):
+            continue
+        merged = graph.remove_end_branch(b)
+        removed.append(b)
+        if merged is not None:
+            push(merged[0])
+    return removed
+
+
+@njit(cache=True)
+def _pick(is_end, exclusive, bna, bnd, ep, lost, area, na, nd, alpha, lbar):
+    """The end branch to remove: smallest (λ, lost area, length, endpoint row, col).
+
+    λ is computed with exactly the operations of :func:`objective`, so that the
+    choice is bit-identical to the oracle's.
+    """
+    best = -1
+    b_lam = b_len = 0.0
+    b_d = b_r = b_c = 0
+    for b in range(is_end.size):
+        if not is_end[b]:
+            continue
+        d = exclusive[b + 1]
+        lam = alpha * (lost + d) / area + math.log(step_length(na - bna[b], nd - bnd[b])
+                                                   / lbar + 1.0)
+        length = step_length(bna[b], bnd[b])
+        if best < 0 or (lam, d, length, ep[b, 0], ep[b, 1]) < (b_lam, b_d, b_len, b_r, b_c):
+            best, b_lam, b_d, b_len, b_r, b_c = b, lam, d, length, ep[b, 0], ep[b, 1]
+    return best

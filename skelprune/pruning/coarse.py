@@ -1,0 +1,323 @@
+"""The coarse stage of ``prune(coarse="dce")``: DCE contour-partition pruning made robust.
+
+The paper ran its Bayesian pruning from a skeleton first pruned to a coarse level with
+the DCE method of its ref. [10] (paper §7.4, SPEC §2.5). This module is that stage, with
+two additions, both measured in ``docs/stability-findings.md``:
+
+* **The DCE stop follows the boundary's own roughness.** DCE stops when the least
+  relevance ``β·l1·l2/(l1 + l2)`` (lengths in pixels) exceeds a threshold. A bump's
+  relevance is about its height in pixels, so the threshold is a height: 2.5 px for a
+  clean digital boundary, raised in proportion to the measured boundary roughness
+  (:func:`boundary_roughness`) so that noise bumps, whose height grows with the noise,
+  do not become convex DCE vertices that protect noise spurs.
+* **One end branch per convex vertex.** End branches generated only by the two
+  segments that meet at one convex vertex all describe that vertex (a corner, or a
+  tip): only the one that ends nearest to the vertex is kept. Noise near a true corner
+  otherwise leaves a fork of two or three such branches.
+
+Neither rule is a user parameter: both are fixed once, here.
+"""
+
+from __future__ import annotations
+
+from itertools import chain
+
+import numba
+import numpy as np
+
+from ..graph import BranchGraph
+from ._generating import SegmentRaster, rim_labels
+from .bayesian import remove_unsupported
+from .dce import (
+    COARSE_PIXEL_THRESHOLD,
+    BoundaryPartition,
+    boundary_partition,
+)
+
+__all__ = [
+    "ROUGHNESS_FLOOR",
+    "ROUGHNESS_GAIN",
+    "boundary_roughness",
+    "coarse_dce",
+    "coarse_threshold",
+]
+
+#: Roughness (see :func:`boundary_roughness`) of a clean digital boundary: 0.08 median on
+#: kimia216 + kimia99, below this for 94 % of them (the rest, up to 0.23, are shapes with
+#: many small corners); only the excess raises the DCE threshold ...
+ROUGHNESS_FLOOR: float = 0.15
+#: ... by this many pixels of relevance per unit of roughness (boundary noise N(0, 1)
+#: measures about 0.44, so its threshold is about 8.3 px; U(-1, 1) about 0.32, 5.9 px).
+ROUGHNESS_GAIN: float = 20.0
+
+
+def boundary_roughness(mask: np.ndarray) -> float:
+    """Pixels a one-pixel opening and closing change, per boundary pixel.
+
+    A clean digital boundary only loses its corner pixels to a 3×3-cross opening and
+    closing; a boundary with pixel-scale noise loses its spikes and gets its notches
+    filled all along. The ratio is scale-free in the sense that matters here: it counts
+    per boundary pixel, not per shape.
+
+    Parameters
+    ----------
+    mask : (H, W) bool array
+
+    Returns
+    -------
+    float
+        0 for a shape no opening or closing changes; typically 0.01–0.14 for a clean
+        silhouette and 0.3–0.7 under boundary noise of one pixel or more.
+
+    Examples
+    --------
+    >>> m = np.zeros((40, 40), bool); m[5:35, 5:35] = True
+    >>> round(boundary_roughness(m), 3)  # only the 4 corner pixels change
+    0.034
+    >>> from skelprune.evaluation.perturb import boundary_noise
+    >>> boundary_roughness(boundary_noise(m, "gaussian", 1.0, rng=0)) > 0.3
+    True
+    """
+    mask = np.asarray(mask, dtype=bool)
+    m = np.zeros((mask.shape[0] + 4, mask.shape[1] + 4), bool)  # np.pad costs more here
+    m[2:-2, 2:-2] = mask
+    perimeter, changed = _opening_closing_changes(m)
+    return changed / perimeter if perimeter else 0.0
+
+
+@numba.njit(cache=True)
+def _opening_closing_changes(m: np.ndarray) -> tuple[int, int]:
+    """Boundary pixels of ``m``, and pixels a 3×3-cross opening or closing changes.
+
+    ``m`` has two empty rows/columns on each side, so no operation meets the border.
+    Same counts as ``scipy.ndimage`` binary_erosion / binary_opening / binary_closing
+    with the cross (``tests/test_coarse.py`` checks), in two passes and no temporaries
+    beyond the eroded and dilated images.
+    """
+    h, w = m.shape
+    eroded = np.zeros((h, w), np.bool_)
+    dilated = np.zeros((h, w), np.bool_)
+    perimeter = 0
+    for i in range(1, h - 1):
+        for j in range(1, w - 1):
+            around = (m[i - 1, j], m[i + 1, j], m[i, j - 1], m[i, j + 1])
+            if m[i, j]:
+                eroded[i, j] = around[0] and around[1] and around[2] and around[3]
+                perimeter += not eroded[i, j]
+                dilated[i, j] = True
+            else:
+                dilated[i, j] = around[0] or around[1] or around[2] or around[3]
+    changed = 0
+    for i in range(1, h - 1):
+        for j in range(1, w - 1):
+            if m[i, j]:  # removed by the opening: no eroded pixel in its cross
+                changed += not (eroded[i, j] or eroded[i - 1, j] or eroded[i + 1, j]
+                                or eroded[i, j - 1] or eroded[i, j + 1])
+            else:  # added by the closing: its whole cross is dilated
+                changed += (dilated[i, j] and dilated[i - 1, j] and dilated[i + 1, j]
+                            and dilated[i, j - 1] and dilated[i, j + 1])
+    return perimeter, changed
+
+
+def coarse_threshold(mask: np.ndarray) -> float:
+    """DCE stop of the coarse stage, in pixels of relevance, for this shape.
+
+    ``COARSE_PIXEL_THRESHOLD + ROUGHNESS_GAIN·max(0, roughness − ROUGHNESS_FLOOR)``.
+
+    Examples
+    --------
+    >>> m = np.zeros((40, 40), bool); m[5:35, 5:35] = True
+    >>> coarse_threshold(m)
+    2.5
+    """
+    excess = max(0.0, boundary_roughness(mask) - ROUGHNESS_FLOOR)
+    return COARSE_PIXEL_THRESHOLD + ROUGHNESS_GAIN * excess
+
+
+def _convex_vertices(partition: BoundaryPartition) -> tuple[np.ndarray, np.ndarray,
+                                                             np.ndarray]:
+    """Each convex vertex: the segments before and after it, and its position.
+
+    Segment ``j`` of a polygon starts at its ``j``-th convex vertex, so the vertex
+    between segments ``j − 1`` and ``j`` (cyclically) is the start of ``j``. Polygons
+    with fewer than three segments are left out: with two, the pair meets twice.
+    """
+    before, after, positions = [], [], []
+    base = 0
+    for v, convex in zip(partition.vertices, partition.convex, strict=True):
+        cuts = v[convex]
+        n = len(cuts) if len(cuts) >= 2 else 1
+        if n >= 3:
+            before.extend(base + (j - 1) % n for j in range(n))
+            after.extend(range(base, base + n))
+            positions.extend(cuts)
+        base += n
+    return (np.asarray(before, np.int64), np.asarray(after, np.int64),
+            np.asarray(positions, np.float64).reshape(-1, 2))
+
+
+def _flatten(graph: BranchGraph, branches: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """The points of end ``branches``, each from its junction end, and the offsets."""
+    lists = [br.points[::-1] if br.node[0] is None else br.points
+             for br in (graph.branches[b] for b in branches)]
+    offsets = np.zeros(len(lists) + 1, np.int64)
+    np.cumsum(np.fromiter(map(len, lists), np.int64, len(lists)), out=offsets[1:])
+    return np.fromiter(chain.from_iterable(lists), np.int64, int(offsets[-1])), offsets
+
+
+class _EndBranches:
+    """Support and corner claim of end branches, from rims scanned only when needed.
+
+    A branch is *supported* when two or more segments generate one of its points. It
+    *claims* convex vertex ``v`` when its generating segments are exactly the two that
+    meet at ``v``. Both are answered in one compiled pass per batch of branches, which
+    scans a point's disk rim only when the answer still depends on it: from the
+    junction end, where a third segment usually settles both at once, so the large
+    interior disks are mostly never scanned. Only merges change a branch, and a merge
+    changes its point count: that is the cache key.
+    """
+
+    def __init__(self, graph: BranchGraph, r2: np.ndarray, partition: BoundaryPartition,
+                 before: np.ndarray, after: np.ndarray, positions: np.ndarray) -> None:
+        self.graph = graph
+        self.raster = SegmentRaster(partition, np.stack([graph.rows, graph.cols], axis=1), r2)
+        n = graph.rows.size
+        self.known = np.zeros(n, np.bool_)
+        self.supported = np.zeros(n, np.bool_)
+        self.first = np.full(n, -1, np.int64)
+        self.vertex = np.full(n, -1, np.int64)
+        m = partition.n_segments
+        self.vertex_of = np.full((m, m), -2, np.int64)
+        ids = np.arange(len(after))
+        self.vertex_of[before, after] = ids
+        self.vertex_of[after, before] = ids
+        self.before, self.after, self.positions = before, after, positions
+        self.cache: dict[int, tuple[int, bool, int, float]] = {}  # b -> (n, sup, v, d2)
+
+    def update(self, branches: list[int]) -> None:
+        """Bring the cached answers of ``branches`` up to date (one compiled call)."""
+        graph = self.graph
+        stale = [b for b in branches if (hit := self.cache.get(b)) is None
+                 or hit[0] != len(graph.branches[b].points)]
+        if not stale:
+            return
+        flat, offsets = _flatten(graph, stale)
+        sup, claimed = _branch_states(
+            flat, offsets, self.raster.seg_lo, self.raster.seg_hi, self.raster.local,
+            self.raster.r2, self.raster.tolerance, self.known, self.first, self.supported,
+            self.vertex, self.vertex_of, self.before, self.after)
+        for b, ok, v in zip(stale, sup.tolist(), claimed.tolist(), strict=True):
+            d2 = 0.0
+            if v >= 0:
+                p = graph.endpoint(b)
+                dr = graph.rows[p] - self.positions[v, 0]
+                dc = graph.cols[p] - self.positions[v, 1]
+                d2 = float(dr * dr + dc * dc)
+            self.cache[b] = (len(graph.branches[b].points), ok, v, d2)
+
+    def is_supported(self, b: int) -> bool:
+        self.update([b])
+        return self.cache[b][1]
+
+    def unsupported(self, branches: list[int]) -> list[int]:
+        self.update(branches)
+        return [b for b in branches if not self.cache[b][1]]
+
+    def surplus(self) -> list[int]:
+        """Every claimant but the one ending nearest its vertex (ties: lower id)."""
+        ends = self.graph.end_branches()
+        self.update(ends)
+        by_vertex: dict[int, list[tuple[float, int]]] = {}
+        for b in ends:
+            _, _, v, d2 = self.cache[b]
+            if v >= 0:
+                by_vertex.setdefault(v, []).append((d2, b))
+        return [b for c in by_vertex.values() if len(c) > 1 for _, b in sorted(c)[1:]]
+
+
+@numba.njit(cache=True)
+def _branch_states(flat: np.ndarray, offsets: np.ndarray, seg_lo: np.ndarray,
+                   seg_hi: np.ndarray, local: np.ndarray, r2: np.ndarray, tolerance: float,
+                   known: np.ndarray, first: np.ndarray, supported: np.ndarray,
+                   vertex: np.ndarray, vertex_of: np.ndarray, before: np.ndarray,
+                   after: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per branch (points ``flat[offsets[k]:offsets[k + 1]]``): supported, claimed vertex.
+
+    Scans (and records in ``known``/``first``/``supported``/``vertex``) each point
+    not scanned yet, until both answers are settled: a supported point and a point
+    that rules out every claim (three segments, or two that meet at no convex vertex
+    or at another vertex than the branch's).
+    """
+    nb = offsets.size - 1
+    sup = np.zeros(nb, np.bool_)
+    claimed = np.full(nb, -1, np.int64)
+    labels = np.empty(3, np.int64)
+    for k in range(nb):
+        v = -1
+        can_claim = True
+        for t in range(offsets[k], offsets[k + 1]):
+            p = flat[t]
+            if not known[p]:
+                labels[:] = -1
+                rim_labels(seg_lo, seg_hi, local[p, 0], local[p, 1], r2[p], tolerance,
+                           labels)
+                known[p] = True
+                first[p] = labels[0]
+                supported[p] = labels[1] != -1
+                if labels[2] != -1:
+                    vertex[p] = -2
+                elif labels[1] != -1:
+                    vertex[p] = vertex_of[labels[0], labels[1]]
+            sup[k] |= supported[p]
+            if vertex[p] == -2 or (v >= 0 and vertex[p] >= 0 and vertex[p] != v):
+                can_claim = False
+            elif vertex[p] >= 0:
+                v = vertex[p]
+            if sup[k] and not can_claim:
+                break
+        if not can_claim or v < 0:
+            continue
+        # every point was scanned: those of one segment must lie on one of v's two
+        for t in range(offsets[k], offsets[k + 1]):
+            p = flat[t]
+            if vertex[p] == -1 and first[p] >= 0 and first[p] != before[v] \
+                    and first[p] != after[v]:
+                v = -1
+                break
+        claimed[k] = v
+    return sup, claimed
+
+
+def coarse_dce(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> list[int]:
+    """Prune ``graph`` (the medial axis of ``mask``) to the coarse level, in place.
+
+    End branches none of whose points two DCE segments generate are removed
+    (:func:`~skelprune.pruning.bayesian.remove_unsupported`), then surplus branches at one
+    convex vertex (see the module docstring), repeating until neither rule applies.
+    Whole end branches only: the topology of the skeleton never changes.
+
+    Parameters
+    ----------
+    graph : BranchGraph
+        The medial axis; modified in place.
+    mask : (H, W) bool array
+        The shape, in the frame of ``graph``'s coordinates.
+    r2 : (n,) int array
+        Squared radius of each point of ``graph``.
+
+    Returns
+    -------
+    list of int
+        The removed branch ids, in order (replayable on a fresh graph).
+    """
+    partition = boundary_partition(mask, pixel_threshold=coarse_threshold(mask))
+    ends = _EndBranches(graph, r2, partition, *_convex_vertices(partition))
+    removed = remove_unsupported(graph, ends.is_supported,
+                                 candidates=ends.unsupported(graph.end_branches()))
+    while surplus := ends.surplus():
+        # one at a time: a removal can merge branches and change other claims
+        merged = graph.remove_end_branch(surplus[0])
+        removed.append(surplus[0])
+        if merged is not None:  # only the merged branch can have lost its support
+            removed += remove_unsupported(graph, ends.is_supported, candidates=[merged[0]])
+    return removed

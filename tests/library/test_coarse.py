@@ -1,0 +1,222 @@
+"""The coarse stage of ``prune(coarse="dce")``: roughness-raised DCE stop, one branch per
+convex vertex (``skelprune/pruning/coarse.py``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skelprune.api import components
+from skelprune.evaluation.perturb import boundary_noise, noisy_rectangle
+from skelprune.graph import BranchGraph
+from skelprune.medial_axis import medial_axis, squared_distance
+from skelprune.pruning.bayesian import remove_unsupported
+from skelprune.pruning.coarse import (
+    ROUGHNESS_FLOOR,
+    boundary_roughness,
+    coarse_dce,
+    coarse_threshold,
+)
+from skelprune.pruning.dce import (
+    COARSE_PIXEL_THRESHOLD,
+    boundary_partition,
+    generated_in_several_segments,
+    generating_segments,
+)
+from testkit.shapes import dataset, load
+
+SHAPES = dataset("kimia216")[::6] + dataset("kimia99")[::6]
+
+
+def _axis(mask: np.ndarray):
+    crop, _ = max(components(mask), key=lambda c: int(c[0].sum()))
+    return crop, medial_axis(crop, squared_distance(crop))
+
+
+def test_clean_silhouettes_keep_about_the_base_threshold():
+    """Most clean shapes stay under the floor; the roughest (a fork's tines, an
+    aircraft's many corners) get at most a pixel or two more."""
+    rough = np.array([boundary_roughness(load(p)) for p in SHAPES])
+    assert np.median(rough) < ROUGHNESS_FLOOR / 1.5
+    assert np.mean(rough < ROUGHNESS_FLOOR) >= 0.85
+    assert max(coarse_threshold(load(p)) for p in SHAPES) <= COARSE_PIXEL_THRESHOLD + 2.0
+
+
+@pytest.mark.parametrize("kind,scale", [("gaussian", 1.0), ("gaussian", 1.5), ("uniform", 1.0)])
+def test_boundary_noise_raises_roughness_and_threshold(kind, scale):
+    clean = [load(p) for p in SHAPES[::4]]
+    noisy = [boundary_noise(m, kind, scale, rng=k, margin=2) for k, m in enumerate(clean)]
+    for c, n in zip(clean, noisy, strict=True):
+        assert boundary_roughness(n) > max(boundary_roughness(c), ROUGHNESS_FLOOR)
+        assert coarse_threshold(n) > coarse_threshold(c)
+    assert np.median([coarse_threshold(n) for n in noisy]) > 2 * COARSE_PIXEL_THRESHOLD
+
+
+def test_roughness_of_degenerate_masks():
+    assert boundary_roughness(np.zeros((5, 5), bool)) == 0.0
+    one = np.zeros((5, 5), bool)
+    one[2, 2] = True
+    assert boundary_roughness(one) == 1.0  # the opening removes the single pixel
+
+
+def test_generating_segments_agrees_with_the_support_test():
+    crop, ma = _axis(load(SHAPES[3], factor=2))
+    part = boundary_partition(crop, pixel_threshold=COARSE_PIXEL_THRESHOLD)
+    pts = np.stack([ma.rows, ma.cols], axis=1)
+    labels = generating_segments(pts, ma.r2, part)
+    assert labels.shape == (len(pts), 3)
+    np.testing.assert_array_equal(labels[:, 1] != -1,
+                                  generated_in_several_segments(pts, ma.r2, part))
+    assert ((labels >= -1) & (labels < part.n_segments)).all()
+    assert (labels[:, 0] >= 0).all()  # every disk touches the boundary somewhere
+    # ids are distinct within a row
+    for a, b in ((0, 1), (0, 2), (1, 2)):
+        both = (labels[:, a] >= 0) & (labels[:, b] >= 0)
+        assert (labels[both, a] != labels[both, b]).all()
+
+
+@pytest.mark.parametrize("kind,scale", [("gaussian", 1.0), ("gaussian", 1.5), ("uniform", 1.5)])
+@pytest.mark.parametrize("seed", range(3))
+def test_noisy_rectangle_gets_one_branch_per_corner(kind, scale, seed):
+    """The paper's Table 2 setting: 4 endpoints, one at each corner, after both stages."""
+    import skelprune
+
+    mask, _ = noisy_rectangle(60, 160, kind, scale, rng=seed)
+    comp = skelprune.prune(mask, coarse="dce").components[0]
+    ends = comp.to_dict()["skeleton"]["endpoints"]
+    assert len(ends) == 4
+    h, w = mask.shape
+    corners = {(n["y"] > h / 2, n["x"] > w / 2) for n in comp.to_dict()["skeleton"]["nodes"]
+               if n["id"] in ends}
+    assert len(corners) == 4
+
+
+def test_the_corner_rule_is_what_removes_forks():
+    """Support alone leaves forks at the corners of these rectangles; the rule removes them."""
+    forked = 0
+    for seed in range(5):
+        mask, _ = noisy_rectangle(60, 160, "gaussian", 1.5, rng=seed)
+        crop, ma = _axis(mask)
+        part = boundary_partition(crop, pixel_threshold=coarse_threshold(crop))
+        support_only = BranchGraph(ma.rows, ma.cols, crop.shape)
+        labels = generating_segments(np.stack([ma.rows, ma.cols], axis=1), ma.r2, part)
+        remove_unsupported(support_only, labels[:, 1] != -1)
+        full = BranchGraph(ma.rows, ma.cols, crop.shape)
+        coarse_dce(full, crop, ma.r2)
+        assert full.n_endpoints() <= support_only.n_endpoints()
+        forked += support_only.n_endpoints() > full.n_endpoints()
+    assert forked >= 3
+
+
+@pytest.mark.parametrize("path", SHAPES[::3], ids=lambda p: p.stem)
+def test_coarse_removals_replay_and_keep_topology(path):
+    mask = boundary_noise(load(path), "gaussian", 1.0, rng=1, margin=2)
+    crop, ma = _axis(mask)
+    graph = BranchGraph(ma.rows, ma.cols, crop.shape)
+    before_ends = graph.n_endpoints()
+    removed = coarse_dce(graph, crop, ma.r2)
+    assert removed and graph.n_endpoints() < before_ends
+    replay = BranchGraph(ma.rows, ma.cols, crop.shape)
+    for b in removed:
+        replay.remove_end_branch(b)
+    np.testing.assert_array_equal(np.sort(graph.alive_points()), np.sort(replay.alive_points()))
+    # a tree stays one tree: points alive form one 8-connected component
+    from scipy import ndimage
+
+    img = np.zeros(crop.shape, bool)
+    alive = graph.alive_points()
+    img[graph.rows[alive], graph.cols[alive]] = True
+    assert ndimage.label(img, np.ones((3, 3), bool))[1] == 1
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_roughness_counts_equal_scipy_morphology(seed):
+    from scipy import ndimage
+
+    rng = np.random.default_rng(seed)
+    if seed < 3:
+        mask = boundary_noise(load(SHAPES[seed * 7]), "uniform", 1.5, rng=seed, margin=2)
+    else:
+        mask = ndimage.binary_opening(rng.random((40, 50)) < 0.6) | (rng.random((40, 50)) < 0.05)
+    cross = ndimage.generate_binary_structure(2, 1)
+    m = np.pad(mask, 2)
+    perimeter = np.count_nonzero(m & ~ndimage.binary_erosion(m, cross))
+    changed = (np.count_nonzero(m & ~ndimage.binary_opening(m, cross))
+               + np.count_nonzero(ndimage.binary_closing(m, cross) & ~m))
+    assert boundary_roughness(mask) == pytest.approx(changed / perimeter, abs=0)
+
+
+def reference_coarse(graph: BranchGraph, crop: np.ndarray, r2: np.ndarray) -> list[int]:
+    """The coarse stage as the module docstring states it, with every rim scanned up front.
+
+    The library scans rims lazily and settles several branches per compiled call; this
+    reads the generating segments of every point of ``M`` and applies the two rules
+    branch by branch.
+    """
+    from skelprune.pruning.coarse import _convex_vertices
+
+    part = boundary_partition(crop, pixel_threshold=coarse_threshold(crop))
+    labels = generating_segments(np.stack([graph.rows, graph.cols], axis=1), r2, part)
+    supported = labels[:, 1] != -1
+    before, after, positions = _convex_vertices(part)
+    meet = {}
+    for v, (a, b) in enumerate(zip(before.tolist(), after.tolist(), strict=True)):
+        meet[(a, b)] = meet[(b, a)] = v
+
+    def claim(b: int) -> int:
+        """The convex vertex whose two segments are all that generate branch ``b``."""
+        segs = set()
+        for p in graph.branches[b].points:
+            segs.update(s for s in labels[p].tolist() if s >= 0)
+            if labels[p, 2] != -1:
+                return -1
+        vertices = {meet.get((int(labels[p, 0]), int(labels[p, 1])), -2)
+                    for p in graph.branches[b].points if labels[p, 1] != -1}
+        if len(vertices) != 1 or -2 in vertices:
+            return -1
+        v = vertices.pop()
+        return v if segs <= {int(before[v]), int(after[v])} else -1
+
+    removed = remove_unsupported(graph, supported)
+    while True:
+        by_vertex: dict[int, list[tuple[float, int]]] = {}
+        for b in graph.end_branches():
+            v = claim(b)
+            if v >= 0:
+                p = graph.endpoint(b)
+                d2 = float((graph.rows[p] - positions[v, 0]) ** 2
+                           + (graph.cols[p] - positions[v, 1]) ** 2)
+                by_vertex.setdefault(v, []).append((d2, b))
+        surplus = [b for c in by_vertex.values() if len(c) > 1 for _, b in sorted(c)[1:]]
+        if not surplus:
+            return removed
+        merged = graph.remove_end_branch(surplus[0])
+        removed.append(surplus[0])
+        if merged is not None:
+            removed += remove_unsupported(graph, supported, candidates=[merged[0]])
+
+
+def _coarse_cases():
+    from testkit.shapes import blobs, rectangle_with_holes, two_components
+
+    out = [("rect-holes", rectangle_with_holes()), ("two", two_components()),
+           ("blobs", blobs(4, size=72, n=5, holes=2))]
+    for k, path in enumerate(SHAPES[::2]):
+        m = load(path)
+        out.append((path.stem, m))
+        out.append((path.stem + "-noisy", boundary_noise(m, "gaussian", 1.0, rng=k, margin=2)))
+    for seed in range(3):
+        out.append((f"rect-{seed}", noisy_rectangle(60, 160, "uniform", 1.5, rng=seed)[0]))
+    return out
+
+
+@pytest.mark.parametrize(("name", "mask"), _coarse_cases(), ids=lambda x: x
+                         if isinstance(x, str) else "")
+def test_lazy_coarse_stage_equals_the_eager_reference(name, mask):
+    for crop, _ in components(mask):
+        ma = medial_axis(crop, squared_distance(crop))
+        fast = BranchGraph(ma.rows, ma.cols, crop.shape)
+        if not fast.ends:
+            continue
+        slow = BranchGraph(ma.rows, ma.cols, crop.shape)
+        assert coarse_dce(fast, crop, ma.r2) == reference_coarse(slow, crop, ma.r2)

@@ -1,0 +1,111 @@
+"""Disk-count kernels (skelprune._disk_counts) and the redundant-anchor pass against plain
+per-pixel counts."""
+
+from __future__ import annotations
+
+import importlib
+
+import numpy as np
+import pytest
+
+from skelprune._digital import disk_half_width, isqrt
+from skelprune._disk_counts import (
+    coverage,
+    disk_loss,
+    disk_remove,
+    drop_redundant_anchors,
+    last_cover,
+    true_counts,
+)
+from skelprune.api import components
+from skelprune.evaluation.perturb import boundary_noise
+from testkit.shapes import blobs, dataset, load
+
+ma = importlib.import_module("skelprune.medial_axis")
+
+
+def _disk(shape: tuple[int, int], r: int, c: int, v: int) -> np.ndarray:
+    out = np.zeros(shape, bool)
+    for dy in range(-isqrt(v - 1), isqrt(v - 1) + 1):
+        w = disk_half_width(v, dy)
+        out[r + dy, c - w : c + w + 1] = True
+    return out
+
+
+def _random_disks(seed: int, h: int = 70, w: int = 83, n: int = 60):
+    rng = np.random.default_rng(seed)
+    r2s = rng.integers(1, 200, n).astype(np.int64)
+    rad = np.array([isqrt(v - 1) for v in r2s])
+    rows = np.array([rng.integers(1 + a, h - 1 - a) for a in rad], dtype=np.int64)
+    cols = np.array([rng.integers(1 + a, w - 1 - a) for a in rad], dtype=np.int64)
+    return rng, rows, cols, r2s, [_disk((h, w), rows[k], cols[k], r2s[k]) for k in range(n)]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_block_counts_match_plain_counts(seed):
+    rng, rows, cols, r2s, disks = _random_disks(seed)
+    h, w = disks[0].shape
+    plain = np.sum(disks, axis=0)
+    cov = coverage(h, w, rows, cols, r2s)
+    assert np.array_equal(true_counts(cov[0], cov[3])[:, :w], plain)
+    for k in rng.permutation(len(disks)):
+        d = disks[k]
+        assert disk_loss(*cov, rows[k], cols[k], r2s[k]) == int((plain[d] == 1).sum())
+        if rng.random() < 0.7:
+            disk_remove(*cov, rows[k], cols[k], r2s[k])
+            plain -= d
+            assert np.array_equal(true_counts(cov[0], cov[3])[:, :w], plain)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_last_cover_is_the_largest_covering_index(seed):
+    _, rows, cols, r2s, disks = _random_disks(seed)
+    expected = np.full(disks[0].shape, -1)
+    for k, d in enumerate(disks):
+        expected[d] = k
+    assert np.array_equal(last_cover(*disks[0].shape, rows, cols, r2s), expected)
+
+
+def _drop_plainly(anchor, r2, rows, cols) -> None:
+    """The pass as specified: drop a disk every pixel of which has two live covers."""
+    disks = [_disk(anchor.shape, r, c, r2[r, c]) for r, c in zip(rows, cols, strict=True)]
+    cover = np.sum(disks, axis=0)
+    for (r, c), d in zip(zip(rows, cols, strict=True), disks, strict=True):
+        if (cover[d] >= 2).all():
+            anchor[r, c] = False
+            cover -= d
+
+
+@pytest.mark.parametrize("case", range(6))
+def test_drop_redundant_anchors_matches_plain_counts(case):
+    masks = dataset("kimia216")
+    mask = (load(masks[case * 30]) if case < 3 else
+            boundary_noise(blobs(case, size=56, n=5), "gaussian", 1.0, rng=case, margin=2))
+    for crop, _ in components(mask):
+        r2 = ma.squared_distance(crop)
+        anchor = ma._anchors(r2, ma._domination_table(r2[r2 > 0]), ma.VECTORS, ma.VECTOR_KIND)
+        ar, ac = np.nonzero(anchor)
+        order = np.lexsort((ac, ar, r2[ar, ac]))
+        rows, cols = ar[order].astype(np.int64), ac[order].astype(np.int64)
+        fast, plain = anchor.copy(), anchor.copy()
+        drop_redundant_anchors(fast, r2, rows, cols)
+        _drop_plainly(plain, r2, rows, cols)
+        assert np.array_equal(fast, plain)
+        assert 0 < fast.sum() < anchor.sum()
+
+
+@pytest.mark.parametrize("size", [1, 2, 64, 256])
+def test_domination_table_is_the_containment_threshold(size):
+    """``need[R, v]``: the least r2 whose disk at offset ``v`` holds the disk of radius² R,
+    worked out here from the definition: test every candidate r2 against every pixel."""
+    need = ma._cached_domination_table(size)
+    assert need.shape == (size + 1, len(ma._KINDS))
+    reach = isqrt(size) + 1
+    dy, dx = np.mgrid[-reach:reach + 1, -reach:reach + 1]
+    d2 = dy * dy + dx * dx
+    for big_r in range(1, size + 1):
+        inside = d2 < big_r
+        for j, (a, b) in enumerate(ma._KINDS):
+            far = ((dy - a) ** 2 + (dx - b) ** 2)[inside]
+            least = next(t for t in range(1, 4 * size + 64) if (far < t).all())
+            assert need[big_r, j] == least, (big_r, (a, b))

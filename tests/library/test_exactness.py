@@ -1,0 +1,130 @@
+"""The fast pruning equals the naive from-scratch oracle (SPEC §2.4 "Exactness")."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skelprune.api import components
+from skelprune.graph import BranchGraph
+from skelprune.medial_axis import medial_axis, squared_distance
+from skelprune.pruning.bayesian import bayesian_sequence, normalisation
+from testkit.oracle import naive_sequence
+from testkit.shapes import (
+    blobs,
+    dataset,
+    load,
+    rectangle_with_holes,
+    touching_border,
+    two_components,
+)
+
+K216 = dataset("kimia216")
+K99 = dataset("kimia99")
+
+CASES = (
+    [pytest.param(("k216", i), id=f"kimia216-{K216[i].stem}") for i in range(0, 204, 17)]
+    + [pytest.param(("k99", i), id=f"kimia99-{K99[i].stem}") for i in range(0, 99, 11)]
+    + [pytest.param(("blobs", s), id=f"blobs-{s}") for s in range(4)]
+    + [pytest.param(("holes", s), id=f"blobs-holes-{s}") for s in range(4)]
+    + [pytest.param(("rect-holes", 0), id="rectangle-two-holes"),
+       pytest.param(("border", 0), id="touching-border"),
+       pytest.param(("two", 0), id="two-components")]
+)
+
+
+def make(case: tuple[str, int]) -> np.ndarray:
+    kind, i = case
+    if kind == "k216":
+        return load(K216[i], factor=2)
+    if kind == "k99":
+        return load(K99[i], factor=2)
+    if kind == "blobs":
+        return blobs(100 + i, size=56, n=5)
+    if kind == "holes":
+        return blobs(200 + i, size=56, n=4, holes=2)
+    return {"rect-holes": rectangle_with_holes, "border": touching_border,
+            "two": two_components}[kind]()
+
+
+def test_at_least_thirty_shapes():
+    assert len(CASES) >= 30
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_fast_equals_naive(case):
+    mask = make(case)
+    crops = components(mask)
+    assert crops
+    steps = 0
+    for crop, _ in crops:
+        ma = medial_axis(crop, squared_distance(crop))
+        fast_graph = BranchGraph(ma.rows, ma.cols, crop.shape)
+        norm = normalisation(fast_graph, ma.r2, 9.0)
+        if norm.alpha is None:
+            continue
+        fast = bayesian_sequence(fast_graph, crop, ma.r2, norm.alpha, norm.lbar)
+        removed, lams = naive_sequence(BranchGraph(ma.rows, ma.cols, crop.shape), crop, ma.r2,
+                                       norm.alpha, norm.lbar)
+        assert fast.removed == removed
+        np.testing.assert_allclose(fast.objective, lams, rtol=0, atol=1e-9)
+        steps += len(removed)
+    assert steps > 0  # the case really exercised pruning
+
+
+NOISY = [pytest.param(("k216", i, s), id=f"noisy-kimia216-{K216[i].stem}-{s}")
+         for i, s in ((5, 1.0), (60, 1.5), (150, 1.0))]
+
+
+def make_noisy(case: tuple[str, int, float]) -> np.ndarray:
+    from skelprune.evaluation.perturb import boundary_noise
+
+    _, i, scale = case
+    return boundary_noise(load(K216[i], factor=2), "gaussian", scale, rng=i, margin=2)
+
+
+@pytest.mark.parametrize("case", CASES[::3] + NOISY)
+def test_fast_equals_naive_from_the_coarse_dce_skeleton(case):
+    """``coarse="dce"``: the Bayesian stage, started from the coarse skeleton.
+
+    The noisy shapes make the coarse stage's roughness-raised threshold and its
+    one-branch-per-convex-vertex rule act.
+    """
+    from skelprune.pruning.coarse import coarse_dce
+
+    mask = make_noisy(case) if len(case) == 3 else make(case)
+    steps = 0
+    for crop, _ in components(mask):
+        ma = medial_axis(crop, squared_distance(crop))
+        graphs = [BranchGraph(ma.rows, ma.cols, crop.shape) for _ in range(2)]
+        norm = normalisation(graphs[0], ma.r2, 9.0)
+        if norm.alpha is None:
+            continue
+        coarse = coarse_dce(graphs[0], crop, ma.r2)
+        for b in coarse:
+            graphs[1].remove_end_branch(b)
+        norm = normalisation(graphs[0], ma.r2, 9.0)
+        if norm.alpha is None:
+            continue
+        fast = bayesian_sequence(graphs[0], crop, ma.r2, norm.alpha, norm.lbar)
+        removed, lams = naive_sequence(graphs[1], crop, ma.r2, norm.alpha, norm.lbar)
+        assert fast.removed == removed
+        np.testing.assert_allclose(fast.objective, lams, rtol=0, atol=1e-9)
+        steps += len(removed) + len(coarse)
+    assert steps > 0
+
+
+@pytest.mark.parametrize("kw", [{"coarse": "dce"}, {"method": "dce"}])
+@pytest.mark.parametrize("case", CASES[1::4])
+def test_dce_pruning_never_changes_topology(case, kw):
+    from skimage.measure import euler_number, label
+
+    import skelprune
+
+    mask = make(case)
+    res = skelprune.prune(mask, **kw)
+    rows, cols, _ = res.skeleton_points()
+    skel = np.zeros(mask.shape, bool)
+    skel[rows, cols] = True
+    assert label(skel, connectivity=2).max() == label(mask, connectivity=2).max()
+    assert euler_number(skel, connectivity=2) == euler_number(mask, connectivity=2)

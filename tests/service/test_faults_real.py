@@ -1,0 +1,194 @@
+"""Faults against the real server process (``python -m service`` on 127.0.0.1).
+
+What the other tests already prove: ``test_service_faults.py`` swaps in job functions
+that hang, crash (``os._exit``) or raise, through the ASGI client (504, 500, 503); and
+``test_shutdown.py`` sends SIGTERM to the real server and sees in-flight requests drain.
+What is added here, on the real process with real pruning jobs:
+
+- a worker killed from *outside* (``os.kill(pid, SIGKILL)``, as the OOM killer would) in
+  the middle of a real prune: that request gets a problem+json 500, the requests queued
+  behind it are served by the replacement worker, which has a new pid;
+- a real prune over ``SKELPRUNE_JOB_TIMEOUT``: 504, its slot freed; meanwhile the full
+  queue answers 503 with ``Retry-After`` and ``/readyz`` says 503 too.
+
+Every request sent gets an answer; nothing is left hanging (generous client timeouts).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import threading
+import time
+from pathlib import Path
+
+import httpx
+import numpy as np
+import pytest
+
+from testkit import REPO
+from testkit.realserver import running_server
+
+pytestmark = [pytest.mark.slow, pytest.mark.timeout(300)]
+
+BIRD = (REPO.parent / "shared" / "data" / "kimia216" / "bird-10.png").read_bytes()
+PNG = {"content-type": "image/png"}
+PROBLEM = "application/problem+json"
+
+
+def star(longest_side: int) -> bytes:
+    """A seven-armed star as GeoJSON; rasterised at 4096 px it prunes for about 40 s."""
+    t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
+    r = 1 + 0.3 * np.sin(7 * t)
+    ring = [[float(a), float(b)] for a, b in zip(r * np.cos(t), r * np.sin(t), strict=True)]
+    return json.dumps({"geojson": {"type": "Polygon", "coordinates": [[*ring, ring[0]]]},
+                       "longest_side": longest_side, "curve": False}).encode()
+
+
+#: Long enough to outlast an 8 s time limit on any machine: 41 s here, where the same
+#: star at 2048 px now takes 4 s.
+LONG_JOB = star(4096)
+
+
+def process_table() -> dict[int, tuple[int, str]]:
+    """pid -> (parent pid, command line) from /proc."""
+    table = {}
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / "stat").read_text()
+            cmd = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+        except OSError:
+            continue
+        table[int(entry.name)] = (int(stat.rsplit(")", 1)[1].split()[1]), cmd)
+    return table
+
+
+def worker_pids(server_pid: int) -> set[int]:
+    """The pool's workers: children of the server's fork server process."""
+    table = process_table()
+    forkservers = {p for p, (pp, cmd) in table.items() if pp == server_pid and "forkserver" in cmd}
+    return {p for p, (pp, _) in table.items() if pp in forkservers}
+
+
+class Call(threading.Thread):
+    """One POST in a thread; keeps the response or the exception."""
+
+    def __init__(self, base: str, content: bytes, headers: dict[str, str]) -> None:
+        super().__init__(daemon=True)
+        self.args_ = (base, content, headers)
+        self.response: httpx.Response | None = None
+        self.error: BaseException | None = None
+        self.start()
+
+    def run(self) -> None:
+        base, content, headers = self.args_
+        try:
+            self.response = httpx.post(f"{base}/v1/prune", content=content, headers=headers,
+                                       timeout=240)
+        except BaseException as exc:
+            self.error = exc
+
+    def result(self) -> httpx.Response:
+        self.join(250)
+        assert not self.is_alive(), "request left without an answer"
+        assert self.error is None, repr(self.error)
+        assert self.response is not None
+        return self.response
+
+
+def wait_for(predicate, what: str, timeout: float = 60.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        time.sleep(0.05)
+
+
+def problem(resp: httpx.Response, status: int, slug: str) -> dict:
+    assert resp.status_code == status, resp.text
+    assert resp.headers["content-type"] == PROBLEM
+    body = resp.json()
+    assert body["type"] == f"urn:skelprune:problem:{slug}" and body["status"] == status
+    assert "Traceback" not in resp.text
+    return body
+
+
+def test_worker_killed_from_outside_mid_job(tmp_path: Path) -> None:
+    with running_server(tmp_path / "server.log", workers="1", queue_size="4",
+                        job_timeout="200") as (proc, base):
+        before = worker_pids(proc.pid)
+        assert len(before) == 1, before
+        (victim,) = before
+        long_job = Call(base, LONG_JOB, {"content-type": "application/json"})
+        wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).json()["busy"] == 1,
+                 "the long job to start")
+        queued = [Call(base, BIRD, PNG) for _ in range(2)]
+        wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).json()["queued"] == 2,
+                 "two requests waiting behind it")
+        os.kill(victim, signal.SIGKILL)
+
+        body = problem(long_job.result(), 500, "worker-crashed")
+        assert "SIGKILL" in body["detail"] and "replaced" in body["detail"]
+        for call in queued:  # served by the replacement worker
+            resp = call.result()
+            assert resp.status_code == 200, resp.text
+            assert resp.json()["width"] == 116
+        after = worker_pids(proc.pid)
+        assert len(after) == 1 and victim not in after
+        ready = httpx.get(f"{base}/readyz", timeout=5).json()
+        assert ready["workers"] == 1 and ready["busy"] == 0 and ready["queued"] == 0
+        assert httpx.post(f"{base}/v1/prune", content=BIRD, headers=PNG,
+                          timeout=60).status_code == 200
+        metrics = httpx.get(f"{base}/metrics", timeout=5).text
+        assert "skelprune_worker_restarts 1.0" in metrics
+        assert proc.poll() is None
+
+
+def test_time_limit_and_full_queue(tmp_path: Path) -> None:
+    # The long job prunes for about 40 s on the reference machine: a time limit of 8 s
+    # stops it whatever the machine, and leaves the 503 checks ample time.
+    with running_server(tmp_path / "server.log", workers="1", queue_size="0", job_timeout="8",
+                retry_after="3") as (proc, base):
+        (first_worker,) = worker_pids(proc.pid)
+        long_job = Call(base, LONG_JOB, {"content-type": "application/json"})
+        # The only worker is busy and nothing may wait: readiness and new jobs say 503.
+        wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).status_code == 503,
+                 "the worker to be taken")
+        ready = httpx.get(f"{base}/readyz", timeout=5)
+        problem(ready, 503, "queue-full")
+        assert ready.headers["retry-after"] == "3"
+        busy = httpx.post(f"{base}/v1/prune", content=BIRD, headers=PNG, timeout=60)
+        body = problem(busy, 503, "queue-full")
+        assert busy.headers["retry-after"] == "3" and "busy" in body["detail"]
+        assert long_job.response is None, "the long job ended before its time limit"
+
+        body = problem(long_job.result(), 504, "job-timeout")
+        assert "time limit of 8 s" in body["detail"]
+        # The slot is free again: a fresh worker, ready, and a normal job succeeds.
+        wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).status_code == 200,
+                 "readiness after the timeout")
+        resp = httpx.post(f"{base}/v1/prune", content=BIRD, headers=PNG, timeout=60)
+        assert resp.status_code == 200, resp.text
+        assert first_worker not in worker_pids(proc.pid)
+        assert proc.poll() is None
+
+
+def test_drain_is_bounded_by_the_shutdown_timeout(tmp_path: Path) -> None:
+    """SIGTERM with a job that would run for minutes: after SKELPRUNE_SHUTDOWN_TIMEOUT the
+    running and the queued request both get a 503 problem, and the server exits 0."""
+    with running_server(tmp_path / "server.log", workers="1", queue_size="4", job_timeout="300",
+                shutdown_timeout="2") as (proc, base):
+        long_job = Call(base, LONG_JOB, {"content-type": "application/json"})
+        wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).json()["busy"] == 1,
+                 "the long job to start")
+        queued = Call(base, BIRD, PNG)
+        wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).json()["queued"] == 1,
+                 "a request waiting behind it")
+        proc.send_signal(signal.SIGTERM)
+        for call in (long_job, queued):
+            resp = call.result()
+            body = problem(resp, 503, "unavailable")
+            assert "shut down" in body["detail"] and resp.headers["retry-after"]
+        assert proc.wait(120) == 0

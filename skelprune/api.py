@@ -8,10 +8,10 @@ from typing import Literal
 import numpy as np
 from scipy import ndimage
 
-from ._orientation import oriented
+from ._orientation import Orientation, oriented
 from .errors import EmptyMaskError, InvalidOptionError
 from .graph import BranchGraph
-from .medial_axis import oriented_medial_axis, squared_distance
+from .medial_axis import MedialAxis, oriented_medial_axis, squared_distance
 from .output.document import ComponentResult, GraphSummary, PruneResult
 from .pruning.bayesian import bayesian_sequence, choose_step, normalisation, remove_unsupported
 from .pruning.coarse import coarse_dce
@@ -23,7 +23,7 @@ from .pruning.dce import (
 )
 from .reconstruction import count_covered
 
-__all__ = ["METHODS", "components", "oriented", "prune"]
+__all__ = ["METHODS", "canonical_medial_axis", "components", "oriented", "prune"]
 
 METHODS = ("bayesian", "dce")
 COARSE = (None, "dce")
@@ -67,6 +67,16 @@ def dce_support(crop: np.ndarray, ma_rows: np.ndarray, ma_cols: np.ndarray, r2: 
     return generated_in_several_segments(np.stack([ma_rows, ma_cols], axis=1), r2, partition)
 
 
+def canonical_medial_axis(crop: np.ndarray) -> tuple[np.ndarray, Orientation, MedialAxis]:
+    """A padded component crop in its canonical orientation, and its medial axis there.
+
+    The frame every stage of :func:`prune` works in; anything that measures the medial
+    axis as the pruning sees it (its ``ℓ̄``, say) must start here too.
+    """
+    crop, orientation = oriented(crop)
+    return crop, orientation, oriented_medial_axis(crop, squared_distance(crop))
+
+
 def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
                     method: str, coarse: str | None,
                     dce_threshold: float | None = None) -> ComponentResult:
@@ -79,9 +89,7 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
     included, so that a shape turned by 90° or mirrored gets the turned or mirrored
     skeleton; the result maps its points back.
     """
-    crop, orientation = oriented(crop)
-    r2img = squared_distance(crop)
-    ma = oriented_medial_axis(crop, r2img)
+    crop, orientation, ma = canonical_medial_axis(crop)
     graph = BranchGraph(ma.rows, ma.cols, crop.shape)
     summary = GraphSummary.of(graph)
     before: list[int] = []

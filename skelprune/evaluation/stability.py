@@ -112,14 +112,14 @@ class Measurement:
 
 
 def _lbar(mask: np.ndarray) -> float:
-    """``ℓ̄`` of the largest component's medial axis: the length unit of SS (SPEC §2.3)."""
-    from ..api import components
+    """``ℓ̄`` of the largest component's medial axis: the length unit of SS (SPEC §2.3),
+    measured on the axis the pruning itself starts from (the canonical frame)."""
+    from ..api import canonical_medial_axis, components
     from ..graph import BranchGraph
-    from ..medial_axis import medial_axis, squared_distance
     from ..pruning.bayesian import normalisation
 
     crop = max((c for c, _ in components(mask)), key=lambda c: int(c.sum()))
-    ma = medial_axis(crop, squared_distance(crop))
+    crop, _, ma = canonical_medial_axis(crop)
     return normalisation(BranchGraph(ma.rows, ma.cols, crop.shape), ma.r2, 9.0).lbar
 
 

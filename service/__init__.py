@@ -6,6 +6,6 @@ Start it with ``python -m service``; build the app in code with
 
 from __future__ import annotations
 
-__all__ = ["__version__"]
+from skelprune import __version__
 
-__version__ = "0.1.0"
+__all__ = ["__version__"]

@@ -25,6 +25,7 @@ from .medial_axis import MedialAxis, medial_axis, squared_distance
 from .output.document import ComponentResult, PruneResult
 from .reconstruction import reconstruction, reconstruction_error
 
+#: The package version: the one place it is written (pyproject.toml reads it from here).
 __version__ = "0.1.0"
 
 __all__ = [

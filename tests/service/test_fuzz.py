@@ -5,6 +5,11 @@ polygon decoder (``parse_geojson``, ``polygon_mask``) either succeed with a well
 answer or raise a documented :class:`skelprune.SkelpruneError`; nothing else, ever.
 The endpoint, fed the same material, never answers 5xx.
 
+Every property records what it generated (``hypothesis.event``, shown by
+``pytest --hypothesis-show-statistics``) and counts the outcomes: a property whose
+generator is meant to reach the success path asserts that it did, so a generator that
+only made rejected inputs cannot pass unnoticed.
+
 Bounded: a fixed number of examples per property (``FUZZ_EXAMPLES``, default 150; set
 ``SKELPRUNE_FUZZ_EXAMPLES`` higher for a long exploratory run), no deadline, derandomised
 so that the suite is repeatable.
@@ -18,13 +23,14 @@ import math
 import os
 import struct
 import zlib
+from collections import Counter
 from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import HealthCheck, assume, event, given, settings
 from hypothesis import strategies as st
 from PIL import Image
 
@@ -157,22 +163,34 @@ def mutated_pngs(draw: st.DrawFn) -> bytes:
     return bytes(data)
 
 
-def check_mask(source: bytes, max_pixels: int | None) -> None:
+def outcome(name: str) -> str:
+    """Record one generated case's outcome with hypothesis, and return it for counting."""
+    event(name)
+    return name
+
+
+def rejected(exc: SkelpruneError) -> str:
+    return outcome(f"rejected: {type(exc).__name__}")
+
+
+def check_mask(source: bytes, max_pixels: int | None) -> str:
     try:
         mask = read_mask(source, max_pixels=max_pixels)
-    except SkelpruneError:
-        return
+    except SkelpruneError as exc:
+        return rejected(exc)
     assert isinstance(mask, np.ndarray) and mask.dtype == bool and mask.ndim == 2
     assert mask.size > 0 and mask.flags.c_contiguous
     assert max_pixels is None or mask.size <= max_pixels
     w, h = png_size(source)
     assert mask.shape == (h, w)
+    return outcome("decoded")
 
 
 # --------------------------------------------------------------------- PNG fuzz
 @FUZZ
 @given(st.binary(max_size=512))
 def test_random_bytes(data: bytes) -> None:
+    # Random bytes are almost never a PNG: this property is about the rejections.
     check_mask(data, MAX_PIXELS)
     try:
         w, h = png_size(data)
@@ -187,23 +205,36 @@ def test_random_bytes_behind_a_signature(tail: bytes) -> None:
     check_mask(PNG_SIGNATURE + tail, MAX_PIXELS)
 
 
-@FUZZ
-@given(mutated_pngs())
-def test_mutated_pngs(data: bytes) -> None:
-    check_mask(data, MAX_PIXELS)
+def test_mutated_pngs() -> None:
+    seen: Counter[str] = Counter()
+
+    @FUZZ
+    @given(mutated_pngs())
+    def prop(data: bytes) -> None:
+        seen[check_mask(data, MAX_PIXELS)] += 1
+
+    prop()
+    assert seen["decoded"] > 0, seen
 
 
-@settings(FUZZ, max_examples=max(10, FUZZ_EXAMPLES // 5))
-@given(mutated_pngs())
-def test_mutated_pngs_without_a_pixel_limit(data: bytes) -> None:
-    # Pillow's own decompression-bomb guard is the last line here; it must come out as
-    # a SkelpruneError too. Keep the claimed size modest so a success stays cheap.
-    try:
-        w, h = png_size(data)
-    except SkelpruneError:
-        return
-    assume(w * h <= 4 * MAX_PIXELS)
-    check_mask(data, None)
+def test_mutated_pngs_without_a_pixel_limit() -> None:
+    seen: Counter[str] = Counter()
+
+    @settings(FUZZ, max_examples=max(10, FUZZ_EXAMPLES // 5))
+    @given(mutated_pngs())
+    def prop(data: bytes) -> None:
+        # Pillow's own decompression-bomb guard is the last line here; it must come out
+        # as a SkelpruneError too. Keep the claimed size modest so a success stays cheap.
+        try:
+            w, h = png_size(data)
+        except SkelpruneError as exc:
+            seen[rejected(exc)] += 1
+            return
+        assume(w * h <= 4 * MAX_PIXELS)
+        seen[check_mask(data, None)] += 1
+
+    prop()
+    assert seen["decoded"] > 0, seen
 
 
 def test_seeds_decode() -> None:
@@ -240,9 +271,24 @@ JSONISH = st.recursive(
 
 
 @st.composite
+def valid_polygons(draw: st.DrawFn) -> dict[str, Any]:
+    """A well-formed Polygon (a rectangle, maybe with a rectangular hole): the success
+    path must be among what the fuzzers reach."""
+    x0, y0 = draw(st.floats(-1e3, 1e3)), draw(st.floats(-1e3, 1e3))
+    w, h = draw(st.floats(4, 200)), draw(st.floats(4, 200))
+    rings = [[[x0, y0], [x0 + w, y0], [x0 + w, y0 + h], [x0, y0 + h], [x0, y0]]]
+    if draw(st.booleans()):
+        a, b = x0 + w / 4, y0 + h / 4
+        rings.append([[a, b], [a, b + h / 2], [a + w / 2, b + h / 2], [a + w / 2, b], [a, b]])
+    return {"type": "Polygon", "coordinates": rings}
+
+
+@st.composite
 def geojsonish(draw: st.DrawFn, depth: int = 0) -> Any:
     kind = draw(st.sampled_from(
-        ["Polygon", "MultiPolygon", "Feature", "FeatureCollection", "junk", "Point"]))
+        ["Polygon", "MultiPolygon", "Feature", "FeatureCollection", "junk", "Point", "valid"]))
+    if kind == "valid":
+        return draw(valid_polygons())
     if kind == "Polygon":
         obj: Any = {"type": "Polygon", "coordinates": draw(POLYGON_COORDS | JSONISH)}
     elif kind == "MultiPolygon":
@@ -272,26 +318,42 @@ RASTER = st.one_of(
 )
 
 
-@FUZZ
-@given(geojsonish(), st.booleans())
-def test_parse_geojson(obj: Any, repair: bool) -> None:
-    try:
-        geom = parse_geojson(obj, max_vertices=200, repair=repair)
-    except SkelpruneError:
-        return
-    assert geom.is_valid and geom.area > 0 and math.isfinite(geom.area)
+def test_parse_geojson() -> None:
+    seen: Counter[str] = Counter()
+
+    @FUZZ
+    @given(geojsonish(), st.booleans())
+    def prop(obj: Any, repair: bool) -> None:
+        try:
+            geom = parse_geojson(obj, max_vertices=200, repair=repair)
+        except SkelpruneError as exc:
+            seen[rejected(exc)] += 1
+            return
+        assert geom.is_valid and geom.area > 0 and math.isfinite(geom.area)
+        seen[outcome("parsed")] += 1
+
+    prop()
+    assert seen["parsed"] > 0, seen
 
 
-@FUZZ
-@given(geojsonish(), RASTER, st.booleans())
-def test_polygon_mask(obj: Any, raster: dict[str, Any], repair: bool) -> None:
-    try:
-        mask, frame = polygon_mask(obj, max_vertices=200, max_pixels=MAX_PIXELS,
-                                   repair=repair, **raster)
-    except SkelpruneError:
-        return
-    assert mask.dtype == bool and mask.ndim == 2 and 0 < mask.size <= MAX_PIXELS
-    assert math.isfinite(frame.pixel_size) and frame.pixel_size > 0
+def test_polygon_mask() -> None:
+    seen: Counter[str] = Counter()
+
+    @FUZZ
+    @given(st.one_of(valid_polygons(), geojsonish()), RASTER, st.booleans())
+    def prop(obj: Any, raster: dict[str, Any], repair: bool) -> None:
+        try:
+            mask, frame = polygon_mask(obj, max_vertices=200, max_pixels=MAX_PIXELS,
+                                       repair=repair, **raster)
+        except SkelpruneError as exc:
+            seen[rejected(exc)] += 1
+            return
+        assert mask.dtype == bool and mask.ndim == 2 and 0 < mask.size <= MAX_PIXELS
+        assert math.isfinite(frame.pixel_size) and frame.pixel_size > 0
+        seen[outcome("rasterised")] += 1
+
+    prop()
+    assert seen["rasterised"] > 0, seen
 
 
 @pytest.mark.parametrize(
@@ -354,40 +416,63 @@ QUERY = st.dictionaries(
         ["0", "-1", "nan", "inf", "1e309", "9", "0.5", "true", "false", "dce", "none", "64"])),
     max_size=3,
 )
+#: Queries with valid values only, beside the arbitrary ones, so that some requests succeed.
+VALID_QUERY = st.dictionaries(
+    st.sampled_from(["beta", "method", "coarse", "curve"]),
+    st.sampled_from(["9", "0.5", "true", "false"]),
+    max_size=1,
+).filter(lambda q: all(
+    (k in ("beta",) and v in ("9", "0.5")) or (k == "curve" and v in ("true", "false"))
+    for k, v in q.items()
+))
 HTTP = settings(FUZZ, max_examples=max(10, FUZZ_EXAMPLES // 3))
 
 
-def assert_no_5xx(resp: Any) -> None:
+def assert_no_5xx(resp: Any) -> str:
+    """The answer is a success or a problem+json 4xx; returns which, as an outcome."""
     assert resp.status_code < 500, resp.text
     if resp.status_code >= 400:
         assert resp.headers["content-type"] == "application/problem+json"
         assert resp.json()["detail"]
+    return outcome(f"HTTP {resp.status_code}")
 
 
-@HTTP
-@given(st.one_of(mutated_pngs(), st.binary(max_size=200)), QUERY,
-       st.sampled_from(["image/png", "multipart"]))
-def test_http_png_bodies(client: TestClient, data: bytes, query: dict[str, str],
-                         how: str) -> None:
-    if how == "multipart":
-        resp = client.post("/v1/prune", files={"file": ("f.png", data, "image/png")},
-                           params=query)
-    else:
-        resp = client.post("/v1/prune", content=data, params=query,
-                           headers={"content-type": "image/png"})
-    assert_no_5xx(resp)
+def test_http_png_bodies(client: TestClient) -> None:
+    seen: Counter[str] = Counter()
+
+    @HTTP
+    @given(st.one_of(st.sampled_from(SEEDS), mutated_pngs(), st.binary(max_size=200)),
+           st.one_of(VALID_QUERY, QUERY), st.sampled_from(["image/png", "multipart"]))
+    def prop(data: bytes, query: dict[str, str], how: str) -> None:
+        if how == "multipart":
+            resp = client.post("/v1/prune", files={"file": ("f.png", data, "image/png")},
+                               params=query)
+        else:
+            resp = client.post("/v1/prune", content=data, params=query,
+                               headers={"content-type": "image/png"})
+        seen[assert_no_5xx(resp)] += 1
+
+    prop()
+    assert seen["HTTP 200"] > 0, seen
 
 
-@HTTP
-@given(st.one_of(geojsonish(), st.fixed_dictionaries({"geojson": geojsonish()},
-                                                       optional={"beta": NUMBERS,
-                                                                 "longest_side": NUMBERS})),
-       QUERY)
-def test_http_polygon_bodies(client: TestClient, obj: Any, query: dict[str, str]) -> None:
-    try:
-        body = json.dumps(obj)  # NaN / Infinity become the JSON5-ish literals on purpose
-    except (ValueError, OverflowError):
-        return
-    resp = client.post("/v1/prune", content=body, params=query,
-                       headers={"content-type": "application/json"})
-    assert_no_5xx(resp)
+def test_http_polygon_bodies(client: TestClient) -> None:
+    seen: Counter[str] = Counter()
+
+    @HTTP
+    @given(st.one_of(valid_polygons(), geojsonish(),
+                     st.fixed_dictionaries({"geojson": geojsonish()},
+                                           optional={"beta": NUMBERS, "longest_side": NUMBERS})),
+           st.one_of(VALID_QUERY, QUERY))
+    def prop(obj: Any, query: dict[str, str]) -> None:
+        try:
+            body = json.dumps(obj)  # NaN / Infinity become the JSON5-ish literals on purpose
+        except (ValueError, OverflowError):
+            seen[outcome("not JSON")] += 1
+            return
+        resp = client.post("/v1/prune", content=body, params=query,
+                           headers={"content-type": "application/json"})
+        seen[assert_no_5xx(resp)] += 1
+
+    prop()
+    assert seen["HTTP 200"] > 0, seen

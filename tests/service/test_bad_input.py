@@ -12,7 +12,6 @@ import io
 import json
 import struct
 import zlib
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -21,9 +20,7 @@ import pytest
 from fastapi.testclient import TestClient
 from PIL import Image
 
-from service.app import create_app
 from service.schemas import Problem, PruneDocument
-from service.settings import Settings
 
 pytestmark = pytest.mark.timeout(300)
 
@@ -294,11 +291,7 @@ CASES = [
 ]
 
 
-@pytest.fixture(scope="module")
-def client() -> Iterator[TestClient]:
-    app = create_app(Settings(workers=2, queue_size=64, **LIMITS))
-    with TestClient(app, raise_server_exceptions=False) as c:
-        yield c
+SETTINGS = {"workers": 2, "queue_size": 64, **LIMITS}
 
 
 def test_catalogue_is_big_and_unique() -> None:

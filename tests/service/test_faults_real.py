@@ -21,18 +21,19 @@ import os
 import signal
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import httpx
 import numpy as np
 import pytest
 
-from testkit import REPO
-from testkit.realserver import running_server
+from testkit import DATA
 
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(300)]
 
-BIRD = (REPO.parent / "shared" / "data" / "kimia216" / "bird-10.png").read_bytes()
+BIRD = (DATA / "kimia216" / "bird-10.png").read_bytes()
 PNG = {"content-type": "image/png"}
 PROBLEM = "application/problem+json"
 
@@ -115,8 +116,8 @@ def problem(resp: httpx.Response, status: int, slug: str) -> dict:
     return body
 
 
-def test_worker_killed_from_outside_mid_job(tmp_path: Path) -> None:
-    with running_server(tmp_path / "server.log", workers="1", queue_size="4",
+def test_worker_killed_from_outside_mid_job(real_server: Callable[..., Any]) -> None:
+    with real_server(workers="1", queue_size="4",
                         job_timeout="200") as (proc, base):
         before = worker_pids(proc.pid)
         assert len(before) == 1, before
@@ -146,10 +147,10 @@ def test_worker_killed_from_outside_mid_job(tmp_path: Path) -> None:
         assert proc.poll() is None
 
 
-def test_time_limit_and_full_queue(tmp_path: Path) -> None:
+def test_time_limit_and_full_queue(real_server: Callable[..., Any]) -> None:
     # The long job prunes for about 40 s on the reference machine: a time limit of 8 s
     # stops it whatever the machine, and leaves the 503 checks ample time.
-    with running_server(tmp_path / "server.log", workers="1", queue_size="0", job_timeout="8",
+    with real_server(workers="1", queue_size="0", job_timeout="8",
                 retry_after="3") as (proc, base):
         (first_worker,) = worker_pids(proc.pid)
         long_job = Call(base, LONG_JOB, {"content-type": "application/json"})
@@ -175,10 +176,10 @@ def test_time_limit_and_full_queue(tmp_path: Path) -> None:
         assert proc.poll() is None
 
 
-def test_drain_is_bounded_by_the_shutdown_timeout(tmp_path: Path) -> None:
+def test_drain_is_bounded_by_the_shutdown_timeout(real_server: Callable[..., Any]) -> None:
     """SIGTERM with a job that would run for minutes: after SKELPRUNE_SHUTDOWN_TIMEOUT the
     running and the queued request both get a 503 problem, and the server exits 0."""
-    with running_server(tmp_path / "server.log", workers="1", queue_size="4", job_timeout="300",
+    with real_server(workers="1", queue_size="4", job_timeout="300",
                 shutdown_timeout="2") as (proc, base):
         long_job = Call(base, LONG_JOB, {"content-type": "application/json"})
         wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).json()["busy"] == 1,

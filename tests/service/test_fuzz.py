@@ -24,7 +24,6 @@ import os
 import struct
 import zlib
 from collections import Counter
-from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -34,8 +33,6 @@ from hypothesis import HealthCheck, assume, event, given, settings
 from hypothesis import strategies as st
 from PIL import Image
 
-from service.app import create_app
-from service.settings import Settings
 from skelprune.errors import SkelpruneError
 from skelprune.io.png import PNG_SIGNATURE, png_size, read_mask
 from skelprune.io.polygon import parse_geojson, polygon_mask
@@ -401,12 +398,8 @@ def test_second_ihdr_cannot_smuggle_a_size() -> None:
 
 
 # -------------------------------------------------------------------- HTTP fuzz
-@pytest.fixture(scope="module")
-def client() -> Iterator[TestClient]:
-    app = create_app(Settings(workers=1, queue_size=8, max_pixels=MAX_PIXELS,
-                              max_vertices=200, max_body_bytes=64 * 1024))
-    with TestClient(app, raise_server_exceptions=False) as c:
-        yield c
+SETTINGS = {"workers": 1, "queue_size": 8, "max_pixels": MAX_PIXELS, "max_vertices": 200,
+            "max_body_bytes": 64 * 1024}
 
 
 QUERY = st.dictionaries(

@@ -33,12 +33,12 @@ from service.routes import job_function
 from service.schemas import PolygonJob, Problem, PruneQuery
 from service.settings import Settings
 from skelprune.errors import InvalidImageError
-from testkit import REPO
+from testkit import DATA, REPO
 from testkit.realserver import running_server, stop
 
 pytestmark = pytest.mark.timeout(300)
 
-BIRD = (REPO.parent / "shared" / "data" / "kimia216" / "bird-10.png").read_bytes()
+BIRD = (DATA / "kimia216" / "bird-10.png").read_bytes()
 KEY = "s3cret-Key_0123456789"
 ORIGIN = "https://app.example"
 PNG = {"content-type": "image/png"}

@@ -16,9 +16,7 @@ from fastapi.testclient import TestClient
 from PIL import Image
 
 import skelprune
-from service.app import create_app
 from service.schemas import Problem, PruneDocument, Readiness, SkeletonGeoJSON
-from service.settings import Settings
 from skelprune.io.png import read_mask
 from testkit import DATA
 
@@ -30,11 +28,7 @@ HOLE = [[10.0, 5.0], [10.0, 15.0], [30.0, 15.0], [30.0, 5.0], [10.0, 5.0]]
 LIMITS = {"max_pixels": 1_000_000, "max_body_bytes": 400_000, "max_vertices": 2000}
 
 
-@pytest.fixture(scope="module")
-def client() -> Iterator[TestClient]:
-    app = create_app(Settings(workers=2, queue_size=8, **LIMITS))
-    with TestClient(app) as c:
-        yield c
+SETTINGS = {"workers": 2, "queue_size": 8, **LIMITS}
 
 
 def png_bytes(arr: np.ndarray, mode: str | None = None) -> bytes:

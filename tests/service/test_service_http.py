@@ -3,21 +3,22 @@
 from __future__ import annotations
 
 import signal
-from pathlib import Path
+from collections.abc import Callable
+from typing import Any
 
 import httpx
 import pytest
 
-from testkit import REPO
-from testkit.realserver import running_server, stop
+from testkit import DATA
+from testkit.realserver import stop
 
 pytestmark = pytest.mark.timeout(180)
 
-BIRD = (REPO.parent / "shared" / "data" / "kimia216" / "bird-10.png").read_bytes()
+BIRD = (DATA / "kimia216" / "bird-10.png").read_bytes()
 
 
-def test_real_server_round_trip(tmp_path: Path) -> None:
-    with running_server(tmp_path / "server.log", ready="/healthz", workers="1") as (proc, base):
+def test_real_server_round_trip(real_server: Callable[..., Any]) -> None:
+    with real_server(ready="/healthz", workers="1") as (proc, base):
         with httpx.Client(base_url=base, timeout=30) as client:
             assert client.get("/readyz").json()["workers"] == 1
             doc = client.post("/v1/prune", content=BIRD,

@@ -17,7 +17,7 @@ from pydantic.json_schema import models_json_schema
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from service import __version__, examples
-from service.errors import BodyTooLargeError, install_error_handlers, problem_response
+from service.errors import BodyTooLargeError, install_error_handlers, problem
 from service.jobs import warmup
 from service.pool import WorkerPool
 from service.routes import router
@@ -53,10 +53,8 @@ class BodyLimitMiddleware:
         declared = dict(scope["headers"]).get(b"content-length")
         message = f"request body exceeds the limit of {self.limit} bytes"
         if declared is not None and declared.isdigit() and int(declared) > self.limit:
-            response = problem_response(
-                413, f"{message} (Content-Length: {int(declared)})", slug="body-too-large",
-                title="Request body too large", instance=scope.get("path"),
-            )
+            response = problem(BodyTooLargeError(f"{message} (Content-Length: {int(declared)})"),
+                               instance=scope.get("path"))
             await response(scope, receive, send)
             return
         received = 0

@@ -40,9 +40,12 @@ __all__ = [
     "PROBLEMS",
     "PROBLEM_MEDIA_TYPE",
     "BodyTooLargeError",
+    "InternalError",
     "NotAcceptableError",
+    "UnauthorizedError",
     "UnsupportedMediaTypeError",
     "install_error_handlers",
+    "problem",
     "problem_response",
 ]
 
@@ -64,6 +67,14 @@ class NotAcceptableError(Exception):
     """None of the media types in Accept can be produced."""
 
 
+class UnauthorizedError(Exception):
+    """The service has an API key and the request did not carry it."""
+
+
+class InternalError(Exception):
+    """A bug: an exception nothing else maps (the message gives a log reference)."""
+
+
 @dataclass(frozen=True)
 class Problem:
     status: int
@@ -83,11 +94,13 @@ PROBLEMS: dict[type[BaseException], Problem] = {
     BodyTooLargeError: Problem(413, "body-too-large", "Request body too large"),
     UnsupportedMediaTypeError: Problem(415, "unsupported-media-type", "Unsupported media type"),
     NotAcceptableError: Problem(406, "not-acceptable", "Not acceptable"),
+    UnauthorizedError: Problem(401, "unauthorized", "Unauthorized"),
     QueueFullError: Problem(503, "queue-full", "Service busy"),
     PoolClosedError: Problem(503, "unavailable", "Service unavailable"),
     JobTimeoutError: Problem(504, "job-timeout", "Job timed out"),
     WorkerCrashedError: Problem(500, "worker-crashed", "Worker crashed"),
     JobFailedError: Problem(500, "internal-error", "Internal error"),
+    InternalError: Problem(500, "internal-error", "Internal error"),
     RequestValidationError: Problem(422, "validation-error", "Request validation failed"),
 }
 
@@ -128,6 +141,25 @@ def problem_response(
     return JSONResponse(body, status_code=status, headers=headers, media_type=PROBLEM_MEDIA_TYPE)
 
 
+def problem(
+    exc: BaseException,
+    *,
+    instance: str | None = None,
+    headers: dict[str, str] | None = None,
+    extra: dict[str, Any] | None = None,
+) -> JSONResponse:
+    """The problem+json answer for ``exc``, from its row of :data:`PROBLEMS`.
+
+    Every error answer of the service is built here, so that the status, the problem
+    type and the title of an error are written once, in the table.
+    """
+    row = lookup(exc)
+    if row is None:
+        raise TypeError(f"{type(exc).__name__} has no row in PROBLEMS")
+    return problem_response(row.status, str(exc) or row.title, slug=row.slug, title=row.title,
+                            instance=instance, headers=headers, extra=extra)
+
+
 def _loc(loc: tuple[Any, ...] | list[Any]) -> str:
     return ".".join(str(p) for p in loc)
 
@@ -142,10 +174,7 @@ def install_error_handlers(app: FastAPI, *, retry_after: int) -> None:
         if row.status >= 500:
             log.warning("%s %s -> %d: %s", request.method, request.url.path, row.status, exc,
                         extra={"request_id": request_id_var.get()})
-        return problem_response(
-            row.status, str(exc) or row.title, slug=row.slug, title=row.title,
-            instance=request.url.path, headers=headers,
-        )
+        return problem(exc, instance=request.url.path, headers=headers)
 
     async def http_error(request: Request, exc: Exception) -> JSONResponse:
         assert isinstance(exc, StarletteHTTPException)
@@ -183,10 +212,8 @@ def install_error_handlers(app: FastAPI, *, retry_after: int) -> None:
         log.error("unhandled error %s on %s %s: %s", ref, request.method, request.url.path,
                   type(exc).__name__, exc_info=log.isEnabledFor(logging.DEBUG),
                   extra={"request_id": request_id_var.get(), "reference": ref})
-        return problem_response(
-            500, f"internal error (reference {ref}); the server log has the details",
-            slug="internal-error", title="Internal error", instance=request.url.path,
-        )
+        return problem(InternalError(f"internal error (reference {ref}); the server log has "
+                                     "the details"), instance=request.url.path)
 
     for cls in PROBLEMS:
         if cls is not RequestValidationError:

@@ -21,8 +21,9 @@ import uuid
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from service.errors import problem_response
+from service.errors import InternalError, UnauthorizedError, problem
 from service.logs import request_id_var
+from service.pool import PoolClosedError
 
 __all__ = [
     "OPEN_PATHS",
@@ -84,10 +85,9 @@ class RequestContextMiddleware:
             if started:
                 raise
 
-            response = problem_response(
-                503, "the server shut down before this request finished; retry it",
-                slug="unavailable", title="Service unavailable", instance=scope["path"],
-                headers={"Retry-After": "1"},
+            response = problem(
+                PoolClosedError("the server shut down before this request finished; retry it"),
+                instance=scope["path"], headers={"Retry-After": "1"},
             )
             await response(scope, receive, send_with_id)
             status = 503
@@ -100,9 +100,9 @@ class RequestContextMiddleware:
                       extra={"request_id": rid, "reference": ref})
             if not started:
 
-                response = problem_response(
-                    500, f"internal error (reference {ref}); the server log has the details",
-                    slug="internal-error", title="Internal error", instance=scope["path"],
+                response = problem(
+                    InternalError(f"internal error (reference {ref}); the server log has "
+                                  "the details"), instance=scope["path"],
                 )
                 await response(scope, receive, send_with_id)
             status = 500
@@ -154,8 +154,6 @@ class ApiKeyMiddleware:
         else:
             detail = ("API key required: send 'Authorization: Bearer <key>' "
                       "or 'X-API-Key: <key>'")
-        response = problem_response(
-            401, detail, slug="unauthorized", title="Unauthorized",
-            instance=scope["path"], headers={"WWW-Authenticate": challenge},
-        )
+        response = problem(UnauthorizedError(detail), instance=scope["path"],
+                           headers={"WWW-Authenticate": challenge})
         await response(scope, receive, send)

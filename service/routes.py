@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Callable
+from dataclasses import fields
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Request, Response
@@ -17,6 +18,7 @@ from service.errors import NotAcceptableError, UnsupportedMediaTypeError
 from service.jobs import Job, Output, run_job
 from service.pool import PoolClosedError, QueueFullError, WorkerPool
 from service.schemas import (
+    POLYGON_ONLY,
     Health,
     PolygonJob,
     PruneQuery,
@@ -25,8 +27,9 @@ from service.schemas import (
     query_parameters,
 )
 from service.settings import Settings
-from skelprune.errors import ImageTooLargeError, InvalidOptionError
-from skelprune.io.png import png_size
+from skelprune.errors import InvalidOptionError
+from skelprune.io.png import check_png_size
+from skelprune.options import OutputOptions, PruneOptions, RasterOptions
 
 __all__ = ["job_function", "negotiate", "parse_query", "router"]
 
@@ -39,7 +42,6 @@ PRODUCES: dict[str, Output] = {
     "application/geo+json": "geojson",
 }
 JSON_TYPES = ("application/json", "application/geo+json")
-POLYGON_ONLY = ("pixel_size", "longest_side", "repair")
 BIG_JSON = 256 * 1024  # bytes of JSON above which validation moves to a thread
 QUERY_OPTIONS = frozenset(PruneQuery.model_fields)  # no aliases: field name = parameter
 
@@ -148,6 +150,11 @@ def _options(query: PruneQuery, body: PolygonJob | None, polygon: bool) -> dict[
     return opts
 
 
+def _group(opts: dict[str, Any], group: type) -> dict[str, Any]:
+    """The options of one group that the request gave."""
+    return {f.name: opts[f.name] for f in fields(group) if f.name in opts}
+
+
 def _parse_polygon(body: bytes) -> tuple[PolygonJob | None, dict[str, Any]]:
     """Validate a JSON body: (envelope with options or None, GeoJSON as plain data)."""
     try:
@@ -215,12 +222,7 @@ async def prune(
     body = await request.body()  # size-limited by BodyLimitMiddleware
     if ctype in ("image/png", "multipart/form-data"):
         png = body if ctype == "image/png" else await _png_from_multipart(request)
-        width, height = png_size(png)
-        if width * height > settings.max_pixels:
-            raise ImageTooLargeError(
-                f"image has {width * height} pixels ({width}×{height}), "
-                f"the limit is {settings.max_pixels}"
-            )
+        check_png_size(png, settings.max_pixels)  # refused before it is queued
         geojson, envelope = None, None
     elif ctype in JSON_TYPES:
         # A big polygon takes a while to validate: off the event loop, so that other
@@ -237,22 +239,18 @@ async def prune(
             "(field 'file') or application/json (GeoJSON)"
         )
     opts = _options(query, envelope, polygon=geojson is not None)
-    prune_options = {k: opts[k] for k in ("beta", "method", "dce_threshold") if k in opts}
-    if "coarse" in opts:
-        prune_options["coarse"] = None if opts["coarse"] == "none" else opts["coarse"]
+    # The library's option classes check the values (the only place they are checked).
+    prune_options = PruneOptions(**_group(opts, PruneOptions))
+    output_options = OutputOptions(**_group(opts, OutputOptions))
     raster: dict[str, Any] = {}
     if geojson is not None:
-        raster["repair"] = opts.get("repair", True)
-        raster["max_vertices"] = settings.max_vertices
-        if "pixel_size" in opts:
-            raster["pixel_size"] = opts["pixel_size"]
-            if "longest_side" in opts:
-                raise InvalidOptionError("give pixel_size or longest_side, not both")
-        else:
-            raster["longest_side"] = opts.get("longest_side", settings.polygon_longest_side)
+        given = _group(opts, RasterOptions)
+        if "pixel_size" not in given:
+            given.setdefault("longest_side", settings.polygon_longest_side)
+        raster = {**RasterOptions(**given).kwargs(), "max_vertices": settings.max_vertices}
     job = Job(
-        output=output, png=png, geojson=geojson, prune_options=prune_options, raster=raster,
-        curve=opts.get("curve", True), overlay=opts.get("overlay", False),
+        output=output, png=png, geojson=geojson, prune_options=prune_options.kwargs(),
+        raster=raster, curve=output_options.curve, overlay=output_options.overlay,
         max_pixels=settings.max_pixels,
     )
     result = await pool.run(fn, job)

@@ -7,11 +7,26 @@ OpenAPI schema is a contract that tests and schemathesis check the answers again
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+import json
+from dataclasses import fields as dataclass_fields
+from typing import Annotated, Any, Literal, get_args, get_type_hints
 
-from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, TypeAdapter
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    Tag,
+    TypeAdapter,
+    ValidationInfo,
+    create_model,
+    field_validator,
+)
+
+from skelprune.options import GROUPS, RasterOptions, check_option
 
 __all__ = [
+    "POLYGON_ONLY",
     "FiniteFloat",
     "GeoJSONInput",
     "Health",
@@ -31,44 +46,47 @@ FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 
 
 # --------------------------------------------------------------------- input: options
-class PruneQuery(BaseModel):
-    """Options in the query string (all optional; unknown parameters are refused)."""
+#: Options that only apply to polygon (JSON) input.
+POLYGON_ONLY = tuple(f.name for f in dataclass_fields(RasterOptions))
 
-    model_config = ConfigDict(extra="forbid")
 
-    beta: float | None = Field(
-        None, gt=0, allow_inf_nan=False,
-        description="Weight β of the reconstruction term, > 0. Default 9 (the paper's).",
-    )
-    method: Literal["bayesian", "dce"] | None = Field(
-        None, description="`bayesian` (the paper) or `dce` (its ref. [10]). Default `bayesian`."
-    )
-    coarse: Literal["dce", "none"] | None = Field(
-        None, description="`dce`: a coarse DCE stage before the Bayesian pruning (the "
-        "default); `none`: start from the full medial axis. Ignored by `method=dce`.",
-    )
-    dce_threshold: float | None = Field(
-        None, ge=0, allow_inf_nan=False,
-        description="For `method=dce`: the DCE stop threshold on relevance (scale-free). "
-        "Default: the library's (0.01).",
-    )
-    curve: bool | None = Field(None, description="Include the pruning curve. Default true.")
-    overlay: bool | None = Field(
-        None, description="Add the overlay image as base64 PNG (`overlay_png`). Default false."
-    )
-    pixel_size: float | None = Field(
-        None, gt=0, allow_inf_nan=False,
-        description="Polygon input only: raster pixel size in the polygon's units.",
-    )
-    longest_side: int | None = Field(
-        None, ge=8, le=16384,
-        description="Polygon input only: pixels across the longer side of the bounding box "
-        "(default `SKELPRUNE_POLYGON_LONGEST_SIDE`, 512).",
-    )
-    repair: bool | None = Field(
-        None, description="Polygon input only: repair self-intersections with "
-        "shapely `make_valid` (default true) or refuse them (false).",
-    )
+def _option_models() -> tuple[type[BaseModel], dict[str, Any], dict[str, Any]]:
+    """The query model and the body's option fields, from the library's option classes.
+
+    Only the wire types are declared here (a number, a flag, one of the choices); each
+    value is checked by the library's own check of that option
+    (:func:`skelprune.options.check_option`), so an error names the field it is in.
+    """
+    fields: dict[str, Any] = {}
+    for group in GROUPS:
+        hints = get_type_hints(group)
+        for f in dataclass_fields(group):
+            choices = f.metadata["choices"]
+            kind = hints[f.name]
+            wire: Any = Literal[choices] if choices else (
+                bool if kind is bool else int if int in (kind, *get_args(kind)) else FiniteFloat)
+            default = f.default if f.default is not None else "none" if choices else None
+            text = f.metadata["help"]
+            if default is not None and "default" not in text:
+                text += f" Default `{json.dumps(default).strip(chr(34))}`."
+            if group is RasterOptions:
+                text = "Polygon input only: " + text[0].lower() + text[1:]
+            if f.name == "longest_side":
+                text += " The server's default is `SKELPRUNE_POLYGON_LONGEST_SIDE`."
+            schema = getattr(f.metadata["check"], "schema", None)
+            fields[f.name] = (wire | None, Field(None, description=text, json_schema_extra=schema))
+    validators = {"check": field_validator(*fields)(_check)}
+    query = create_model("PruneQuery", __config__=ConfigDict(extra="forbid"),
+                         __validators__=validators, **fields)
+    query.__doc__ = "Options in the query string (all optional; unknown parameters are refused)."
+    return query, fields, validators
+
+
+def _check(cls: type, value: Any, info: ValidationInfo) -> Any:
+    return value if value is None else check_option(str(info.field_name), value)
+
+
+PruneQuery, _BODY_OPTIONS, _VALIDATORS = _option_models()
 
 
 def query_parameters(model: type[BaseModel]) -> list[dict[str, Any]]:
@@ -146,20 +164,13 @@ GeoJSONInput = Annotated[
 ]
 
 
-class PolygonJob(BaseModel):
-    """A GeoJSON shape with options in the body (each also allowed in the query, not both)."""
-
-    model_config = STRICT
-    geojson: GeoJSONInput
-    beta: FiniteFloat | None = Field(None, gt=0)
-    method: Literal["bayesian", "dce"] | None = None
-    coarse: Literal["dce", "none"] | None = None
-    dce_threshold: FiniteFloat | None = Field(None, ge=0)
-    curve: bool | None = None
-    overlay: bool | None = None
-    pixel_size: FiniteFloat | None = Field(None, gt=0)
-    longest_side: int | None = Field(None, ge=8, le=16384)
-    repair: bool | None = None
+PolygonJob = create_model(
+    "PolygonJob", __config__=STRICT, __validators__=_VALIDATORS,
+    geojson=(GeoJSONInput, ...), **_BODY_OPTIONS,
+)
+PolygonJob.__doc__ = (
+    "A GeoJSON shape with options in the body (each also allowed in the query, not both)."
+)
 
 
 def _request_tag(value: Any) -> str:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from typing import Literal
 
 import numpy as np
@@ -12,6 +11,7 @@ from ._orientation import Orientation, oriented
 from .errors import EmptyMaskError, InvalidOptionError
 from .graph import BranchGraph
 from .medial_axis import MedialAxis, oriented_medial_axis, squared_distance
+from .options import METHODS, PruneOptions
 from .output.document import ComponentResult, GraphSummary, PruneResult
 from .pruning.bayesian import bayesian_sequence, choose_step, normalisation, remove_unsupported
 from .pruning.coarse import coarse_dce
@@ -25,8 +25,6 @@ from .reconstruction import count_covered
 
 __all__ = ["METHODS", "canonical_medial_axis", "components", "oriented", "prune"]
 
-METHODS = ("bayesian", "dce")
-COARSE = (None, "dce")
 EIGHT = np.ones((3, 3), dtype=bool)
 
 
@@ -42,22 +40,6 @@ def components(mask: np.ndarray) -> list[tuple[np.ndarray, tuple[int, int]]]:
         crop = np.pad(labels[sl] == k, 1)
         out.append((crop, (sl[0].start - 1, sl[1].start - 1)))
     return out
-
-
-def _check_options(beta: float, method: str, coarse: str | None,
-                   dce_threshold: float | None) -> None:
-    if not isinstance(beta, (int, float)) or isinstance(beta, bool) or not math.isfinite(beta) \
-            or beta <= 0:
-        raise InvalidOptionError(f"beta must be a finite number > 0, got {beta!r}")
-    if method not in METHODS:
-        raise InvalidOptionError(f"method must be one of {METHODS}, got {method!r}")
-    if coarse not in COARSE:
-        raise InvalidOptionError(f"coarse must be null or 'dce', got {coarse!r}")
-    if dce_threshold is not None and (
-            isinstance(dce_threshold, bool) or not isinstance(dce_threshold, (int, float))
-            or not math.isfinite(dce_threshold) or dce_threshold < 0):
-        raise InvalidOptionError(
-            f"dce_threshold must be a finite number >= 0, got {dce_threshold!r}")
 
 
 def dce_support(crop: np.ndarray, ma_rows: np.ndarray, ma_cols: np.ndarray, r2: np.ndarray,
@@ -183,9 +165,9 @@ def prune(
     >>> len(comp.to_dict()["skeleton"]["endpoints"]), comp.rer < 0.05
     (4, True)
     """
-    _check_options(beta, method, coarse, dce_threshold)
-    if method == "dce":
-        coarse = None  # DCE pruning has no stage before it
+    opts = PruneOptions(beta=beta, method=method, coarse=coarse, dce_threshold=dce_threshold)
+    beta, method, dce_threshold = opts.beta, opts.method, opts.dce_threshold
+    coarse = None if method == "dce" else opts.coarse  # DCE pruning has no stage before it
     mask = np.asarray(mask)
     if mask.ndim != 2:
         raise InvalidOptionError(f"mask must be 2-D, got shape {mask.shape}")

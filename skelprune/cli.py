@@ -10,6 +10,7 @@ figures from the benchmark data (``skelprune.evaluation``; needs the ``bench`` e
 
 from __future__ import annotations
 
+import enum
 import json
 import os
 import sys
@@ -20,18 +21,18 @@ from typing import Annotated, Any
 import typer
 
 from .errors import SkelpruneError
+from .options import COARSE, METHODS, OutputOptions, PruneOptions, option_fields
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Parameter-free Bayesian skeleton pruning.")
 
 
-def _prune_file(path: str, beta: float, method: str, coarse: str | None,
-                curve: bool) -> dict[str, Any]:
+def _prune_file(path: str, options: PruneOptions, curve: bool) -> dict[str, Any]:
     from .api import prune
     from .io.png import read_mask
 
     try:
-        doc = prune(read_mask(path), beta=beta, method=method, coarse=coarse).to_dict(curve=curve)
+        doc = prune(read_mask(path), **options.kwargs()).to_dict(curve=curve)
         return {"file": path, "result": doc}
     except (SkelpruneError, OSError) as exc:
         return {"file": path, "error": f"{type(exc).__name__}: {exc}"}
@@ -44,30 +45,41 @@ def _expand(paths: list[Path]) -> list[Path]:
     return files
 
 
+HELP = {name: text for name, _, text, _ in option_fields(PruneOptions, OutputOptions)}
+# the choices as typer shows them (it lists an Enum's values in --help)
+Method = enum.Enum("Method", {name: name for name in METHODS}, type=str)
+Coarse = enum.Enum("Coarse", {name: name for name in COARSE}, type=str)
+
+
 @app.command("prune")
 def prune_command(
     files: Annotated[list[Path], typer.Argument(help="PNG masks, or folders of them.")],
-    beta: Annotated[float, typer.Option(help="Weight of the reconstruction term.")] = 9.0,
-    method: Annotated[str, typer.Option(help="bayesian or dce.")] = "bayesian",
-    coarse: Annotated[str, typer.Option(help="Coarse stage before the Bayesian pruning: "
-                                        "dce, or none (the full medial axis).")] = "dce",
+    beta: Annotated[float, typer.Option(help=HELP["beta"])] = PruneOptions.beta,
+    method: Annotated[Method, typer.Option(help=HELP["method"])] = Method(PruneOptions.method),
+    coarse: Annotated[Coarse, typer.Option(help=HELP["coarse"])] = Coarse("dce"),
+    dce_threshold: Annotated[float | None, typer.Option(help=HELP["dce_threshold"])] = None,
     overlay: Annotated[Path | None, typer.Option(help="Write the overlay PNG here "
                                                  "(one input file only).")] = None,
-    curve: Annotated[bool, typer.Option(help="Include the pruning curve.")] = True,
+    curve: Annotated[bool, typer.Option(help=HELP["curve"])] = OutputOptions.curve,
     workers: Annotated[int, typer.Option(help="Worker processes for several files.")] = 0,
 ) -> None:
     """Prune the skeleton of each shape and print the result as JSON."""
     from .api import prune
     from .io.png import read_mask
 
-    coarse = None if coarse in (None, "", "none", "null") else coarse
+    try:  # checked once, before any file is read
+        options = PruneOptions(beta=beta, method=method.value, coarse=coarse.value,
+                               dce_threshold=dce_threshold)
+    except SkelpruneError as exc:
+        typer.echo(f"error: {exc}", err=True)
+        raise typer.Exit(2) from None
     inputs = _expand(files)
     if not inputs:
         typer.echo("error: no PNG file given", err=True)
         raise typer.Exit(2)
     if len(inputs) == 1 and not files[0].is_dir():
         try:
-            res = prune(read_mask(str(inputs[0])), beta=beta, method=method, coarse=coarse)
+            res = prune(read_mask(str(inputs[0])), **options.kwargs())
         except (SkelpruneError, OSError) as exc:
             typer.echo(f"error: {inputs[0]}: {exc}", err=True)
             raise typer.Exit(1) from None
@@ -84,8 +96,8 @@ def prune_command(
     n = workers or os.cpu_count() or 1
     failed = 0
     with ProcessPoolExecutor(max_workers=n) as pool:
-        jobs = pool.map(_prune_file, [str(p) for p in inputs], [beta] * len(inputs),
-                        [method] * len(inputs), [coarse] * len(inputs), [curve] * len(inputs))
+        jobs = pool.map(_prune_file, [str(p) for p in inputs], [options] * len(inputs),
+                        [curve] * len(inputs))
         for line in tqdm(jobs, total=len(inputs), file=sys.stderr, unit="shape"):
             failed += "error" in line
             sys.stdout.write(json.dumps(line) + "\n")

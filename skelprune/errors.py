@@ -7,6 +7,8 @@ ever letting an unexpected exception through as a bad-input answer.
 
 from __future__ import annotations
 
+from typing import Any
+
 __all__ = [
     "EmptyMaskError",
     "ImageTooLargeError",
@@ -14,6 +16,7 @@ __all__ = [
     "InvalidOptionError",
     "InvalidPolygonError",
     "SkelpruneError",
+    "shown",
 ]
 
 
@@ -39,3 +42,19 @@ class InvalidPolygonError(SkelpruneError):
 
 class InvalidOptionError(SkelpruneError):
     """An option is out of range or unknown (beta <= 0, unknown method, ...)."""
+
+
+def shown(value: Any) -> str:
+    """A value as an error message shows it: short, and a huge integer by its size (it
+    has no repr past 4300 digits).
+
+    >>> shown(10**400), shown(0.5), shown("x" * 50)
+    ('<integer of 1329 bits>', '0.5', "'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx...")
+    """
+    if isinstance(value, int) and not isinstance(value, bool):
+        try:
+            float(value)
+        except OverflowError:
+            return f"{'-' if value < 0 else ''}<integer of {value.bit_length()} bits>"
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."

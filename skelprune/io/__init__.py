@@ -7,7 +7,7 @@ output). :func:`read_mask` decodes PNG files and arrays (:mod:`.png`),
 """
 
 from .frame import IDENTITY, PixelFrame
-from .png import PNG_SIGNATURE, png_size, read_mask
+from .png import PNG_SIGNATURE, check_png_size, png_size, read_mask
 from .polygon import DEFAULT_LONGEST_SIDE, parse_geojson, polygon_mask, rasterize
 
 __all__ = [
@@ -15,6 +15,7 @@ __all__ = [
     "IDENTITY",
     "PNG_SIGNATURE",
     "PixelFrame",
+    "check_png_size",
     "parse_geojson",
     "png_size",
     "polygon_mask",

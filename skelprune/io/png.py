@@ -30,7 +30,7 @@ from PIL import Image, UnidentifiedImageError
 
 from skelprune.errors import ImageTooLargeError, InvalidImageError
 
-__all__ = ["PNG_SIGNATURE", "png_size", "read_mask"]
+__all__ = ["PNG_SIGNATURE", "check_png_size", "png_size", "read_mask"]
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _MAX_DIMENSION = 2**31 - 1  # PNG spec limit for width and height
@@ -79,6 +79,25 @@ def png_size(data: bytes) -> tuple[int, int]:
     (5, 3)
     """
     width, height, _, _ = _ihdr(bytes(data[:33]))
+    return width, height
+
+
+def check_png_size(data: bytes, max_pixels: int | None) -> tuple[int, int]:
+    """The PNG's (width, height) from its header; refuses more than ``max_pixels`` pixels
+    before anything is decoded.
+
+    Raises
+    ------
+    InvalidImageError
+        Not a PNG header.
+    ImageTooLargeError
+        More pixels than ``max_pixels``.
+    """
+    width, height = png_size(data)
+    if max_pixels is not None and width * height > max_pixels:
+        raise ImageTooLargeError(
+            f"image has {width * height} pixels ({width}×{height}), the limit is {max_pixels}"
+        )
     return width, height
 
 
@@ -221,10 +240,7 @@ def read_mask(
     else:
         data = bytes(source)
     width, height, depth, _ = _ihdr(data)
-    if max_pixels is not None and width * height > max_pixels:
-        raise ImageTooLargeError(
-            f"image has {width * height} pixels ({width}×{height}), the limit is {max_pixels}"
-        )
+    check_png_size(data, max_pixels)
     _check_chunks(data)
     im = _decode(data)
     if im.size != (width, height):  # never decode something other than what was checked

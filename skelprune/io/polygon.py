@@ -33,8 +33,9 @@ import numpy as np
 import shapely
 from shapely.geometry import GeometryCollection, MultiPolygon, Polygon
 
-from skelprune.errors import ImageTooLargeError, InvalidOptionError, InvalidPolygonError
+from skelprune.errors import ImageTooLargeError, InvalidPolygonError, shown
 from skelprune.io.frame import PixelFrame
+from skelprune.options import DEFAULT_LONGEST_SIDE, RasterOptions
 
 __all__ = [
     "DEFAULT_LONGEST_SIDE",
@@ -44,7 +45,6 @@ __all__ = [
     "rasterize",
 ]
 
-DEFAULT_LONGEST_SIDE = 512
 DEFAULT_MARGIN = 2
 _SHIFT = 8  # fractional bits for cv2.fillPoly: sub-pixel vertex positions
 _MAX_SIDE = 1 << 20  # keeps fixed-point vertex coordinates inside int32
@@ -71,7 +71,7 @@ def _geometries(obj: Any, where: str) -> Iterator[tuple[str, Mapping[str, Any]]]
             yield from _geometries(feature, f"{where}.features[{i}]")
     else:
         raise InvalidPolygonError(
-            f"{where}: type {_show(kind)} is not Polygon, MultiPolygon, Feature or "
+            f"{where}: type {shown(kind)} is not Polygon, MultiPolygon, Feature or "
             "FeatureCollection"
         )
 
@@ -95,14 +95,6 @@ def _bounds(geom: Any) -> tuple[float, float, float, float]:
     return tuple(shapely.bounds(geom))  # type: ignore[return-value]
 
 
-def _show(v: Any) -> str:
-    """A short repr for error messages (a huge int has no repr past 4300 digits)."""
-    if isinstance(v, int) and not isinstance(v, bool) and not _finite(v):
-        return f"{'-' if v < 0 else ''}<integer of {v.bit_length()} bits>"
-    text = repr(v)
-    return text if len(text) <= 40 else text[:37] + "..."
-
-
 def _ring(ring: Any, where: str) -> np.ndarray:
     if not isinstance(ring, list | tuple):
         raise InvalidPolygonError(f"{where}: a ring must be an array of positions")
@@ -117,7 +109,7 @@ def _ring(ring: Any, where: str) -> np.ndarray:
         for v in pos:
             if isinstance(v, bool) or not isinstance(v, int | float) or not _finite(v):
                 raise InvalidPolygonError(
-                    f"{where}[{i}]: coordinate {_show(v)} is not a finite number"
+                    f"{where}[{i}]: coordinate {shown(v)} is not a finite number"
                 )
         out[i] = pos[0], pos[1]
     if not np.array_equal(out[0], out[-1]):
@@ -259,23 +251,18 @@ def rasterize(
     frame : PixelFrame
         Maps pixel centres ``(col, row)`` back to polygon coordinates.
     """
-    if pixel_size is not None and longest_side is not None:
-        raise InvalidOptionError("give pixel_size or longest_side, not both")
+    RasterOptions(pixel_size=pixel_size, longest_side=longest_side)  # the options' checks
     minx, miny, maxx, maxy = geom.bounds
     extent = max(maxx - minx, maxy - miny)
     if not math.isfinite(extent):
         raise InvalidPolygonError("coordinates span too large a range to rasterise")
     if pixel_size is None:
         side = DEFAULT_LONGEST_SIDE if longest_side is None else longest_side
-        if isinstance(side, bool) or not isinstance(side, int) or side < 1:
-            raise InvalidOptionError(f"longest_side must be a positive integer, got {_show(side)}")
         if side > _MAX_SIDE:
             raise ImageTooLargeError(
-                f"longest_side {_show(side)} is over the limit of {_MAX_SIDE} pixels"
+                f"longest_side {shown(side)} is over the limit of {_MAX_SIDE} pixels"
             )
         pixel_size = extent / side
-    elif not (math.isfinite(pixel_size) and pixel_size > 0):
-        raise InvalidOptionError(f"pixel_size must be a positive finite number, got {pixel_size}")
     cols_f = (maxx - minx) / pixel_size
     rows_f = (maxy - miny) / pixel_size
     if not (cols_f <= _MAX_SIDE and rows_f <= _MAX_SIDE):  # also catches inf / nan

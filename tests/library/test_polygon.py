@@ -141,9 +141,9 @@ def test_overlapping_parts_merge() -> None:
 def test_option_and_size_errors() -> None:
     with pytest.raises(InvalidOptionError, match="not both"):
         polygon_mask(poly(SQUARE), pixel_size=1.0, longest_side=10)
-    with pytest.raises(InvalidOptionError, match="positive finite"):
+    with pytest.raises(InvalidOptionError, match="finite number > 0"):
         polygon_mask(poly(SQUARE), pixel_size=-1.0)
-    with pytest.raises(InvalidOptionError, match="positive integer"):
+    with pytest.raises(InvalidOptionError, match="integer from 8 to 16384"):
         polygon_mask(poly(SQUARE), longest_side=0)
     with pytest.raises(ImageTooLargeError, match="exceeds the limit of 1000"):
         polygon_mask(poly(SQUARE), pixel_size=0.01, max_pixels=1000)

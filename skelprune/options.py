@@ -1,0 +1,235 @@
+"""Every user option, defined once: for the library, the command line and the service.
+
+Each option is a field of one of three frozen dataclasses, with its default, its help
+text and, for a choice, its spellings (``field(metadata=...)``). Constructing one checks
+it: that check is the only one, whoever asks (the CLI and the service build these
+objects from what they were sent, as titiler builds its dependencies once).
+
+- :class:`PruneOptions`: how :func:`skelprune.prune` prunes;
+- :class:`OutputOptions`: what the document holds;
+- :class:`RasterOptions`: how a polygon becomes pixels (polygon input only).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field, fields
+from typing import Any
+
+from .errors import InvalidOptionError, shown
+
+__all__ = [
+    "COARSE",
+    "DEFAULT_LONGEST_SIDE",
+    "GROUPS",
+    "LONGEST_SIDE_RANGE",
+    "METHODS",
+    "OutputOptions",
+    "PruneOptions",
+    "RasterOptions",
+    "check_option",
+    "option_fields",
+]
+
+METHODS = ("bayesian", "dce")
+#: Spellings of ``coarse``: the name ``"none"`` is the full medial axis (``None``).
+COARSE = ("dce", "none")
+#: Pixels across the longer side of a polygon's bounding box, unless told otherwise ...
+DEFAULT_LONGEST_SIDE = 512
+#: ... and the range it may be set to: fewer pixels cannot hold a skeleton worth the
+#: name; for more, give a pixel_size.
+LONGEST_SIDE_RANGE = (8, 16384)
+
+
+def _option(default: Any, help: str, check: Callable[[str, Any], Any],
+            choices: tuple[str, ...] | None = None) -> Any:
+    return field(default=default, metadata={"help": help, "choices": choices, "check": check})
+
+
+def _with_schema(check: Callable[[str, Any], Any], **schema: Any) -> Callable[[str, Any], Any]:
+    """Attach the check's bounds as a JSON-schema fragment, for documents that show them."""
+    check.schema = schema  # type: ignore[attr-defined]
+    return check
+
+
+def _number(low: float, strict: bool) -> Callable[[str, Any], float]:
+    def check(name: str, value: Any) -> float:
+        try:
+            finite = not isinstance(value, bool) and isinstance(value, int | float) \
+                and math.isfinite(value)
+        except OverflowError:  # an integer too large for a float
+            finite = False
+        if not finite or value < low or (strict and value == low):
+            raise InvalidOptionError(
+                f"{name} must be a finite number {'>' if strict else '>='} {low:g}, "
+                f"got {shown(value)}"
+            )
+        return float(value)
+
+    return _with_schema(check, **{"exclusiveMinimum" if strict else "minimum": low})
+
+
+def _integer(low: int, high: int) -> Callable[[str, Any], int]:
+    def check(name: str, value: Any) -> int:
+        if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+            raise InvalidOptionError(
+                f"{name} must be an integer from {low} to {high}, got {shown(value)}"
+            )
+        return value
+
+    return _with_schema(check, minimum=low, maximum=high)
+
+
+def _choice(choices: tuple[str, ...]) -> Callable[[str, Any], str]:
+    def check(name: str, value: Any) -> str:
+        if value not in choices:
+            raise InvalidOptionError(
+                f"{name} must be one of {', '.join(choices)}; got {shown(value)}"
+            )
+        return value
+
+    return check
+
+
+def _flag(name: str, value: Any) -> bool:
+    if not isinstance(value, bool):
+        raise InvalidOptionError(f"{name} must be true or false, got {shown(value)}")
+    return value
+
+
+def _check_fields(options: Any) -> None:
+    """Check (and normalise) every field of a frozen options object in place; a field
+    whose default is None may be left unset."""
+    for f in fields(options):
+        value = getattr(options, f.name)
+        if value is None and f.default is None:
+            continue
+        object.__setattr__(options, f.name, f.metadata["check"](f.name, value))
+
+
+@dataclass(frozen=True)
+class PruneOptions:
+    """How :func:`skelprune.prune` prunes.
+
+    Examples
+    --------
+    >>> PruneOptions(coarse="none")
+    PruneOptions(beta=9.0, method='bayesian', coarse=None, dce_threshold=None)
+    >>> PruneOptions(beta=-1)
+    Traceback (most recent call last):
+    ...
+    skelprune.errors.InvalidOptionError: beta must be a finite number > 0, got -1
+    """
+
+    beta: float = _option(
+        9.0, "Weight β of the reconstruction term, > 0: α = β·log(L(M)/ℓ̄). The paper's 9.",
+        _number(0, strict=True),
+    )
+    method: str = _option(
+        "bayesian", "bayesian: the paper's pruning; dce: contour-partition pruning (its "
+        "ref. [10]).", _choice(METHODS), METHODS,
+    )
+    coarse: str | None = _option(
+        "dce", "dce: a coarse DCE stage before the Bayesian pruning (the default); none: "
+        "start from the full medial axis. Ignored by method=dce.", _choice(COARSE), COARSE,
+    )
+    dce_threshold: float | None = _option(
+        None, "For method=dce: the DCE stop threshold on relevance, >= 0 (scale-free; "
+        "default 0.01).", _number(0, strict=False),
+    )
+
+    def __post_init__(self) -> None:
+        if self.coarse is None:  # the library's spelling of "none"
+            object.__setattr__(self, "coarse", "none")
+        _check_fields(self)
+        if self.coarse == "none":
+            object.__setattr__(self, "coarse", None)
+
+    def kwargs(self) -> dict[str, Any]:
+        """As keyword arguments of :func:`skelprune.prune`."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class OutputOptions:
+    """What the output document holds."""
+
+    curve: bool = _option(True, "Include the pruning curve (α·AR, LR and λ at every step).",
+                          _flag)
+    overlay: bool = _option(False, "Add the overlay image as a base64 PNG (overlay_png).",
+                            _flag)
+
+    def __post_init__(self) -> None:
+        _check_fields(self)
+
+
+@dataclass(frozen=True)
+class RasterOptions:
+    """How a GeoJSON polygon becomes a raster (polygon input only).
+
+    Examples
+    --------
+    >>> RasterOptions(pixel_size=0.5).kwargs()
+    {'pixel_size': 0.5, 'repair': True}
+    >>> RasterOptions(pixel_size=0.5, longest_side=100)
+    Traceback (most recent call last):
+    ...
+    skelprune.errors.InvalidOptionError: give pixel_size or longest_side, not both
+    """
+
+    pixel_size: float | None = _option(
+        None, "Raster pixel size in the polygon's units, > 0 (instead of longest_side).",
+        _number(0, strict=True),
+    )
+    longest_side: int | None = _option(
+        None, "Pixels across the longer side of the bounding box, a whole number from "
+        f"{LONGEST_SIDE_RANGE[0]} to {LONGEST_SIDE_RANGE[1]} (default {DEFAULT_LONGEST_SIDE}).",
+        _integer(*LONGEST_SIDE_RANGE),
+    )
+    repair: bool = _option(
+        True, "Repair self-intersections with shapely's make_valid (true) or refuse them.",
+        _flag,
+    )
+
+    def __post_init__(self) -> None:
+        _check_fields(self)
+        if self.pixel_size is not None and self.longest_side is not None:
+            raise InvalidOptionError("give pixel_size or longest_side, not both")
+
+    def kwargs(self) -> dict[str, Any]:
+        """As keyword arguments of :func:`skelprune.io.polygon_mask` (unset sizes left out)."""
+        return {k: v for k, v in asdict(self).items() if v is not None}
+
+
+GROUPS: tuple[type, ...] = (PruneOptions, OutputOptions, RasterOptions)
+
+
+def check_option(name: str, value: Any) -> Any:
+    """Check one option on its own (what a form or a query parser can do per field);
+    returns the value as given.
+
+    >>> check_option("coarse", "none")
+    'none'
+    >>> check_option("longest_side", 4)
+    Traceback (most recent call last):
+    ...
+    skelprune.errors.InvalidOptionError: longest_side must be an integer from 8 to 16384, got 4
+    """
+    for group in GROUPS:
+        for f in fields(group):
+            if f.name == name:
+                f.metadata["check"](name, value)
+                return value
+    raise InvalidOptionError(f"unknown option {name!r}")
+
+
+def option_fields(*groups: type) -> list[tuple[str, Any, str, tuple[str, ...] | None]]:
+    """``(name, default, help, choices)`` of every option of the given classes, in order:
+    what the CLI and the service describe their options from.
+
+    >>> [name for name, *_ in option_fields(OutputOptions)]
+    ['curve', 'overlay']
+    """
+    return [(f.name, f.default, f.metadata["help"], f.metadata["choices"])
+            for group in groups for f in fields(group)]

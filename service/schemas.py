@@ -197,8 +197,12 @@ class Branch(BaseModel):
     id: int
     source: int
     target: int
-    length: float
-    points: list[Point3]
+    length: float = Field(description="Step length of the path (1 axial, √2 diagonal), "
+                          "with the step into each junction cluster and a loop's closing step.")
+    points: list[Point3] = Field(description="The path, in order from the source node to the "
+                                 "target node; consecutive points are 8-neighbours.")
+    off_path: list[Point3] = Field(description="Skeleton pixels of the branch beside its path "
+                                   "(kept for reconstruction), sorted by (x, y).")
 
 
 class Skeleton(BaseModel):

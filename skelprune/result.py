@@ -17,7 +17,7 @@ from .frame import IDENTITY, PixelFrame
 from .graph import BranchGraph
 from .pruning import PruningSequence
 
-__all__ = ["ComponentResult", "PruneResult"]
+__all__ = ["ComponentResult", "PruneResult", "branch_line"]
 
 
 @dataclass(frozen=True)
@@ -114,21 +114,23 @@ class ComponentResult:
         for br in g.branches:
             if not br.alive:
                 continue
+            path = br.path()
             if br.loop:
-                src = dst = new_node(br.points[0], "loop")
+                src = dst = new_node(path[0], "loop")
             else:
                 ends = []
-                for e, p in ((0, br.points[0]), (1, br.points[-1])):
+                for e, p in ((0, path[0]), (1, path[-1])):
                     if br.node[e] is not None:
                         ends.append(junction_node[br.node[e]])
-                    elif e == 1 and len(br.points) == 1 and br.node[0] is None:
+                    elif e == 1 and len(path) == 1 and br.node[0] is None:
                         ends.append(ends[0])  # a single point: one node
                     else:
                         ends.append(new_node(p, "endpoint"))
                 src, dst = ends
             branches.append({"id": len(branches), "source": src, "target": dst,
                              "length": float(br.length),
-                             "points": [xyr(p) for p in br.points]})
+                             "points": [xyr(p) for p in path],
+                             "off_path": [xyr(p) for p in sorted(br.side)]})
         return nodes, branches
 
     def to_dict(self, curve: bool = True, frame: PixelFrame = IDENTITY) -> dict[str, Any]:
@@ -144,6 +146,7 @@ class ComponentResult:
         for b in branches:
             b["length"] = frame.distance(b["length"])
             b["points"] = mapped(b["points"])
+            b["off_path"] = mapped(b["off_path"])
         ma = self.medial_axis
         seq = self.sequence
         doc: dict[str, Any] = {
@@ -174,6 +177,24 @@ class ComponentResult:
                     zip(seq.length, seq.ar, seq.lr, seq.objective, strict=True))
             ]
         return doc
+
+
+def branch_line(skeleton: dict[str, Any], branch: dict[str, Any]) -> list[list[float]]:
+    """A branch of a document as a polyline ``[x, y, radius]`` from its source node to
+    its target node.
+
+    The path's points, with the source node's position before them and the target
+    node's after them where the path does not already end there, so that the lines of
+    a skeleton meet exactly at its nodes. A loop's line is closed; a single-point
+    branch gets two equal positions, as a LineString needs two.
+    """
+    nodes = skeleton["nodes"]
+    line = [list(p) for p in branch["points"]]
+    for end, nid in ((0, branch["source"]), (-1, branch["target"])):
+        node = nodes[nid]
+        if line[end][:2] != [node["x"], node["y"]] or (end == -1 and len(line) == 1):
+            line.insert(len(line) if end == -1 else 0, [node["x"], node["y"], node["radius"]])
+    return line
 
 
 @dataclass
@@ -233,16 +254,14 @@ class PruneResult:
         for ci, comp in enumerate(self.to_dict(curve=False, frame=frame)["components"]):
             sk = comp["skeleton"]
             for br in sk["branches"]:
-                coords = [[p[0], p[1]] for p in br["points"]]
-                if len(coords) == 1:
-                    coords = coords * 2  # a LineString needs two positions
+                line = branch_line(sk, br)
                 features.append({
                     "type": "Feature",
-                    "geometry": {"type": "LineString", "coordinates": coords},
+                    "geometry": {"type": "LineString",
+                                 "coordinates": [[x, y] for x, y, _ in line]},
                     "properties": {"component": ci, "kind": "branch", "id": br["id"],
                                    "source": br["source"], "target": br["target"],
-                                   "length": br["length"],
-                                   "radii": [p[2] for p in br["points"]]},
+                                   "length": br["length"], "radii": [r for *_, r in line]},
                 })
             for nd in sk["nodes"]:
                 features.append({

@@ -94,7 +94,7 @@ def test_measure_matches_the_document() -> None:
     assert got.endpoints == res.components[0].graph.n_endpoints()
     assert got.rer == doc["rer"] and got.ss == doc["ss"]
     assert got.points is not None and len(got.points) == sum(
-        len(b["points"]) for b in doc["skeleton"]["branches"]) + sum(
+        len(b["points"]) + len(b["off_path"]) for b in doc["skeleton"]["branches"]) + sum(
         len(n["points"]) for n in doc["skeleton"]["nodes"])
 
 

@@ -140,7 +140,7 @@ def test_polygon_answer_is_in_polygon_units(client: TestClient) -> None:
         assert math.isclose(nb["radius"], na["radius"] * scale, rel_tol=1e-9)
     # Every skeleton point lies inside the polygon, in the polygon's own frame (y up).
     poly = shapely.Polygon(big)
-    pts = [p for br in b["skeleton"]["branches"] for p in br["points"]]
+    pts = [p for br in b["skeleton"]["branches"] for p in br["points"] + br["off_path"]]
     assert all(poly.contains(shapely.Point(x, y)) for x, y, _ in pts)
     assert max(r for *_, r in pts) <= 10 * scale * 1.01  # half the rectangle's height
 

@@ -272,6 +272,39 @@ class PruneResult:
                 })
         return {"type": "FeatureCollection", "features": features}
 
+    def to_networkx(self, frame: PixelFrame = IDENTITY) -> Any:
+        """The skeleton as a ``networkx.MultiGraph`` (needs the optional ``networkx``).
+
+        Nodes are ``(component, node id)`` with the document's node fields (``x``, ``y``,
+        ``radius``, ``kind``, ``points``) as attributes; each branch is an edge, keyed by
+        its id, with ``length``, ``points`` (its path from ``source`` to ``target``),
+        ``off_path`` and ``line`` (:func:`branch_line`). A loop is a self-loop edge.
+
+        Examples
+        --------
+        >>> import skelprune
+        >>> m = np.zeros((20, 40), bool); m[5:15, 5:35] = True
+        >>> g = skelprune.prune(m).to_networkx()
+        >>> g.number_of_nodes(), g.number_of_edges(), sorted(d for _, d in g.degree())
+        (6, 5, [1, 1, 1, 1, 3, 3])
+        """
+        try:
+            import networkx as nx
+        except ImportError:  # an optional dependency: say how to get it
+            raise ImportError("to_networkx needs networkx: pip install 'skelprune[graph]'") \
+                from None
+        g = nx.MultiGraph()
+        for ci, comp in enumerate(self.to_dict(curve=False, frame=frame)["components"]):
+            sk = comp["skeleton"]
+            for nd in sk["nodes"]:
+                g.add_node((ci, nd["id"]), component=ci,
+                           **{k: v for k, v in nd.items() if k != "id"})
+            for br in sk["branches"]:
+                g.add_edge((ci, br["source"]), (ci, br["target"]), key=br["id"], component=ci,
+                           length=br["length"], points=br["points"], off_path=br["off_path"],
+                           line=branch_line(sk, br))
+        return g
+
     def render_overlay(self) -> np.ndarray:
         from .render import render_overlay
 

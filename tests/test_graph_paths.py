@@ -106,3 +106,25 @@ def test_geojson_lines_form_one_network_per_component(name: str) -> None:
             # is one polygon with one interior ring per hole
             net = unary_union([LineString(c) for c in lines]).buffer(0.05)
             assert net.geom_type == "Polygon" and len(net.interiors) == holes[ci]
+
+
+def test_to_networkx_is_the_documented_graph() -> None:
+    mask = two_components()
+    res = skelprune.prune(mask)
+    doc = res.to_dict(curve=False)
+    g = res.to_networkx()
+    assert isinstance(g, nx.MultiGraph)
+    assert nx.number_connected_components(g) == len(doc["components"]) == 2
+    for ci, comp in enumerate(doc["components"]):
+        sk = comp["skeleton"]
+        assert sum(1 for n in g if n[0] == ci) == len(sk["nodes"])
+        for br in sk["branches"]:
+            data = g.get_edge_data((ci, br["source"]), (ci, br["target"]), key=br["id"])
+            assert data["length"] == br["length"] and data["points"] == br["points"]
+        sub = g.subgraph([n for n in g if n[0] == ci])
+        cycles = sub.number_of_edges() - sub.number_of_nodes() + 1
+        assert cycles == graphcheck.holes(components(mask)[ci][0])
+    assert sum(d for _, _, d in g.edges(data="length")) == pytest.approx(
+        sum(c["skeleton"]["length"] for c in doc["components"]))
+    endpoints = [n for n, kind in g.nodes(data="kind") if kind == "endpoint"]
+    assert all(g.degree(n) == 1 for n in endpoints)

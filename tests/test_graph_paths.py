@@ -12,6 +12,7 @@ from shapely.ops import unary_union
 
 import skelprune
 from skelprune.api import components
+from skelprune.polygon import polygon_mask
 
 from . import graphcheck
 from .graphcheck import check_document, check_network, network
@@ -128,3 +129,30 @@ def test_to_networkx_is_the_documented_graph() -> None:
         sum(c["skeleton"]["length"] for c in doc["components"]))
     endpoints = [n for n, kind in g.nodes(data="kind") if kind == "endpoint"]
     assert all(g.degree(n) == 1 for n in endpoints)
+
+
+def test_polygon_coordinates_are_rounded_to_a_thousandth_of_a_pixel() -> None:
+    """No float noise: every mapped value is rounded to the frame's decimals, within half
+    a unit of that place of the exact mapping, and pixel documents stay integers."""
+    ring = [[0.1, 0.25], [40.3, 0.25], [40.3, 15.15], [20.2, 9.05], [0.1, 15.15], [0.1, 0.25]]
+    mask, frame = polygon_mask({"type": "Polygon", "coordinates": [ring]}, pixel_size=0.1)
+    assert frame.decimals == 4
+    res = skelprune.prune(mask)
+    pixel = res.to_dict(curve=False)["components"][0]["skeleton"]
+    mapped = res.to_dict(curve=False, frame=frame)["components"][0]["skeleton"]
+    values = 0
+    for pn, mn in zip(pixel["nodes"], mapped["nodes"], strict=True):
+        x = frame.x0 + pn["x"] * frame.pixel_size
+        y = frame.y0 - pn["y"] * frame.pixel_size
+        for got, exact in ((mn["x"], x), (mn["y"], y), (mn["radius"], pn["radius"] * 0.1)):
+            assert got == round(got, 4) and abs(got - exact) <= 0.5e-4 + 1e-12
+            assert len(repr(got).split(".")[1]) <= 4
+            values += 1
+    for pb, mb in zip(pixel["branches"], mapped["branches"], strict=True):
+        assert all(p[0] == int(p[0]) and p[1] == int(p[1]) for p in pb["points"])
+        for (px, py, _), (mx, my, _) in zip(pb["points"], mb["points"], strict=True):
+            assert abs(mx - (frame.x0 + px * 0.1)) <= 0.5e-4 + 1e-12
+            assert abs(my - (frame.y0 - py * 0.1)) <= 0.5e-4 + 1e-12
+            assert len(repr(mx).split(".")[1]) <= 4 and len(repr(my).split(".")[1]) <= 4
+            values += 1
+    assert values > 50

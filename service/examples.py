@@ -25,6 +25,7 @@ SQUARE_POLYGON = {
 
 DOCUMENT_EXAMPLE: dict[str, Any] = {
     "width": 60, "height": 30, "method": "bayesian", "beta": 9.0, "coarse": "dce",
+    "foreground": {"rule": "auto", "shape": "light", "threshold": 127.5, "border": 1.0},
     "components": [{
         "area": 1000, "alpha": 8.64, "rer": 0.0, "ss": 1.28, "objective": 1.28,
         "medial_axis": {"rer": 0.0, "length": 71.08, "endpoints": 4, "branches": 5},

@@ -40,6 +40,7 @@ PRODUCES: dict[str, Output] = {
 }
 JSON_TYPES = ("application/json", "application/geo+json")
 POLYGON_ONLY = ("pixel_size", "longest_side", "repair")
+PNG_ONLY = ("foreground",)
 BIG_JSON = 256 * 1024  # bytes of JSON above which validation moves to a thread
 QUERY_OPTIONS = frozenset(PruneQuery.model_fields)  # no aliases: field name = parameter
 
@@ -145,6 +146,13 @@ def _options(query: PruneQuery, body: PolygonJob | None, polygon: bool) -> dict[
             raise InvalidOptionError(
                 f"option(s) {', '.join(misplaced)} only apply to polygon (JSON) input"
             )
+    else:
+        misplaced = [k for k in PNG_ONLY if k in opts]
+        if misplaced:
+            raise InvalidOptionError(
+                f"option(s) {', '.join(misplaced)} only apply to PNG input; a polygon's "
+                "shape is its interior"
+            )
     return opts
 
 
@@ -162,6 +170,12 @@ def _parse_polygon(body: bytes) -> tuple[PolygonJob | None, dict[str, Any]]:
 async def _png_from_multipart(request: Request) -> bytes:
     async with request.form(max_files=1, max_fields=16) as form:
         upload = form.get("file")
+        # An option sent as a form field would otherwise be silently ignored.
+        misplaced = sorted(k for k in form if k in QUERY_OPTIONS)
+        if misplaced:
+            raise InvalidOptionError(
+                f"option(s) {', '.join(misplaced)} sent as multipart fields; options go in "
+                "the query string")
         if not isinstance(upload, UploadFile):
             raise RequestValidationError([{
                 "loc": ("body", "file"), "type": "missing",
@@ -253,7 +267,7 @@ async def prune(
     job = Job(
         output=output, png=png, geojson=geojson, prune_options=prune_options, raster=raster,
         curve=opts.get("curve", True), overlay=opts.get("overlay", False),
-        max_pixels=settings.max_pixels,
+        max_pixels=settings.max_pixels, foreground=opts.get("foreground", "auto"),
     )
     result = await pool.run(fn, job)
     request.app.state.metrics.prune_seconds.observe(result.prune_seconds)

@@ -52,6 +52,12 @@ class PruneQuery(BaseModel):
         description="For `method=dce`: the DCE stop threshold on relevance (scale-free). "
         "Default: the library's (0.01).",
     )
+    foreground: Literal["auto", "nonzero", "zero"] | None = Field(
+        None, description="PNG input only: which pixels are the shape. `auto` (default): "
+        "the opaque ones if the image uses transparency, else the background is the grey "
+        "level holding most of the border (split at mid-range); `nonzero` / `zero`: exactly "
+        "those pixels.",
+    )
     curve: bool | None = Field(None, description="Include the pruning curve. Default true.")
     overlay: bool | None = Field(
         None, description="Add the overlay image as base64 PNG (`overlay_png`). Default false."
@@ -155,6 +161,7 @@ class PolygonJob(BaseModel):
     method: Literal["bayesian", "dce"] | None = None
     coarse: Literal["dce", "none"] | None = None
     dce_threshold: FiniteFloat | None = Field(None, ge=0)
+    foreground: Literal["auto", "nonzero", "zero"] | None = None
     curve: bool | None = None
     overlay: bool | None = None
     pixel_size: FiniteFloat | None = Field(None, gt=0)
@@ -243,6 +250,20 @@ class Component(BaseModel):
     chosen_step: int
 
 
+class ForegroundTaken(BaseModel):
+    """What was taken as the shape."""
+
+    model_config = STRICT
+    rule: Literal["auto", "nonzero", "zero"] | None = Field(
+        description="The rule asked for; null for polygon input.")
+    shape: Literal["nonzero", "zero", "light", "dark", "opaque", "polygon"] = Field(
+        description="Pixels taken: non-zero / zero ones, grey values above (`light`) or at "
+        "or below (`dark`) `threshold`, alpha above `threshold` (`opaque`), or the polygon.")
+    threshold: float | None = Field(description="The mid-range split, for light/dark/opaque.")
+    border: float | None = Field(
+        description="Share of the image border on the background side (auto, grey values).")
+
+
 class PruneDocument(BaseModel):
     """The output document of SPEC §3."""
 
@@ -252,6 +273,7 @@ class PruneDocument(BaseModel):
     method: Literal["bayesian", "dce"]
     beta: float
     coarse: Literal["dce"] | None
+    foreground: ForegroundTaken
     components: list[Component]
     overlay_png: str | None = Field(None, description="Base64 PNG; only with overlay=true.")
 

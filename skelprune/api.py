@@ -17,6 +17,7 @@ from .dce import (
     generated_in_several_segments,
 )
 from .errors import EmptyMaskError, InvalidOptionError
+from .foreground import check_rule, select
 from .graph import BranchGraph
 from .medial_axis import oriented_medial_axis, squared_distance
 from .pruning import bayesian_sequence, choose_step, normalisation, remove_unsupported
@@ -135,13 +136,14 @@ def prune(
     method: Literal["bayesian", "dce"] = "bayesian",
     coarse: Literal["dce"] | None = "dce",
     dce_threshold: float | None = None,
+    foreground: Literal["auto", "nonzero", "zero"] = "nonzero",
 ) -> PruneResult:
     """Pruned skeleton of every 8-connected component of a binary mask.
 
     Parameters
     ----------
     mask : (H, W) array
-        Non-zero pixels are the shape.
+        The image; by default its non-zero pixels are the shape.
     beta : float
         Weight of the reconstruction term, ``α = β·log(length(M)/ℓ̄)``; the paper's 9.
     method : {"bayesian", "dce"}
@@ -155,6 +157,11 @@ def prune(
     dce_threshold : float, optional
         For ``method="dce"``: the DCE stop threshold on relevance (scale-free: edge
         lengths over the perimeter); default :data:`skelprune.dce.DCE_THRESHOLD`.
+    foreground : {"nonzero", "auto", "zero"}
+        Which pixels of ``mask`` are the shape (:mod:`skelprune.foreground`): the
+        non-zero ones (the default for arrays, as a boolean mask means), the zero ones,
+        or by the ``auto`` rule, which :func:`skelprune.io.read_mask` uses for images:
+        the background is the grey level holding most of the image border.
 
     Returns
     -------
@@ -165,7 +172,7 @@ def prune(
     EmptyMaskError
         When the mask has no foreground pixel.
     InvalidOptionError
-        For a bad ``beta``, ``method`` or ``coarse``.
+        For a bad ``beta``, ``method``, ``coarse`` or ``foreground``.
 
     Examples
     --------
@@ -176,15 +183,18 @@ def prune(
     (4, True)
     """
     _check_options(beta, method, coarse, dce_threshold)
+    check_rule(foreground)
     if method == "dce":
         coarse = None  # DCE pruning has no stage before it
     mask = np.asarray(mask)
     if mask.ndim != 2:
         raise InvalidOptionError(f"mask must be 2-D, got shape {mask.shape}")
-    fg = mask != 0
+    fg, taken = (mask != 0, None) if foreground == "nonzero" else select(mask, foreground)
     if not fg.any():
         raise EmptyMaskError("the mask has no foreground pixel")
     result = PruneResult(mask=fg, method=method, beta=float(beta), coarse=coarse)
+    if taken is not None:
+        result.foreground = taken
     for crop, origin in components(fg):
         result.components.append(
             prune_component(crop, origin, beta, method, coarse, dce_threshold))

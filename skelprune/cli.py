@@ -15,23 +15,34 @@ import os
 import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from .errors import SkelpruneError
 
+if TYPE_CHECKING:
+    from .result import PruneResult
+
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Parameter-free Bayesian skeleton pruning.")
 
 
-def _prune_file(path: str, beta: float, method: str, coarse: str | None,
-                curve: bool) -> dict[str, Any]:
+def _prune(path: str, beta: float, method: str, coarse: str | None,
+           foreground: str) -> PruneResult:
     from .api import prune
-    from .io import read_mask
+    from .io import read_shape
 
+    mask, taken = read_shape(path, foreground=foreground)
+    res = prune(mask, beta=beta, method=method, coarse=coarse)
+    res.foreground = taken
+    return res
+
+
+def _prune_file(path: str, beta: float, method: str, coarse: str | None,
+                curve: bool, foreground: str = "auto") -> dict[str, Any]:
     try:
-        doc = prune(read_mask(path), beta=beta, method=method, coarse=coarse).to_dict(curve=curve)
+        doc = _prune(path, beta, method, coarse, foreground).to_dict(curve=curve)
         return {"file": path, "result": doc}
     except (SkelpruneError, OSError) as exc:
         return {"file": path, "error": f"{type(exc).__name__}: {exc}"}
@@ -55,11 +66,18 @@ def prune_command(
                                                  "(one input file only).")] = None,
     curve: Annotated[bool, typer.Option(help="Include the pruning curve.")] = True,
     workers: Annotated[int, typer.Option(help="Worker processes for several files.")] = 0,
+    foreground: Annotated[str, typer.Option(
+        help="Which pixels are the shape: auto (the background is the grey level holding "
+        "most of the border; opaque pixels if the image uses transparency), nonzero or "
+        "zero.")] = "auto",
 ) -> None:
     """Prune the skeleton of each shape and print the result as JSON."""
-    from .api import prune
-    from .io import read_mask
+    from .foreground import FOREGROUND_RULES
 
+    if foreground not in FOREGROUND_RULES:
+        typer.echo(f"error: --foreground must be one of {', '.join(FOREGROUND_RULES)}, "
+                   f"got {foreground!r}", err=True)
+        raise typer.Exit(2)
     coarse = None if coarse in (None, "", "none", "null") else coarse
     inputs = _expand(files)
     if not inputs:
@@ -67,7 +85,7 @@ def prune_command(
         raise typer.Exit(2)
     if len(inputs) == 1 and not files[0].is_dir():
         try:
-            res = prune(read_mask(str(inputs[0])), beta=beta, method=method, coarse=coarse)
+            res = _prune(str(inputs[0]), beta, method, coarse, foreground)
         except (SkelpruneError, OSError) as exc:
             typer.echo(f"error: {inputs[0]}: {exc}", err=True)
             raise typer.Exit(1) from None
@@ -85,7 +103,8 @@ def prune_command(
     failed = 0
     with ProcessPoolExecutor(max_workers=n) as pool:
         jobs = pool.map(_prune_file, [str(p) for p in inputs], [beta] * len(inputs),
-                        [method] * len(inputs), [coarse] * len(inputs), [curve] * len(inputs))
+                        [method] * len(inputs), [coarse] * len(inputs), [curve] * len(inputs),
+                        [foreground] * len(inputs))
         for line in tqdm(jobs, total=len(inputs), file=sys.stderr, unit="shape"):
             failed += "error" in line
             sys.stdout.write(json.dumps(line) + "\n")

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from ._orientation import IDENTITY_ORIENTATION, Orientation
+from .foreground import Foreground
 from .frame import IDENTITY, PixelFrame
 from .graph import BranchGraph
 from .pruning import PruningSequence
@@ -206,6 +207,9 @@ class PruneResult:
     beta: float
     coarse: str | None
     components: list[ComponentResult] = field(default_factory=list)
+    #: What was taken as the shape (:mod:`skelprune.foreground`); readers of images
+    #: (:func:`skelprune.io.read_shape`) set theirs here.
+    foreground: Foreground = field(default_factory=lambda: Foreground("nonzero", "nonzero"))
 
     @property
     def width(self) -> int:
@@ -242,6 +246,7 @@ class PruneResult:
         doc: dict[str, Any] = {
             "width": self.width, "height": self.height, "method": self.method,
             "beta": float(self.beta), "coarse": self.coarse,
+            "foreground": self.foreground.to_dict(),
             "components": [c.to_dict(curve=curve, frame=frame) for c in self.components],
         }
         if overlay:

@@ -251,7 +251,8 @@ async def prune(
             "(field 'file') or application/json (GeoJSON)"
         )
     opts = _options(query, envelope, polygon=geojson is not None)
-    prune_options = {k: opts[k] for k in ("beta", "method", "dce_threshold") if k in opts}
+    prune_options = {k: opts[k] for k in ("beta", "method", "dce_threshold", "min_margin")
+                     if k in opts}
     if "coarse" in opts:
         prune_options["coarse"] = None if opts["coarse"] == "none" else opts["coarse"]
     raster: dict[str, Any] = {}

@@ -52,6 +52,11 @@ class PruneQuery(BaseModel):
         description="For `method=dce`: the DCE stop threshold on relevance (scale-free). "
         "Default: the library's (0.01).",
     )
+    min_margin: float | None = Field(
+        None, ge=0, allow_inf_nan=False,
+        description="For `method=bayesian`: drop end branches whose margin is below this, "
+        "cheapest first, as the pruning sequence goes on. Default: off (the paper's answer).",
+    )
     foreground: Literal["auto", "nonzero", "zero"] | None = Field(
         None, description="PNG input only: which pixels are the shape. `auto` (default): "
         "the opaque ones if the image uses transparency, else the background is the grey "
@@ -161,6 +166,7 @@ class PolygonJob(BaseModel):
     method: Literal["bayesian", "dce"] | None = None
     coarse: Literal["dce", "none"] | None = None
     dce_threshold: FiniteFloat | None = Field(None, ge=0)
+    min_margin: FiniteFloat | None = Field(None, ge=0)
     foreground: Literal["auto", "nonzero", "zero"] | None = None
     curve: bool | None = None
     overlay: bool | None = None
@@ -210,6 +216,12 @@ class Branch(BaseModel):
                                  "target node; consecutive points are 8-neighbours.")
     off_path: list[Point3] = Field(description="Skeleton pixels of the branch beside its path "
                                    "(kept for reconstruction), sorted by (x, y).")
+    margin: float | None = Field(description="How clearly the trade-off keeps the branch: "
+                                 "λ(Ŝ − E) − λ(Ŝ) for an end branch E, λ at the step that "
+                                 "removes it minus λ(Ŝ) for an inner one; null if never "
+                                 "removed, for method=dce and degenerate shapes.")
+    removed_at: int | None = Field(description="Step of the pruning sequence that removes "
+                                   "the branch (null: never).")
 
 
 class Skeleton(BaseModel):
@@ -301,6 +313,8 @@ class BranchProperties(BaseModel):
     target: int
     length: float
     radii: list[float]
+    margin: float | None
+    removed_at: int | None
 
 
 class NodeProperties(BaseModel):

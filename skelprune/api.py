@@ -19,6 +19,7 @@ from .dce import (
 from .errors import EmptyMaskError, InvalidOptionError
 from .foreground import check_rule, select
 from .graph import BranchGraph
+from .margin import Margins, branch_margins
 from .medial_axis import oriented_medial_axis, squared_distance
 from .pruning import bayesian_sequence, choose_step, normalisation, remove_unsupported
 from .reconstruction import count_covered
@@ -46,7 +47,7 @@ def components(mask: np.ndarray) -> list[tuple[np.ndarray, tuple[int, int]]]:
 
 
 def _check_options(beta: float, method: str, coarse: str | None,
-                   dce_threshold: float | None) -> None:
+                   dce_threshold: float | None, min_margin: float | None = None) -> None:
     if not isinstance(beta, (int, float)) or isinstance(beta, bool) or not math.isfinite(beta) \
             or beta <= 0:
         raise InvalidOptionError(f"beta must be a finite number > 0, got {beta!r}")
@@ -59,6 +60,14 @@ def _check_options(beta: float, method: str, coarse: str | None,
             or not math.isfinite(dce_threshold) or dce_threshold < 0):
         raise InvalidOptionError(
             f"dce_threshold must be a finite number >= 0, got {dce_threshold!r}")
+    if min_margin is not None:
+        if isinstance(min_margin, bool) or not isinstance(min_margin, (int, float)) \
+                or not math.isfinite(min_margin) or min_margin < 0:
+            raise InvalidOptionError(
+                f"min_margin must be a finite number >= 0, got {min_margin!r}")
+        if method != "bayesian":
+            raise InvalidOptionError("min_margin applies to method='bayesian' only: the "
+                                     "margin measures the Bayesian trade-off")
 
 
 def dce_support(crop: np.ndarray, ma_rows: np.ndarray, ma_cols: np.ndarray, r2: np.ndarray,
@@ -70,7 +79,8 @@ def dce_support(crop: np.ndarray, ma_rows: np.ndarray, ma_cols: np.ndarray, r2: 
 
 def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
                     method: str, coarse: str | None,
-                    dce_threshold: float | None = None) -> ComponentResult:
+                    dce_threshold: float | None = None,
+                    min_margin: float | None = None) -> ComponentResult:
     """Medial axis and pruning of one padded component crop.
 
     With ``coarse="dce"`` the Bayesian sequence (and so its curve, ``chosen_step``,
@@ -109,6 +119,12 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
         seq = bayesian_sequence(graph, crop, ma.r2, norm.alpha, norm.lbar,
                                 uncovered=bool(before))
         chosen = choose_step(seq.objective)
+        if min_margin is not None and seq.alpha is not None:
+            # Drop end branches kept by less than min_margin: the cheapest one is the
+            # sequence's next removal, and its margin is that step's rise of λ.
+            lam = seq.objective
+            while chosen < len(seq.removed) and lam[chosen + 1] - lam[chosen] < min_margin:
+                chosen += 1
     # Λ(D \ R(M)) without a second painting: a sequence from M knows it; from the
     # coarse skeleton, only the pixels it misses need testing against the removed disks.
     ma_lost = seq.lost[0]
@@ -124,9 +140,12 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
         final = start
         for b in seq.removed[:chosen]:
             final.remove_end_branch(b)
+    # DCE's answer is not chosen by the trade-off: its branches have no margin.
+    margins = Margins() if method == "dce" else branch_margins(final, crop, ma.r2, seq, chosen)
     return ComponentResult(
         origin=origin, area=int(crop.sum()), r2=ma.r2, medial_axis=summary, graph=final,
         sequence=seq, chosen_step=chosen, ma_rer=ma_rer, orientation=orientation,
+        margins=margins,
     )
 
 
@@ -137,6 +156,7 @@ def prune(
     coarse: Literal["dce"] | None = "dce",
     dce_threshold: float | None = None,
     foreground: Literal["auto", "nonzero", "zero"] = "nonzero",
+    min_margin: float | None = None,
 ) -> PruneResult:
     """Pruned skeleton of every 8-connected component of a binary mask.
 
@@ -162,6 +182,10 @@ def prune(
         non-zero ones (the default for arrays, as a boolean mask means), the zero ones,
         or by the ``auto`` rule, which :func:`skelprune.io.read_mask` uses for images:
         the background is the grey level holding most of the image border.
+    min_margin : float, optional
+        For ``method="bayesian"``: drop the answer's end branches whose margin
+        (:mod:`skelprune.margin`) is below this, one at a time, cheapest first, as the
+        sequence would go on removing them. Default: off (the paper's answer).
 
     Returns
     -------
@@ -172,7 +196,7 @@ def prune(
     EmptyMaskError
         When the mask has no foreground pixel.
     InvalidOptionError
-        For a bad ``beta``, ``method``, ``coarse`` or ``foreground``.
+        For a bad ``beta``, ``method``, ``coarse``, ``foreground`` or ``min_margin``.
 
     Examples
     --------
@@ -182,7 +206,7 @@ def prune(
     >>> len(comp.to_dict()["skeleton"]["endpoints"]), comp.rer < 0.05
     (4, True)
     """
-    _check_options(beta, method, coarse, dce_threshold)
+    _check_options(beta, method, coarse, dce_threshold, min_margin)
     check_rule(foreground)
     if method == "dce":
         coarse = None  # DCE pruning has no stage before it
@@ -197,5 +221,5 @@ def prune(
         result.foreground = taken
     for crop, origin in components(fg):
         result.components.append(
-            prune_component(crop, origin, beta, method, coarse, dce_threshold))
+            prune_component(crop, origin, beta, method, coarse, dce_threshold, min_margin))
     return result

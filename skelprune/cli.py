@@ -29,20 +29,21 @@ app = typer.Typer(add_completion=False, no_args_is_help=True,
 
 
 def _prune(path: str, beta: float, method: str, coarse: str | None,
-           foreground: str) -> PruneResult:
+           foreground: str, min_margin: float | None = None) -> PruneResult:
     from .api import prune
     from .io import read_shape
 
     mask, taken = read_shape(path, foreground=foreground)
-    res = prune(mask, beta=beta, method=method, coarse=coarse)
+    res = prune(mask, beta=beta, method=method, coarse=coarse, min_margin=min_margin)
     res.foreground = taken
     return res
 
 
 def _prune_file(path: str, beta: float, method: str, coarse: str | None,
-                curve: bool, foreground: str = "auto") -> dict[str, Any]:
+                curve: bool, foreground: str = "auto",
+                min_margin: float | None = None) -> dict[str, Any]:
     try:
-        doc = _prune(path, beta, method, coarse, foreground).to_dict(curve=curve)
+        doc = _prune(path, beta, method, coarse, foreground, min_margin).to_dict(curve=curve)
         return {"file": path, "result": doc}
     except (SkelpruneError, OSError) as exc:
         return {"file": path, "error": f"{type(exc).__name__}: {exc}"}
@@ -70,6 +71,9 @@ def prune_command(
         help="Which pixels are the shape: auto (the background is the grey level holding "
         "most of the border; opaque pixels if the image uses transparency), nonzero or "
         "zero.")] = "auto",
+    min_margin: Annotated[float | None, typer.Option(
+        help="Drop end branches whose margin is below this (bayesian only; default off: "
+        "the paper's answer).")] = None,
 ) -> None:
     """Prune the skeleton of each shape and print the result as JSON."""
     from .foreground import FOREGROUND_RULES
@@ -85,7 +89,7 @@ def prune_command(
         raise typer.Exit(2)
     if len(inputs) == 1 and not files[0].is_dir():
         try:
-            res = _prune(str(inputs[0]), beta, method, coarse, foreground)
+            res = _prune(str(inputs[0]), beta, method, coarse, foreground, min_margin)
         except (SkelpruneError, OSError) as exc:
             typer.echo(f"error: {inputs[0]}: {exc}", err=True)
             raise typer.Exit(1) from None
@@ -104,7 +108,7 @@ def prune_command(
     with ProcessPoolExecutor(max_workers=n) as pool:
         jobs = pool.map(_prune_file, [str(p) for p in inputs], [beta] * len(inputs),
                         [method] * len(inputs), [coarse] * len(inputs), [curve] * len(inputs),
-                        [foreground] * len(inputs))
+                        [foreground] * len(inputs), [min_margin] * len(inputs))
         for line in tqdm(jobs, total=len(inputs), file=sys.stderr, unit="shape"):
             failed += "error" in line
             sys.stdout.write(json.dumps(line) + "\n")

@@ -16,6 +16,7 @@ from ._orientation import IDENTITY_ORIENTATION, Orientation
 from .foreground import Foreground
 from .frame import IDENTITY, PixelFrame
 from .graph import BranchGraph
+from .margin import Margins
 from .pruning import PruningSequence
 
 __all__ = ["ComponentResult", "PruneResult", "branch_line"]
@@ -53,6 +54,7 @@ class ComponentResult:
     chosen_step: int
     ma_rer: float
     orientation: Orientation = IDENTITY_ORIENTATION
+    margins: Margins = field(default_factory=Margins)
 
     def image_coordinates(self, rows: np.ndarray,
                           cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -112,7 +114,7 @@ class ComponentResult:
             return len(nodes) - 1
 
         branches: list[dict[str, Any]] = []
-        for br in g.branches:
+        for b, br in enumerate(g.branches):
             if not br.alive:
                 continue
             path = br.path()
@@ -131,7 +133,9 @@ class ComponentResult:
             branches.append({"id": len(branches), "source": src, "target": dst,
                              "length": float(br.length),
                              "points": [xyr(p) for p in path],
-                             "off_path": [xyr(p) for p in sorted(br.side)]})
+                             "off_path": [xyr(p) for p in sorted(br.side)],
+                             "margin": self.margins.margin.get(b),
+                             "removed_at": self.margins.removed_at.get(b)})
         return nodes, branches
 
     def to_dict(self, curve: bool = True, frame: PixelFrame = IDENTITY) -> dict[str, Any]:
@@ -266,7 +270,8 @@ class PruneResult:
                                  "coordinates": [[x, y] for x, y, _ in line]},
                     "properties": {"component": ci, "kind": "branch", "id": br["id"],
                                    "source": br["source"], "target": br["target"],
-                                   "length": br["length"], "radii": [r for *_, r in line]},
+                                   "length": br["length"], "radii": [r for *_, r in line],
+                                   "margin": br["margin"], "removed_at": br["removed_at"]},
                 })
             for nd in sk["nodes"]:
                 features.append({

@@ -141,7 +141,7 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
         for b in seq.removed[:chosen]:
             final.remove_end_branch(b)
     # DCE's answer is not chosen by the trade-off: its branches have no margin.
-    margins = Margins() if method == "dce" else branch_margins(final, crop, ma.r2, seq, chosen)
+    margins = Margins() if method == "dce" else branch_margins(final, seq, chosen)
     return ComponentResult(
         origin=origin, area=int(crop.sum()), r2=ma.r2, medial_axis=summary, graph=final,
         sequence=seq, chosen_step=chosen, ma_rer=ma_rer, orientation=orientation,

@@ -330,6 +330,24 @@ class BranchGraph:
                 keep.extend(junc.points)
         return np.array(sorted(keep), dtype=np.int64)
 
+    def counts_without(self, b: int) -> tuple[int, int]:
+        """(axial, diagonal) step counts of the skeleton once end branch ``b`` is removed,
+        without removing it: what :meth:`remove_end_branch` would leave, a dissolved
+        junction's path through its cluster included."""
+        br = self.branches[b]
+        e = 0 if br.node[0] is not None else 1
+        jid = br.node[e]
+        assert jid is not None
+        na, nd = self.na - br.na, self.nd - br.nd
+        rest = [end for end in self.junctions[jid].ends if end != (b, e)]
+        if len(rest) == 2:
+            (b1, e1), (b2, e2) = rest
+            # a shortest path's (axial, diagonal) counts are the same either way round
+            _, pa, pd = self._cluster_path(jid, self.branches[b1].attach[e1],
+                                           self.branches[b2].attach[e2])
+            na, nd = na + pa, nd + pd
+        return na, nd
+
     # -- mutation -----------------------------------------------------------------
     def remove_end_branch(self, b: int) -> tuple[int, int, int] | None:
         """Remove end branch ``b``.

@@ -14,20 +14,17 @@ For the answer ``Ŝ = S(k)`` of the greedy sequence and ``λ`` its target (eq. 7
 - a branch the sequence never removes (the last path of a tree, the cycles of a shape
   with holes) has no margin (``None``): nothing in the trade-off would take it.
 
-``removed_at`` is that step ``j`` for every branch (``None``: never removed). Both are
-computed from the sequence already run, plus one coverage of ``Ŝ`` for the areas of
-its end branches.
+``removed_at`` is that step ``j`` for every branch (``None``: never removed). Both come
+from the sequence already run: it records, at each step, the area each end branch alone
+covers (what the choice reads anyway) and which branches merged.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from .graph import BranchGraph
 from .pruning import PruningSequence, objective
-from .reconstruction import Coverage
 
 __all__ = ["Margins", "branch_margins"]
 
@@ -40,25 +37,21 @@ class Margins:
     removed_at: dict[int, int | None] = field(default_factory=dict)
 
 
-def branch_margins(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray,
-                   seq: PruningSequence, chosen: int) -> Margins:
+def branch_margins(graph: BranchGraph, seq: PruningSequence, chosen: int) -> Margins:
     """Margins of the branches of ``graph``, which is ``S(chosen)`` of ``seq``.
 
     Parameters
     ----------
     graph : BranchGraph
         The answer's graph (not modified).
-    mask : (H, W) bool array
-        The shape in the graph's frame.
-    r2 : (n,) int array
-        Squared radius of each graph point.
     seq : PruningSequence
-        The sequence ``graph`` is step ``chosen`` of.
+        The sequence ``graph`` is step ``chosen`` of; its recorded end-branch areas and
+        merges are all the margins need.
     chosen : int
         The answer's step.
     """
     alive = [b for b, br in enumerate(graph.branches) if br.alive]
-    removed_at = _removal_steps(graph, seq, chosen, alive)
+    removed_at = _removal_steps(seq, chosen, alive)
     if seq.alpha is None or not seq.lbar > 0:
         return Margins({b: None for b in alive}, removed_at)
     lam = seq.objective
@@ -67,43 +60,26 @@ def branch_margins(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray,
     for b in alive:
         j = removed_at[b]
         margin[b] = None if j is None else float(lam[j]) - base
-    ends = graph.end_branches()
-    if ends:
-        nb = len(graph.branches)
-        labels = np.zeros(graph.rows.size, np.int64)
-        for b in alive:
-            labels[graph.branches[b].points] = b + 1
-        for j, junc in enumerate(graph.junctions):
-            if junc.alive:
-                labels[junc.points] = nb + 1 + j
-        pts = graph.alive_points()
-        cov = Coverage(mask, graph.rows[pts], graph.cols[pts], r2[pts], labels[pts],
-                       nb + len(graph.junctions) + 1)
-        for b in ends:
-            g = graph.copy()
-            g.remove_end_branch(b)
-            lost = cov.lost + int(cov.exclusive[b + 1])
-            margin[b] = objective(lost, seq.area, g.na, g.nd, seq.alpha, seq.lbar) - base
+    if chosen < len(seq.end_areas):
+        lost = seq.lost[chosen]
+        ends, areas = seq.end_areas[chosen]
+        for b, d in zip(ends.tolist(), areas.tolist(), strict=True):
+            na, nd = graph.counts_without(b)
+            margin[b] = objective(lost + d, seq.area, na, nd, seq.alpha, seq.lbar) - base
     return Margins(margin, removed_at)
 
 
-def _removal_steps(graph: BranchGraph, seq: PruningSequence, chosen: int,
+def _removal_steps(seq: PruningSequence, chosen: int,
                    alive: list[int]) -> dict[int, int | None]:
-    """The step at which the sequence, continued from ``graph``, removes each branch."""
-    owner = {b: b for b in alive}  # the branch of the running graph that holds b's points
+    """The step at which the sequence, from step ``chosen`` on, removes each branch."""
+    held = {b: [b] for b in alive}  # running branch -> the answer's branches it holds
     steps: dict[int, int | None] = {b: None for b in alive}
-    rest = seq.removed[chosen:]
-    if not rest:
-        return steps
-    g = graph.copy()
-    for i, pick in enumerate(rest, start=chosen + 1):
-        merged = g.remove_end_branch(pick)
-        for b in alive:
-            if steps[b] is None and owner[b] == pick:
-                steps[b] = i
-        if merged is not None:
-            kept, absorbed, _ = merged
-            for b in alive:
-                if owner[b] == absorbed:
-                    owner[b] = kept
+    for i in range(chosen, len(seq.removed)):
+        for b in held.pop(seq.removed[i], []):
+            steps[b] = i + 1
+        merged = seq.merges[i]
+        if merged is not None and merged[0] != merged[1]:  # (a loop closing keeps its id)
+            kept, absorbed = merged
+            moved = held.pop(absorbed, [])
+            held.setdefault(kept, []).extend(moved)
     return steps

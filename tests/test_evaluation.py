@@ -109,6 +109,9 @@ def test_eval_command_writes_report_and_figures(tmp_path: Path) -> None:
         assert v in text
     assert "skelprune eval --out docs --limit 2" in text
     assert "Endpoint agreement" in (tmp_path / "stability.md").read_text()
+    margin = (tmp_path / "margin.md").read_text()
+    assert "Flips by margin quartile" in margin and "| off (default) |" in margin
+    assert margin.count("| rotate-15 |") == 1
     figs = sorted(p.name for p in (tmp_path / "figures").glob("*.png"))
     assert figs == ["fig11_kimia216.png", "fig3_curves.png", "fig6_7_stability.png",
                     "fig9_rectangles.png", "methods.png"]

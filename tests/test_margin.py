@@ -160,3 +160,20 @@ def test_min_margin_in_cli_and_service(tmp_path) -> None:
             resp = client.post("/v1/prune", content=data,
                                headers={"content-type": "image/png"}, **kwargs)
             assert resp.status_code == 422 and "min_margin" in resp.text
+
+
+def test_flip_matching_finds_every_branch_under_exact_turns() -> None:
+    """A turn by 0° or 90° and a mirror-free shift keep every end branch: nothing is lost
+    or gained, so the flip table's mapping and matching are right."""
+    from skelprune.eval_margin import run_margins
+    from skelprune.perturb import Perturbation
+
+    sets = {"kimia216": [(p.stem, load(p)) for p in dataset("kimia216")[:4]]}
+    perts = (Perturbation("rotate-0", "rotate", 0.0), Perturbation("rotate-90", "rotate", 90.0))
+    run = run_margins(sets, perturbations=perts, min_margins=(0.1,), workers=1, progress=False)
+    for p in ("rotate-0", "rotate-90"):
+        for kind in ("lost", "gained"):
+            _, flips, total = run.flips(kind, p)
+            assert flips == 0 and total > 10, (p, kind)
+        assert run.agreement(None, p) == 1.0 and run.agreement(0.1, p) == 1.0
+    assert run.mean_endpoints(0.1) <= run.mean_endpoints(None)

@@ -25,6 +25,7 @@ SQUARE_POLYGON = {
 
 DOCUMENT_EXAMPLE: dict[str, Any] = {
     "width": 60, "height": 30, "method": "bayesian", "beta": 9.0, "coarse": "dce",
+    "foreground": {"rule": "auto", "shape": "light", "threshold": 127.5, "border": 1.0},
     "components": [{
         "area": 1000, "alpha": 8.64, "rer": 0.0, "ss": 1.28, "objective": 1.28,
         "medial_axis": {"rer": 0.0, "length": 71.08, "endpoints": 4, "branches": 5},
@@ -36,8 +37,11 @@ DOCUMENT_EXAMPLE: dict[str, Any] = {
                 {"id": 1, "x": 7.0, "y": 7.0, "radius": 3.0, "kind": "endpoint", "points": []},
             ],
             "branches": [
-                {"id": 0, "source": 0, "target": 1, "length": 8.49,
-                 "points": [[13.0, 13.0, 9.0], [12.0, 12.0, 8.0], [7.0, 7.0, 3.0]]},
+                {"id": 0, "source": 0, "target": 1, "length": 9.9,
+                 "points": [[13.0, 13.0, 9.0], [12.0, 12.0, 8.0], [11.0, 11.0, 7.0],
+                            [10.0, 10.0, 6.0], [9.0, 9.0, 5.0], [8.0, 8.0, 4.0],
+                            [7.0, 7.0, 3.0]],
+                 "off_path": [], "margin": 0.046, "removed_at": 1},
             ],
             "endpoints": [1],
         },
@@ -53,9 +57,12 @@ GEOJSON_EXAMPLE: dict[str, Any] = {
     "type": "FeatureCollection",
     "features": [
         {"type": "Feature",
-         "geometry": {"type": "LineString", "coordinates": [[13.0, 13.0], [7.0, 7.0]]},
+         "geometry": {"type": "LineString",
+                      "coordinates": [[14.0, 14.0], [13.0, 13.0], [12.0, 12.0], [11.0, 11.0],
+                                      [10.0, 10.0], [9.0, 9.0], [8.0, 8.0], [7.0, 7.0]]},
          "properties": {"component": 0, "kind": "branch", "id": 0, "source": 0, "target": 1,
-                        "length": 8.49, "radii": [9.0, 3.0]}},
+                        "length": 9.9, "radii": [10.0, 9.0, 8.0, 7.0, 6.0, 5.0, 4.0, 3.0],
+                        "margin": 0.046, "removed_at": 1}},
         {"type": "Feature", "geometry": {"type": "Point", "coordinates": [7.0, 7.0]},
          "properties": {"component": 0, "kind": "endpoint", "id": 1, "radius": 3.0}},
     ],

@@ -14,8 +14,9 @@ from typing import Any, Literal
 import numpy as np
 
 from skelprune.errors import InvalidImageError
+from skelprune.io import read_shape
+from skelprune.io.foreground import POLYGON_FOREGROUND, Foreground
 from skelprune.io.frame import PixelFrame
-from skelprune.io.png import read_mask
 from skelprune.io.polygon import polygon_mask
 
 __all__ = ["Job", "JobResult", "run_job", "warmup"]
@@ -46,6 +47,7 @@ class Job:
     curve: bool = True
     overlay: bool = False
     max_pixels: int | None = None
+    foreground: str = "auto"
 
 
 @dataclass(frozen=True)
@@ -78,24 +80,28 @@ def warmup() -> None:
     res.overlay_png()
 
 
-def _mask(job: Job) -> tuple[np.ndarray, PixelFrame | None]:
+def _mask(job: Job) -> tuple[np.ndarray, PixelFrame | None, Foreground]:
     if job.png is not None:
-        # read_mask also opens files by path: never let anything but bytes through.
+        # read_shape also opens files by path: never let anything but bytes through.
         if not isinstance(job.png, bytes | bytearray | memoryview):
             raise InvalidImageError("PNG input must be bytes, not a file name")
-        return read_mask(bytes(job.png), max_pixels=job.max_pixels), None
+        mask, taken = read_shape(bytes(job.png), foreground=job.foreground,
+                                 max_pixels=job.max_pixels)
+        return mask, None, taken
     assert job.geojson is not None
-    return polygon_mask(job.geojson, max_pixels=job.max_pixels, **job.raster)
+    mask, frame = polygon_mask(job.geojson, max_pixels=job.max_pixels, **job.raster)
+    return mask, frame, POLYGON_FOREGROUND
 
 
 def run_job(job: Job) -> JobResult:
     """Decode the input, prune it and serialise the requested output."""
     import skelprune
 
-    mask, frame = _mask(job)
+    mask, frame, taken = _mask(job)
     t0 = time.perf_counter()
     res = skelprune.prune(mask, **job.prune_options)
     elapsed = time.perf_counter() - t0
+    res.foreground = taken
     framing = {} if frame is None else {"frame": frame}  # None: the image's own pixel frame
     if job.output == "png":
         body = res.overlay_png()

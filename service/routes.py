@@ -29,7 +29,7 @@ from service.schemas import (
 from service.settings import Settings
 from skelprune.errors import InvalidOptionError
 from skelprune.io.png import check_png_size
-from skelprune.options import OutputOptions, PruneOptions, RasterOptions
+from skelprune.options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
 
 __all__ = ["job_function", "negotiate", "parse_query", "router"]
 
@@ -42,6 +42,7 @@ PRODUCES: dict[str, Output] = {
     "application/geo+json": "geojson",
 }
 JSON_TYPES = ("application/json", "application/geo+json")
+PNG_ONLY = tuple(f.name for f in fields(ReadOptions))
 BIG_JSON = 256 * 1024  # bytes of JSON above which validation moves to a thread
 QUERY_OPTIONS = frozenset(PruneQuery.model_fields)  # no aliases: field name = parameter
 
@@ -147,6 +148,13 @@ def _options(query: PruneQuery, body: PolygonJob | None, polygon: bool) -> dict[
             raise InvalidOptionError(
                 f"option(s) {', '.join(misplaced)} only apply to polygon (JSON) input"
             )
+    else:
+        misplaced = [k for k in PNG_ONLY if k in opts]
+        if misplaced:
+            raise InvalidOptionError(
+                f"option(s) {', '.join(misplaced)} only apply to PNG input; a polygon's "
+                "shape is its interior"
+            )
     return opts
 
 
@@ -169,6 +177,12 @@ def _parse_polygon(body: bytes) -> tuple[PolygonJob | None, dict[str, Any]]:
 async def _png_from_multipart(request: Request) -> bytes:
     async with request.form(max_files=1, max_fields=16) as form:
         upload = form.get("file")
+        # An option sent as a form field would otherwise be silently ignored.
+        misplaced = sorted(k for k in form if k in QUERY_OPTIONS)
+        if misplaced:
+            raise InvalidOptionError(
+                f"option(s) {', '.join(misplaced)} sent as multipart fields; options go in "
+                "the query string")
         if not isinstance(upload, UploadFile):
             raise RequestValidationError([{
                 "loc": ("body", "file"), "type": "missing",
@@ -242,6 +256,7 @@ async def prune(
     # The library's option classes check the values (the only place they are checked).
     prune_options = PruneOptions(**_group(opts, PruneOptions))
     output_options = OutputOptions(**_group(opts, OutputOptions))
+    read_options = ReadOptions(**_group(opts, ReadOptions))
     raster: dict[str, Any] = {}
     if geojson is not None:
         given = _group(opts, RasterOptions)
@@ -251,7 +266,7 @@ async def prune(
     job = Job(
         output=output, png=png, geojson=geojson, prune_options=prune_options.kwargs(),
         raster=raster, curve=output_options.curve, overlay=output_options.overlay,
-        max_pixels=settings.max_pixels,
+        max_pixels=settings.max_pixels, foreground=read_options.foreground,
     )
     result = await pool.run(fn, job)
     request.app.state.metrics.prune_seconds.observe(result.prune_seconds)

@@ -23,7 +23,7 @@ from pydantic import (
     field_validator,
 )
 
-from skelprune.options import GROUPS, RasterOptions, check_option
+from skelprune.options import GROUPS, RasterOptions, ReadOptions, check_option
 
 __all__ = [
     "POLYGON_ONLY",
@@ -69,8 +69,9 @@ def _option_models() -> tuple[type[BaseModel], dict[str, Any], dict[str, Any]]:
             text = f.metadata["help"]
             if default is not None and "default" not in text:
                 text += f" Default `{json.dumps(default).strip(chr(34))}`."
-            if group is RasterOptions:
-                text = "Polygon input only: " + text[0].lower() + text[1:]
+            only = {RasterOptions: "Polygon", ReadOptions: "PNG"}.get(group)
+            if only:
+                text = f"{only} input only: " + text[0].lower() + text[1:]
             if f.name == "longest_side":
                 text += " The server's default is `SKELPRUNE_POLYGON_LONGEST_SIDE`."
             schema = getattr(f.metadata["check"], "schema", None)
@@ -208,8 +209,18 @@ class Branch(BaseModel):
     id: int
     source: int
     target: int
-    length: float
-    points: list[Point3]
+    length: float = Field(description="Step length of the path (1 axial, √2 diagonal), "
+                          "with the step into each junction cluster and a loop's closing step.")
+    points: list[Point3] = Field(description="The path, in order from the source node to the "
+                                 "target node; consecutive points are 8-neighbours.")
+    off_path: list[Point3] = Field(description="Skeleton pixels of the branch beside its path "
+                                   "(kept for reconstruction), sorted by (x, y).")
+    margin: float | None = Field(description="How clearly the trade-off keeps the branch: "
+                                 "λ(Ŝ − E) − λ(Ŝ) for an end branch E, λ at the step that "
+                                 "removes it minus λ(Ŝ) for an inner one; null if never "
+                                 "removed, for method=dce and degenerate shapes.")
+    removed_at: int | None = Field(description="Step of the pruning sequence that removes "
+                                   "the branch (null: never).")
 
 
 class Skeleton(BaseModel):
@@ -250,6 +261,20 @@ class Component(BaseModel):
     chosen_step: int
 
 
+class ForegroundTaken(BaseModel):
+    """What was taken as the shape."""
+
+    model_config = STRICT
+    rule: Literal["auto", "nonzero", "zero"] | None = Field(
+        description="The rule asked for; null for polygon input.")
+    shape: Literal["nonzero", "zero", "light", "dark", "opaque", "polygon"] = Field(
+        description="Pixels taken: non-zero / zero ones, grey values above (`light`) or at "
+        "or below (`dark`) `threshold`, alpha above `threshold` (`opaque`), or the polygon.")
+    threshold: float | None = Field(description="The mid-range split, for light/dark/opaque.")
+    border: float | None = Field(
+        description="Share of the image border on the background side (auto, grey values).")
+
+
 class PruneDocument(BaseModel):
     """The output document of SPEC §3."""
 
@@ -259,6 +284,7 @@ class PruneDocument(BaseModel):
     method: Literal["bayesian", "dce"]
     beta: float
     coarse: Literal["dce"] | None
+    foreground: ForegroundTaken
     components: list[Component]
     overlay_png: str | None = Field(None, description="Base64 PNG; only with overlay=true.")
 
@@ -286,6 +312,8 @@ class BranchProperties(BaseModel):
     target: int
     length: float
     radii: list[float]
+    margin: float | None
+    removed_at: int | None
 
 
 class NodeProperties(BaseModel):

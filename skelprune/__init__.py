@@ -7,7 +7,7 @@ simplicity and reconstruction error", Science China Information Sciences, 2013.
 >>> m = np.zeros((30, 60), bool); m[5:25, 5:55] = True
 >>> doc = skelprune.prune(m).to_dict()
 >>> sorted(doc)
-['beta', 'coarse', 'components', 'height', 'method', 'width']
+['beta', 'coarse', 'components', 'foreground', 'height', 'method', 'width']
 """
 
 from .api import components, prune

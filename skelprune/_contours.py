@@ -20,7 +20,7 @@ def boundary_polygons(mask: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
 
     Exactly the polygons of ``find_contours(pad(mask, 1), 0.5, fully_connected="high",
     positive_orientation="high")`` with the closing vertex dropped: same vertices, same
-    start vertex and orientation, same polygon order (``tests/test_dce_fast.py`` checks
+    start vertex and orientation, same polygon order (``tests/library/test_dce_fast.py`` checks
     this against skimage). The DCE tie-breaking depends on vertex indices, so the start
     vertex matters.
     """

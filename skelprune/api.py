@@ -10,8 +10,9 @@ from scipy import ndimage
 from ._orientation import Orientation, oriented
 from .errors import EmptyMaskError, InvalidOptionError
 from .graph import BranchGraph
+from .io.foreground import select
 from .medial_axis import MedialAxis, oriented_medial_axis, squared_distance
-from .options import METHODS, PruneOptions
+from .options import METHODS, PruneOptions, check_option
 from .output.document import ComponentResult, GraphSummary, PruneResult
 from .pruning.bayesian import bayesian_sequence, choose_step, normalisation, remove_unsupported
 from .pruning.coarse import coarse_dce
@@ -21,6 +22,7 @@ from .pruning.dce import (
     boundary_partition,
     generated_in_several_segments,
 )
+from .pruning.margin import Margins, branch_margins
 from .reconstruction import count_covered
 
 __all__ = ["METHODS", "canonical_medial_axis", "components", "oriented", "prune"]
@@ -61,7 +63,8 @@ def canonical_medial_axis(crop: np.ndarray) -> tuple[np.ndarray, Orientation, Me
 
 def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
                     method: str, coarse: str | None,
-                    dce_threshold: float | None = None) -> ComponentResult:
+                    dce_threshold: float | None = None,
+                    min_margin: float | None = None) -> ComponentResult:
     """Medial axis and pruning of one padded component crop.
 
     With ``coarse="dce"`` the Bayesian sequence (and so its curve, ``chosen_step``,
@@ -98,6 +101,12 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
         seq = bayesian_sequence(graph, crop, ma.r2, norm.alpha, norm.lbar,
                                 uncovered=bool(before))
         chosen = choose_step(seq.objective)
+        if min_margin is not None and seq.alpha is not None:
+            # Drop end branches kept by less than min_margin: the cheapest one is the
+            # sequence's next removal, and its margin is that step's rise of λ.
+            lam = seq.objective
+            while chosen < len(seq.removed) and lam[chosen + 1] - lam[chosen] < min_margin:
+                chosen += 1
     # Λ(D \ R(M)) without a second painting: a sequence from M knows it; from the
     # coarse skeleton, only the pixels it misses need testing against the removed disks.
     ma_lost = seq.lost[0]
@@ -113,9 +122,12 @@ def prune_component(crop: np.ndarray, origin: tuple[int, int], beta: float,
         final = start
         for b in seq.removed[:chosen]:
             final.remove_end_branch(b)
+    # DCE's answer is not chosen by the trade-off: its branches have no margin.
+    margins = Margins() if method == "dce" else branch_margins(final, seq, chosen)
     return ComponentResult(
         origin=origin, area=int(crop.sum()), r2=ma.r2, medial_axis=summary, graph=final,
         sequence=seq, chosen_step=chosen, ma_rer=ma_rer, orientation=orientation,
+        margins=margins,
     )
 
 
@@ -125,13 +137,15 @@ def prune(
     method: Literal["bayesian", "dce"] = "bayesian",
     coarse: Literal["dce"] | None = "dce",
     dce_threshold: float | None = None,
+    foreground: Literal["auto", "nonzero", "zero"] = "nonzero",
+    min_margin: float | None = None,
 ) -> PruneResult:
     """Pruned skeleton of every 8-connected component of a binary mask.
 
     Parameters
     ----------
     mask : (H, W) array
-        Non-zero pixels are the shape.
+        The image; by default its non-zero pixels are the shape.
     beta : float
         Weight of the reconstruction term, ``α = β·log(length(M)/ℓ̄)``; the paper's 9.
     method : {"bayesian", "dce"}
@@ -145,6 +159,15 @@ def prune(
     dce_threshold : float, optional
         For ``method="dce"``: the DCE stop threshold on relevance (scale-free: edge
         lengths over the perimeter); default :data:`skelprune.pruning.dce.DCE_THRESHOLD`.
+    foreground : {"nonzero", "auto", "zero"}
+        Which pixels of ``mask`` are the shape (:mod:`skelprune.io.foreground`): the
+        non-zero ones (the default for arrays, as a boolean mask means), the zero ones,
+        or by the ``auto`` rule, which :func:`skelprune.io.read_mask` uses for images:
+        the background is the grey level holding most of the image border.
+    min_margin : float, optional
+        For ``method="bayesian"``: drop the answer's end branches whose margin
+        (:mod:`skelprune.pruning.margin`) is below this, one at a time, cheapest first, as
+        the sequence would go on removing them. Default: off (the paper's answer).
 
     Returns
     -------
@@ -155,7 +178,7 @@ def prune(
     EmptyMaskError
         When the mask has no foreground pixel.
     InvalidOptionError
-        For a bad ``beta``, ``method`` or ``coarse``.
+        For a bad ``beta``, ``method``, ``coarse``, ``foreground`` or ``min_margin``.
 
     Examples
     --------
@@ -165,17 +188,21 @@ def prune(
     >>> len(comp.to_dict()["skeleton"]["endpoints"]), comp.rer < 0.05
     (4, True)
     """
-    opts = PruneOptions(beta=beta, method=method, coarse=coarse, dce_threshold=dce_threshold)
+    opts = PruneOptions(beta=beta, method=method, coarse=coarse, dce_threshold=dce_threshold,
+                        min_margin=min_margin)
     beta, method, dce_threshold = opts.beta, opts.method, opts.dce_threshold
     coarse = None if method == "dce" else opts.coarse  # DCE pruning has no stage before it
+    check_option("foreground", foreground)
     mask = np.asarray(mask)
     if mask.ndim != 2:
         raise InvalidOptionError(f"mask must be 2-D, got shape {mask.shape}")
-    fg = mask != 0
+    fg, taken = (mask != 0, None) if foreground == "nonzero" else select(mask, foreground)
     if not fg.any():
         raise EmptyMaskError("the mask has no foreground pixel")
     result = PruneResult(mask=fg, method=method, beta=float(beta), coarse=coarse)
+    if taken is not None:
+        result.foreground = taken
     for crop, origin in components(fg):
         result.components.append(
-            prune_component(crop, origin, beta, method, coarse, dce_threshold))
+            prune_component(crop, origin, beta, method, coarse, dce_threshold, min_margin))
     return result

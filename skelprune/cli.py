@@ -16,24 +16,43 @@ import os
 import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
+from typer.exceptions import TyperException
 
 from .errors import SkelpruneError
-from .options import COARSE, METHODS, OutputOptions, PruneOptions, option_fields
+from .options import (
+    COARSE,
+    FOREGROUND_RULES,
+    METHODS,
+    OutputOptions,
+    PruneOptions,
+    ReadOptions,
+    option_fields,
+)
+
+if TYPE_CHECKING:
+    from .output.document import PruneResult
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Parameter-free Bayesian skeleton pruning.")
 
 
-def _prune_file(path: str, options: PruneOptions, curve: bool) -> dict[str, Any]:
+def _prune(path: str, read: ReadOptions, options: PruneOptions) -> PruneResult:
     from .api import prune
-    from .io.png import read_mask
+    from .io import read_shape
 
+    mask, taken = read_shape(path, foreground=read.foreground)
+    res = prune(mask, **options.kwargs())
+    res.foreground = taken
+    return res
+
+
+def _prune_file(path: str, read: ReadOptions, options: PruneOptions,
+                curve: bool) -> dict[str, Any]:
     try:
-        doc = prune(read_mask(path), **options.kwargs()).to_dict(curve=curve)
-        return {"file": path, "result": doc}
+        return {"file": path, "result": _prune(path, read, options).to_dict(curve=curve)}
     except (SkelpruneError, OSError) as exc:
         return {"file": path, "error": f"{type(exc).__name__}: {exc}"}
 
@@ -45,10 +64,12 @@ def _expand(paths: list[Path]) -> list[Path]:
     return files
 
 
-HELP = {name: text for name, _, text, _ in option_fields(PruneOptions, OutputOptions)}
+HELP = {name: text for name, _, text, _ in option_fields(PruneOptions, OutputOptions,
+                                                          ReadOptions)}
 # the choices as typer shows them (it lists an Enum's values in --help)
 Method = enum.Enum("Method", {name: name for name in METHODS}, type=str)
 Coarse = enum.Enum("Coarse", {name: name for name in COARSE}, type=str)
+Rule = enum.Enum("Rule", {name: name for name in FOREGROUND_RULES}, type=str)
 
 
 @app.command("prune")
@@ -58,18 +79,19 @@ def prune_command(
     method: Annotated[Method, typer.Option(help=HELP["method"])] = Method(PruneOptions.method),
     coarse: Annotated[Coarse, typer.Option(help=HELP["coarse"])] = Coarse("dce"),
     dce_threshold: Annotated[float | None, typer.Option(help=HELP["dce_threshold"])] = None,
+    min_margin: Annotated[float | None, typer.Option(help=HELP["min_margin"])] = None,
+    foreground: Annotated[Rule, typer.Option(help=HELP["foreground"])
+                          ] = Rule(ReadOptions.foreground),
     overlay: Annotated[Path | None, typer.Option(help="Write the overlay PNG here "
                                                  "(one input file only).")] = None,
     curve: Annotated[bool, typer.Option(help=HELP["curve"])] = OutputOptions.curve,
     workers: Annotated[int, typer.Option(help="Worker processes for several files.")] = 0,
 ) -> None:
     """Prune the skeleton of each shape and print the result as JSON."""
-    from .api import prune
-    from .io.png import read_mask
-
     try:  # checked once, before any file is read
         options = PruneOptions(beta=beta, method=method.value, coarse=coarse.value,
-                               dce_threshold=dce_threshold)
+                               dce_threshold=dce_threshold, min_margin=min_margin)
+        read = ReadOptions(foreground=foreground.value)
     except SkelpruneError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None
@@ -79,7 +101,7 @@ def prune_command(
         raise typer.Exit(2)
     if len(inputs) == 1 and not files[0].is_dir():
         try:
-            res = prune(read_mask(str(inputs[0])), **options.kwargs())
+            res = _prune(str(inputs[0]), read, options)
         except (SkelpruneError, OSError) as exc:
             typer.echo(f"error: {inputs[0]}: {exc}", err=True)
             raise typer.Exit(1) from None
@@ -96,8 +118,9 @@ def prune_command(
     n = workers or os.cpu_count() or 1
     failed = 0
     with ProcessPoolExecutor(max_workers=n) as pool:
-        jobs = pool.map(_prune_file, [str(p) for p in inputs], [options] * len(inputs),
-                        [curve] * len(inputs))
+        k = len(inputs)
+        jobs = pool.map(_prune_file, [str(p) for p in inputs], [read] * k, [options] * k,
+                        [curve] * k)
         for line in tqdm(jobs, total=len(inputs), file=sys.stderr, unit="shape"):
             failed += "error" in line
             sys.stdout.write(json.dumps(line) + "\n")
@@ -140,7 +163,17 @@ def version() -> None:
 
 
 def main() -> None:  # console-script entry point
-    app()
+    """Run the command line; a usage error is one line on stderr and exit status 2."""
+    try:
+        code = app(standalone_mode=False)
+    except typer.Abort:
+        code = 130
+    except TyperException as exc:  # usage errors (status 2) and the like
+        message = " ".join(exc.format_message().split())  # typer's wrapped text, one line
+        if message:  # (no arguments at all: the help was shown instead)
+            typer.echo(f"error: {message}", err=True)
+        code = getattr(exc, "exit_code", 2)
+    sys.exit(code or 0)
 
 
 if __name__ == "__main__":

@@ -178,6 +178,10 @@ class Branch:
     ``node[e]`` is a junction node id or ``None`` (a free end: an endpoint);
     ``attach[e]`` is the junction pixel the end touches. A loop without junction has
     ``loop = True`` and no nodes.
+
+    ``side`` lists the points of ``points`` that are not on the branch's path: pixels of
+    a dissolved junction cluster beside the path through it. ``points`` keeps them, in
+    the order the pruning has always seen them; :meth:`path` leaves them out.
     """
 
     points: list[int]
@@ -187,10 +191,22 @@ class Branch:
     nd: int
     loop: bool = False
     alive: bool = True
+    side: list[int] = field(default_factory=list)
 
     @property
     def length(self) -> float:
         return step_length(self.na, self.nd)
+
+    def path(self) -> list[int]:
+        """``points`` without ``side``: consecutive 8-neighbours, in the branch's order.
+
+        Its step length, with the step from each junction end's ``attach`` pixel into
+        it (and, for a loop, the closing step), is ``length``.
+        """
+        if not self.side:
+            return list(self.points)
+        off = set(self.side)
+        return [p for p in self.points if p not in off]
 
 
 @dataclass
@@ -285,7 +301,7 @@ class BranchGraph:
         g.extra_na, g.extra_nd = self.extra_na, self.extra_nd
         g.na, g.nd = self.na, self.nd
         g.branches = [Branch(list(b.points), list(b.node), list(b.attach), b.na, b.nd,
-                             b.loop, b.alive) for b in self.branches]
+                             b.loop, b.alive, list(b.side)) for b in self.branches]
         g.junctions = [Junction(list(j.points), list(j.ends), j.alive)
                        for j in self.junctions]
         g.ends = set(self.ends)
@@ -328,6 +344,24 @@ class BranchGraph:
             if junc.alive:
                 keep.extend(junc.points)
         return np.array(sorted(keep), dtype=np.int64)
+
+    def counts_without(self, b: int) -> tuple[int, int]:
+        """(axial, diagonal) step counts of the skeleton once end branch ``b`` is removed,
+        without removing it: what :meth:`remove_end_branch` would leave, a dissolved
+        junction's path through its cluster included."""
+        br = self.branches[b]
+        e = 0 if br.node[0] is not None else 1
+        jid = br.node[e]
+        assert jid is not None
+        na, nd = self.na - br.na, self.nd - br.nd
+        rest = [end for end in self.junctions[jid].ends if end != (b, e)]
+        if len(rest) == 2:
+            (b1, e1), (b2, e2) = rest
+            # a shortest path's (axial, diagonal) counts are the same either way round
+            _, pa, pd = self._cluster_path(jid, self.branches[b1].attach[e1],
+                                           self.branches[b2].attach[e2])
+            na, nd = na + pa, nd + pd
+        return na, nd
 
     # -- mutation -----------------------------------------------------------------
     def remove_end_branch(self, b: int) -> tuple[int, int, int] | None:
@@ -399,7 +433,8 @@ class BranchGraph:
         ends = list(junc.ends)
         junc.ends.clear()
         if not ends:  # an isolated blob of junction pixels: one branch, two free ends
-            self.branches.append(Branch(list(junc.points), [None, None], [-1, -1], 0, 0))
+            self.branches.append(Branch(list(junc.points), [None, None], [-1, -1], 0, 0,
+                                        side=list(junc.points[1:])))
             return None
         if len(ends) == 1:  # the cluster is the tip of a branch
             b, e = ends[0]
@@ -408,6 +443,7 @@ class BranchGraph:
             rest = [p for p in junc.points if p not in path]
             tip = path + rest
             br.points = br.points + tip if e == 1 else tip[::-1] + br.points
+            br.side = br.side + rest
             br.node[e], br.attach[e] = None, -1
             return None
         (b1, e1), (b2, e2) = ends
@@ -416,6 +452,7 @@ class BranchGraph:
             path, na, nd = self._cluster_path(jid, br.attach[1], br.attach[0])
             moved = list(dict.fromkeys(path + list(junc.points)))
             br.points = br.points + moved
+            br.side = br.side + moved[len(path):]
             br.na += na
             br.nd += nd
             self.extra_na += na
@@ -434,6 +471,7 @@ class BranchGraph:
         path, na, nd = self._cluster_path(jid, k.attach[e1], a.attach[e2])
         rest = [p for p in junc.points if p not in path]
         k.points = kp + path + rest + ap
+        k.side = k.side + rest + a.side
         k.node = [kn[0], a.node[1 - e2]]
         k.attach = [kt[0], a.attach[1 - e2]]
         k.na += a.na + na

@@ -5,9 +5,10 @@ text and, for a choice, its spellings (``field(metadata=...)``). Constructing on
 it: that check is the only one, whoever asks (the CLI and the service build these
 objects from what they were sent, as titiler builds its dependencies once).
 
+- :class:`ReadOptions`: which pixels of an image are the shape (image input only);
+- :class:`RasterOptions`: how a polygon becomes pixels (polygon input only);
 - :class:`PruneOptions`: how :func:`skelprune.prune` prunes;
-- :class:`OutputOptions`: what the document holds;
-- :class:`RasterOptions`: how a polygon becomes pixels (polygon input only).
+- :class:`OutputOptions`: what the document holds.
 """
 
 from __future__ import annotations
@@ -22,17 +23,21 @@ from .errors import InvalidOptionError, shown
 __all__ = [
     "COARSE",
     "DEFAULT_LONGEST_SIDE",
+    "FOREGROUND_RULES",
     "GROUPS",
     "LONGEST_SIDE_RANGE",
     "METHODS",
     "OutputOptions",
     "PruneOptions",
     "RasterOptions",
+    "ReadOptions",
     "check_option",
     "option_fields",
 ]
 
 METHODS = ("bayesian", "dce")
+#: The foreground rules (:mod:`skelprune.io.foreground`).
+FOREGROUND_RULES = ("auto", "nonzero", "zero")
 #: Spellings of ``coarse``: the name ``"none"`` is the full medial axis (``None``).
 COARSE = ("dce", "none")
 #: Pixels across the longer side of a polygon's bounding box, unless told otherwise ...
@@ -109,13 +114,27 @@ def _check_fields(options: Any) -> None:
 
 
 @dataclass(frozen=True)
+class ReadOptions:
+    """Which pixels of an image are the shape (image input only)."""
+
+    foreground: str = _option(
+        "auto", "Which pixels are the shape: auto (the grey side not holding most of the "
+        "image border, split at mid-grey; the opaque part of a transparent image), nonzero "
+        "or zero.", _choice(FOREGROUND_RULES), FOREGROUND_RULES,
+    )
+
+    def __post_init__(self) -> None:
+        _check_fields(self)
+
+
+@dataclass(frozen=True)
 class PruneOptions:
     """How :func:`skelprune.prune` prunes.
 
     Examples
     --------
     >>> PruneOptions(coarse="none")
-    PruneOptions(beta=9.0, method='bayesian', coarse=None, dce_threshold=None)
+    PruneOptions(beta=9.0, method='bayesian', coarse=None, dce_threshold=None, min_margin=None)
     >>> PruneOptions(beta=-1)
     Traceback (most recent call last):
     ...
@@ -138,6 +157,11 @@ class PruneOptions:
         None, "For method=dce: the DCE stop threshold on relevance, >= 0 (scale-free; "
         "default 0.01).", _number(0, strict=False),
     )
+    min_margin: float | None = _option(
+        None, "For method=bayesian: also drop the answer's end branches whose margin is "
+        "below this, >= 0, cheapest first, as the sequence goes on (default off: the "
+        "paper's answer).", _number(0, strict=False),
+    )
 
     def __post_init__(self) -> None:
         if self.coarse is None:  # the library's spelling of "none"
@@ -145,6 +169,9 @@ class PruneOptions:
         _check_fields(self)
         if self.coarse == "none":
             object.__setattr__(self, "coarse", None)
+        if self.min_margin is not None and self.method != "bayesian":
+            raise InvalidOptionError("min_margin applies to method='bayesian' only: the "
+                                     "margin measures the Bayesian trade-off")
 
     def kwargs(self) -> dict[str, Any]:
         """As keyword arguments of :func:`skelprune.prune`."""
@@ -202,7 +229,7 @@ class RasterOptions:
         return {k: v for k, v in asdict(self).items() if v is not None}
 
 
-GROUPS: tuple[type, ...] = (PruneOptions, OutputOptions, RasterOptions)
+GROUPS: tuple[type, ...] = (PruneOptions, OutputOptions, ReadOptions, RasterOptions)
 
 
 def check_option(name: str, value: Any) -> Any:

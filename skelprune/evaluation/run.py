@@ -307,7 +307,7 @@ def run_evaluation(out: Path, data: Path | None = None, limit: int | None = None
     Returns
     -------
     dict
-        ``{"evaluation": path, "stability": path, <figure key>: path, ...}``.
+        ``{"evaluation": path, "stability": path, "margin": path, <figure key>: path, ...}``.
     """
     data = default_data_dir() if data is None else Path(data)
     out = Path(out)
@@ -324,6 +324,11 @@ def run_evaluation(out: Path, data: Path | None = None, limit: int | None = None
     (out / "evaluation.md").write_text(
         _markdown(run, spd, len(sets[DATASETS[0]]), figs, command))
     (out / "stability.md").write_text(stability_markdown(run, command))
-    written = {"evaluation": out / "evaluation.md", "stability": out / "stability.md"}
+    from .margin import margin_markdown, run_margins
+
+    margins = run_margins(sets, seed=seed, workers=workers, progress=progress)
+    (out / "margin.md").write_text(margin_markdown(margins, command))
+    written = {"evaluation": out / "evaluation.md", "stability": out / "stability.md",
+               "margin": out / "margin.md"}
     written.update({k: out / v for k, v in figs.items()})
     return written

@@ -1,19 +1,22 @@
 """Input: PNG masks and GeoJSON polygons to boolean masks, and the pixel frame.
 
 The first stage of the pipeline (input → medial axis → graph → pruning → metrics →
-output). :func:`read_mask` decodes PNG files and arrays (:mod:`.png`),
+output). :func:`read_mask` / :func:`read_shape` decode PNG files and arrays (:mod:`.png`),
+taking as the shape what :mod:`.foreground`'s rule says,
 :func:`polygon_mask` rasterises GeoJSON polygons (:mod:`.polygon`), and
 :class:`PixelFrame` maps pixel results back to the polygon's coordinates (:mod:`.frame`).
 """
 
+from .foreground import Foreground
 from .frame import IDENTITY, PixelFrame
-from .png import PNG_SIGNATURE, check_png_size, png_size, read_mask
+from .png import PNG_SIGNATURE, check_png_size, png_size, read_mask, read_shape
 from .polygon import DEFAULT_LONGEST_SIDE, parse_geojson, polygon_mask, rasterize
 
 __all__ = [
     "DEFAULT_LONGEST_SIDE",
     "IDENTITY",
     "PNG_SIGNATURE",
+    "Foreground",
     "PixelFrame",
     "check_png_size",
     "parse_geojson",
@@ -21,4 +24,5 @@ __all__ = [
     "polygon_mask",
     "rasterize",
     "read_mask",
+    "read_shape",
 ]

@@ -1,18 +1,20 @@
 """Decoding of PNG files and arrays into boolean shape masks.
 
 Rules (SPEC §4): greyscale, RGB, RGBA, palette (with or without transparency) and
-16-bit PNGs are accepted. Where the image *uses* transparency, the shape is the set of
-non-transparent pixels; otherwise it is the set of pixels whose grey value is non-zero.
+16-bit PNGs are accepted. Which pixels are the shape is decided by the foreground rule
+of :mod:`skelprune.io.foreground` (``auto`` by default: the background is the grey level
+holding most of the border; ``nonzero`` and ``zero`` on request).
 
 Choices made where the SPEC is silent:
 
 - An image uses transparency when at least one pixel is fully transparent: alpha 0 in
   an alpha channel, a palette entry with alpha 0 that some pixel uses, or a pixel equal
-  to the tRNS colour key. An RGBA file whose alpha is 255 everywhere is therefore read
-  by its grey values, like the RGB file it really is.
-- With transparency, "non-transparent" means alpha > 0 (anti-aliased edges count).
-- "Grey value non-zero" is taken exactly, before any rounding: a colour pixel belongs
-  to the shape unless it is pure black.
+  to the tRNS colour key (whose alpha is then 0, and 1 elsewhere). An RGBA file whose
+  alpha is 255 everywhere is therefore read by its grey values, like the RGB file it
+  really is.
+- Values are taken exactly, before any rounding (16-bit samples keep 16 bits where
+  Pillow gives them): for ``nonzero``, a colour pixel belongs to the shape unless it is
+  pure black.
 - The chunk structure (lengths, CRCs, a final IEND) is checked before Pillow decodes, so
   a truncated or corrupted file is refused instead of half-decoded.
 """
@@ -30,7 +32,9 @@ from PIL import Image, UnidentifiedImageError
 
 from skelprune.errors import ImageTooLargeError, InvalidImageError
 
-__all__ = ["PNG_SIGNATURE", "check_png_size", "png_size", "read_mask"]
+from .foreground import Foreground, check_rule, select
+
+__all__ = ["PNG_SIGNATURE", "check_png_size", "png_size", "read_mask", "read_shape"]
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _MAX_DIMENSION = 2**31 - 1  # PNG spec limit for width and height
@@ -147,7 +151,8 @@ def _is_key(arr: np.ndarray, key: object) -> np.ndarray:
     return arr == int(key)  # type: ignore[call-overload]
 
 
-def _image_mask(im: Image.Image, bit_depth: int) -> np.ndarray:
+def _image_values(im: Image.Image, bit_depth: int) -> tuple[np.ndarray, np.ndarray | None]:
+    """Grey or colour values, and the alpha channel if the image uses transparency."""
     mode = im.mode
     if mode == "P":
         # Palette: Pillow maps tRNS (per-entry alpha) to RGBA for us.
@@ -155,14 +160,13 @@ def _image_mask(im: Image.Image, bit_depth: int) -> np.ndarray:
         im = im.convert("RGBA" if has_trns else "RGB")
         mode = im.mode
     if mode == "1":
-        return np.array(im, dtype=bool)
+        return np.array(im, dtype=np.uint8), None
     arr = np.asarray(im)
     if mode in _ALPHA_MODES:
         alpha = arr[..., -1]
-        if np.any(alpha == 0):
-            return alpha > 0
         colour = arr[..., :-1]
-        return np.any(colour != 0, axis=-1) if colour.ndim == 3 else colour != 0
+        colour = colour[..., 0] if colour.shape[-1] == 1 else colour
+        return colour, (alpha if np.any(alpha == 0) else None)
     key = im.info.get("transparency")
     if key is not None and not isinstance(key, bytes):
         if mode == "RGB" and bit_depth == 16:
@@ -170,45 +174,49 @@ def _image_mask(im: Image.Image, bit_depth: int) -> np.ndarray:
             key = tuple(int(k) >> 8 for k in key)
         transparent = _is_key(arr, key)
         if transparent.any():
-            return ~transparent
-    return np.any(arr != 0, axis=-1) if arr.ndim == 3 else arr != 0
+            return arr, (~transparent).astype(np.uint8)
+    return arr, None
 
 
-def _array_mask(arr: np.ndarray) -> np.ndarray:
+def _array_values(arr: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     if arr.ndim == 2:
-        return np.ascontiguousarray(arr != 0) if arr.dtype != bool else arr.copy()
+        return arr, None
     if arr.ndim == 3 and arr.shape[2] in (1, 2, 3, 4):
+        alpha = None
         if arr.shape[2] in (2, 4):
-            alpha = arr[..., -1]
-            if np.any(alpha == 0):
-                return np.ascontiguousarray(alpha > 0)
+            alpha = arr[..., -1] if np.any(arr[..., -1] == 0) else None
             arr = arr[..., :-1]
-        return np.ascontiguousarray(np.any(arr != 0, axis=-1))
+        return (arr[..., 0] if arr.shape[2] == 1 else arr), alpha
     raise InvalidImageError(
         f"array of shape {arr.shape} is not an image: expected (H, W) or (H, W, 1-4)"
     )
 
 
-def read_mask(
+def read_shape(
     source: bytes | bytearray | memoryview | str | os.PathLike[str] | np.ndarray,
     *,
+    foreground: str = "auto",
     max_pixels: int | None = None,
-) -> np.ndarray:
-    """Decode a PNG (bytes or file path) or an array into a boolean shape mask.
+) -> tuple[np.ndarray, Foreground]:
+    """Decode a PNG (bytes or file path) or an image array into its shape mask.
 
     Parameters
     ----------
     source : bytes, str, os.PathLike or numpy.ndarray
         PNG file contents, the path of a PNG file, or an image array of shape
         ``(H, W)`` or ``(H, W, C)`` with ``C`` in 1–4 (2 and 4: last channel is alpha).
+    foreground : {"auto", "nonzero", "zero"}
+        The foreground rule (:mod:`skelprune.io.foreground`).
     max_pixels : int, optional
         Refuse images with more pixels than this. For PNG input the check reads the
         header only, before anything is decoded.
 
     Returns
     -------
-    numpy.ndarray
+    mask : numpy.ndarray
         ``(H, W)`` boolean array, True on the shape.
+    Foreground
+        What was taken as the shape.
 
     Raises
     ------
@@ -217,6 +225,55 @@ def read_mask(
         not an image.
     ImageTooLargeError
         More pixels than ``max_pixels``.
+    InvalidOptionError
+        An unknown ``foreground`` rule.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> white = np.full((4, 4), 255, np.uint8); white[1:3, 1:3] = 0
+    >>> mask, fg = read_shape(white)
+    >>> mask.astype(int).tolist()[1], fg.shape
+    ([0, 1, 1, 0], 'dark')
+    """
+    check_rule(foreground)
+    if isinstance(source, np.ndarray):
+        values, alpha = _array_values(source)
+        if max_pixels is not None and values.shape[0] * values.shape[1] > max_pixels:
+            raise ImageTooLargeError(
+                f"image has {values.shape[0] * values.shape[1]} pixels "
+                f"({values.shape[1]}×{values.shape[0]}), the limit is {max_pixels}"
+            )
+    else:
+        if isinstance(source, (str, os.PathLike)):
+            try:
+                data = Path(source).read_bytes()
+            except OSError as exc:
+                raise InvalidImageError(
+                    f"cannot read {os.fspath(source)!r}: {exc.strerror}") from None
+        else:
+            data = bytes(source)
+        width, height, depth, _ = _ihdr(data)
+        check_png_size(data, max_pixels)
+        _check_chunks(data)
+        im = _decode(data)
+        if im.size != (width, height):  # never decode something other than what was checked
+            raise InvalidImageError(
+                f"corrupt PNG: decoded size {im.size[0]}×{im.size[1]} differs from the "
+                f"IHDR size {width}×{height}"
+            )
+        values, alpha = _image_values(im, depth)
+    mask, taken = select(values, foreground, alpha)
+    return np.ascontiguousarray(mask, dtype=bool), taken
+
+
+def read_mask(
+    source: bytes | bytearray | memoryview | str | os.PathLike[str] | np.ndarray,
+    *,
+    foreground: str = "auto",
+    max_pixels: int | None = None,
+) -> np.ndarray:
+    """The shape mask of a PNG or an image array: :func:`read_shape` without the report.
 
     Examples
     --------
@@ -224,29 +281,4 @@ def read_mask(
     >>> read_mask(np.array([[0, 3], [0, 0]])).tolist()
     [[False, True], [False, False]]
     """
-    if isinstance(source, np.ndarray):
-        mask = _array_mask(source)
-        if max_pixels is not None and mask.size > max_pixels:
-            raise ImageTooLargeError(
-                f"image has {mask.size} pixels ({mask.shape[1]}×{mask.shape[0]}), "
-                f"the limit is {max_pixels}"
-            )
-        return mask
-    if isinstance(source, (str, os.PathLike)):
-        try:
-            data = Path(source).read_bytes()
-        except OSError as exc:
-            raise InvalidImageError(f"cannot read {os.fspath(source)!r}: {exc.strerror}") from None
-    else:
-        data = bytes(source)
-    width, height, depth, _ = _ihdr(data)
-    check_png_size(data, max_pixels)
-    _check_chunks(data)
-    im = _decode(data)
-    if im.size != (width, height):  # never decode something other than what was checked
-        raise InvalidImageError(
-            f"corrupt PNG: decoded size {im.size[0]}×{im.size[1]} differs from the "
-            f"IHDR size {width}×{height}"
-        )
-    mask = _image_mask(im, depth)
-    return np.ascontiguousarray(mask, dtype=bool)
+    return read_shape(source, foreground=foreground, max_pixels=max_pixels)[0]

@@ -14,11 +14,13 @@ import numpy as np
 
 from .._orientation import IDENTITY_ORIENTATION, Orientation
 from ..graph import BranchGraph, step_length
+from ..io.foreground import Foreground
 from ..io.frame import IDENTITY, PixelFrame
 from ..pruning.bayesian import PruningSequence
+from ..pruning.margin import Margins
 from .render import encode_png, render_overlay
 
-__all__ = ["ComponentResult", "PruneResult"]
+__all__ = ["ComponentResult", "PruneResult", "branch_line"]
 
 
 @dataclass(frozen=True)
@@ -53,6 +55,7 @@ class ComponentResult:
     chosen_step: int
     ma_rer: float
     orientation: Orientation = IDENTITY_ORIENTATION
+    margins: Margins = field(default_factory=Margins)
 
     def image_coordinates(self, rows: np.ndarray,
                           cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -112,24 +115,28 @@ class ComponentResult:
             return len(nodes) - 1
 
         branches: list[dict[str, Any]] = []
-        for br in g.branches:
+        for b, br in enumerate(g.branches):
             if not br.alive:
                 continue
+            path = br.path()
             if br.loop:
-                src = dst = new_node(br.points[0], "loop")
+                src = dst = new_node(path[0], "loop")
             else:
                 ends = []
-                for e, p in ((0, br.points[0]), (1, br.points[-1])):
+                for e, p in ((0, path[0]), (1, path[-1])):
                     if br.node[e] is not None:
                         ends.append(junction_node[br.node[e]])
-                    elif e == 1 and len(br.points) == 1 and br.node[0] is None:
+                    elif e == 1 and len(path) == 1 and br.node[0] is None:
                         ends.append(ends[0])  # a single point: one node
                     else:
                         ends.append(new_node(p, "endpoint"))
                 src, dst = ends
             branches.append({"id": len(branches), "source": src, "target": dst,
                              "length": float(br.length),
-                             "points": [xyr(p) for p in br.points]})
+                             "points": [xyr(p) for p in path],
+                             "off_path": [xyr(p) for p in sorted(br.side)],
+                             "margin": self.margins.margin.get(b),
+                             "removed_at": self.margins.removed_at.get(b)})
         return nodes, branches
 
     def to_dict(self, curve: bool = True, frame: PixelFrame = IDENTITY) -> dict[str, Any]:
@@ -145,6 +152,7 @@ class ComponentResult:
         for b in branches:
             b["length"] = frame.distance(b["length"])
             b["points"] = mapped(b["points"])
+            b["off_path"] = mapped(b["off_path"])
         ma = self.medial_axis
         seq = self.sequence
         doc: dict[str, Any] = {
@@ -177,6 +185,24 @@ class ComponentResult:
         return doc
 
 
+def branch_line(skeleton: dict[str, Any], branch: dict[str, Any]) -> list[list[float]]:
+    """A branch of a document as a polyline ``[x, y, radius]`` from its source node to
+    its target node.
+
+    The path's points, with the source node's position before them and the target
+    node's after them where the path does not already end there, so that the lines of
+    a skeleton meet exactly at its nodes. A loop's line is closed; a single-point
+    branch gets two equal positions, as a LineString needs two.
+    """
+    nodes = skeleton["nodes"]
+    line = [list(p) for p in branch["points"]]
+    for end, nid in ((0, branch["source"]), (-1, branch["target"])):
+        node = nodes[nid]
+        if line[end][:2] != [node["x"], node["y"]] or (end == -1 and len(line) == 1):
+            line.insert(len(line) if end == -1 else 0, [node["x"], node["y"], node["radius"]])
+    return line
+
+
 @dataclass
 class PruneResult:
     """Result of :func:`skelprune.prune` for a whole image."""
@@ -186,6 +212,9 @@ class PruneResult:
     beta: float
     coarse: str | None
     components: list[ComponentResult] = field(default_factory=list)
+    #: What was taken as the shape (:mod:`skelprune.io.foreground`); readers of images
+    #: (:func:`skelprune.io.read_shape`) set theirs here.
+    foreground: Foreground = field(default_factory=lambda: Foreground("nonzero", "nonzero"))
 
     @property
     def width(self) -> int:
@@ -222,6 +251,7 @@ class PruneResult:
         doc: dict[str, Any] = {
             "width": self.width, "height": self.height, "method": self.method,
             "beta": float(self.beta), "coarse": self.coarse,
+            "foreground": self.foreground.to_dict(),
             "components": [c.to_dict(curve=curve, frame=frame) for c in self.components],
         }
         if overlay:
@@ -234,16 +264,15 @@ class PruneResult:
         for ci, comp in enumerate(self.to_dict(curve=False, frame=frame)["components"]):
             sk = comp["skeleton"]
             for br in sk["branches"]:
-                coords = [[p[0], p[1]] for p in br["points"]]
-                if len(coords) == 1:
-                    coords = coords * 2  # a LineString needs two positions
+                line = branch_line(sk, br)
                 features.append({
                     "type": "Feature",
-                    "geometry": {"type": "LineString", "coordinates": coords},
+                    "geometry": {"type": "LineString",
+                                 "coordinates": [[x, y] for x, y, _ in line]},
                     "properties": {"component": ci, "kind": "branch", "id": br["id"],
                                    "source": br["source"], "target": br["target"],
-                                   "length": br["length"],
-                                   "radii": [p[2] for p in br["points"]]},
+                                   "length": br["length"], "radii": [r for *_, r in line],
+                                   "margin": br["margin"], "removed_at": br["removed_at"]},
                 })
             for nd in sk["nodes"]:
                 features.append({
@@ -253,6 +282,39 @@ class PruneResult:
                                    "radius": nd["radius"]},
                 })
         return {"type": "FeatureCollection", "features": features}
+
+    def to_networkx(self, frame: PixelFrame = IDENTITY) -> Any:
+        """The skeleton as a ``networkx.MultiGraph`` (needs the optional ``networkx``).
+
+        Nodes are ``(component, node id)`` with the document's node fields (``x``, ``y``,
+        ``radius``, ``kind``, ``points``) as attributes; each branch is an edge, keyed by
+        its id, with ``length``, ``points`` (its path from ``source`` to ``target``),
+        ``off_path`` and ``line`` (:func:`branch_line`). A loop is a self-loop edge.
+
+        Examples
+        --------
+        >>> import skelprune
+        >>> m = np.zeros((20, 40), bool); m[5:15, 5:35] = True
+        >>> g = skelprune.prune(m).to_networkx()
+        >>> g.number_of_nodes(), g.number_of_edges(), sorted(d for _, d in g.degree())
+        (6, 5, [1, 1, 1, 1, 3, 3])
+        """
+        try:
+            import networkx as nx
+        except ImportError:  # an optional dependency: say how to get it
+            raise ImportError("to_networkx needs networkx: pip install 'skelprune[graph]'") \
+                from None
+        g = nx.MultiGraph()
+        for ci, comp in enumerate(self.to_dict(curve=False, frame=frame)["components"]):
+            sk = comp["skeleton"]
+            for nd in sk["nodes"]:
+                g.add_node((ci, nd["id"]), component=ci,
+                           **{k: v for k, v in nd.items() if k != "id"})
+            for br in sk["branches"]:
+                g.add_edge((ci, br["source"]), (ci, br["target"]), key=br["id"], component=ci,
+                           length=br["length"], points=br["points"], off_path=br["off_path"],
+                           line=branch_line(sk, br))
+        return g
 
     def render_overlay(self) -> np.ndarray:
         """RGB overlay (:func:`~skelprune.output.render.render_overlay`), the mask's size.

@@ -111,6 +111,11 @@ class PruningSequence:
     #: Flat indices (into the mask) of the pixels of ``D`` that ``S(0)`` misses; recorded
     #: only when asked for (``bayesian_sequence(..., uncovered=True)``).
     uncovered: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    #: Per step ``i`` before the last: the end branches of ``S(i)`` and the area each alone
+    #: covers (what removing it would lose), as read for the choice; for the margins.
+    end_areas: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
+    #: Per step ``i``: ``(kept, absorbed)`` if the removal merged two branches, else None.
+    merges: list[tuple[int, int] | None] = field(default_factory=list)
 
     @property
     def length(self) -> np.ndarray:
@@ -204,6 +209,8 @@ def bayesian_sequence(
     for b in graph.ends:
         mark_end(b)
     while graph.ends:
+        ends = np.flatnonzero(is_end)
+        seq.end_areas.append((ends, cov.exclusive[ends + 1]))
         if order is None:
             pick = _pick(is_end, cov.exclusive, bna, bnd, ep, cov.lost, area, graph.na,
                          graph.nd, alpha, lbar)
@@ -216,6 +223,7 @@ def bayesian_sequence(
         cov.remove_label(pick + 1)
         merged = graph.remove_end_branch(pick)
         is_end[pick] = False
+        seq.merges.append(None if merged is None else (merged[0], merged[1]))
         if merged is not None:
             kept, absorbed, jid = merged
             cov.merge_label(nb + 1 + jid, kept + 1)

@@ -91,7 +91,7 @@ def _opening_closing_changes(m: np.ndarray) -> tuple[int, int]:
 
     ``m`` has two empty rows/columns on each side, so no operation meets the border.
     Same counts as ``scipy.ndimage`` binary_erosion / binary_opening / binary_closing
-    with the cross (``tests/test_coarse.py`` checks), in two passes and no temporaries
+    with the cross (``tests/library/test_coarse.py`` checks), in two passes and no temporaries
     beyond the eroded and dilated images.
     """
     h, w = m.shape

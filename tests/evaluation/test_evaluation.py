@@ -93,7 +93,7 @@ def test_measure_matches_the_document() -> None:
     assert got.endpoints == res.components[0].graph.n_endpoints()
     assert got.rer == doc["rer"] and got.ss == doc["ss"]
     assert got.points is not None and len(got.points) == sum(
-        len(b["points"]) for b in doc["skeleton"]["branches"]) + sum(
+        len(b["points"]) + len(b["off_path"]) for b in doc["skeleton"]["branches"]) + sum(
         len(n["points"]) for n in doc["skeleton"]["nodes"])
 
 
@@ -108,6 +108,9 @@ def test_eval_command_writes_report_and_figures(tmp_path: Path) -> None:
         assert v in text
     assert "skelprune eval --out docs --limit 2" in text
     assert "Endpoint agreement" in (tmp_path / "stability.md").read_text()
+    margin = (tmp_path / "margin.md").read_text()
+    assert "Flips by margin quartile" in margin and "| off (default) |" in margin
+    assert margin.count("| rotate-15 |") == 1
     figs = sorted(p.name for p in (tmp_path / "figures").glob("*.png"))
     assert figs == ["fig11_kimia216.png", "fig3_curves.png", "fig6_7_stability.png",
                     "fig9_rectangles.png", "methods.png"]

@@ -15,7 +15,7 @@ from hypothesis.extra.numpy import arrays
 from PIL import Image
 
 from skelprune.errors import ImageTooLargeError, InvalidImageError
-from skelprune.io.png import png_size, read_mask
+from skelprune.io import png_size, read_mask, read_shape
 from testkit import DATA
 
 
@@ -237,4 +237,15 @@ def test_round_trip_any_mode(mask: np.ndarray, mode: str) -> None:
     im = Image.fromarray(grey).convert(mode) if mode != "I;16" else Image.fromarray(
         mask.astype(np.uint16) * 300
     )
-    assert np.array_equal(read_mask(pil_png(im)), mask)
+    data = pil_png(im)
+    assert np.array_equal(read_mask(data, foreground="nonzero"), mask)
+    assert np.array_equal(read_mask(data, foreground="zero"), ~mask)
+    # auto: the side holding most of the border is the background (a tie: the light side
+    # is the shape); an image of one level keeps its non-zero pixels
+    border = np.concatenate([mask[0], mask[-1], mask[1:-1, 0], mask[1:-1, -1]]) \
+        if min(mask.shape) > 2 else mask.ravel()
+    uniform = mask.all() or not mask.any()
+    expected = mask if uniform or border.sum() <= border.size - border.sum() else ~mask
+    shape, taken = read_shape(data)
+    assert np.array_equal(shape, expected)
+    assert taken.shape == ("nonzero" if uniform else "light" if expected is mask else "dark")

@@ -131,7 +131,7 @@ def test_document_is_plain_json_and_consistent():
             c["objective"] for c in comp["curve"])
         assert abs(sum(b["length"] for b in sk["branches"]) - sk["length"]) < 1e-6
         # every point in exactly one branch or junction node
-        pts = [tuple(p[:2]) for b in sk["branches"] for p in b["points"]]
+        pts = [tuple(p[:2]) for b in sk["branches"] for p in b["points"] + b["off_path"]]
         pts += [tuple(p[:2]) for n in sk["nodes"] if n["kind"] == "junction" for p in n["points"]]
         assert len(pts) == len(set(pts))
 
@@ -223,7 +223,7 @@ def test_pruned_skeleton_properties(mask):
     for comp, cdoc in zip(res.components, doc["components"], strict=True):
         assert len(cdoc["skeleton"]["endpoints"]) == comp.graph.n_endpoints()
     for cdoc in doc["components"]:
-        pts = [p for b in cdoc["skeleton"]["branches"] for p in b["points"]]
+        pts = [p for b in cdoc["skeleton"]["branches"] for p in b["points"] + b["off_path"]]
         pts += [p for n in cdoc["skeleton"]["nodes"] for p in n["points"]]
         rows = np.array([int(p[1]) for p in pts])
         cols = np.array([int(p[0]) for p in pts])

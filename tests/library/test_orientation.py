@@ -145,7 +145,7 @@ def test_document_points_are_in_the_image_frame():
     assert canonical_orientation(np.pad(mask, 1)) != Orientation()
     r2 = squared_distance(np.pad(mask, 1))[1:-1, 1:-1]
     doc = skelprune.prune(mask).to_dict()["components"][0]["skeleton"]
-    points = [p for b in doc["branches"] for p in b["points"]]
+    points = [p for b in doc["branches"] for p in b["points"] + b["off_path"]]
     points += [p for n in doc["nodes"] for p in n["points"]]
     points += [[n["x"], n["y"], n["radius"]] for n in doc["nodes"]]
     for x, y, radius in points:

@@ -286,6 +286,12 @@ CASES = [
          params={"pixel_size": "5e-324"}),
     Case("polygon-option-on-png", GOOD, "image/png", 422, ("only apply to polygon",),
          params={"repair": "false"}),
+    Case("png-option-on-polygon", GOOD_POLY, "application/json", 422,
+         ("only apply to PNG input",), params={"foreground": "zero"}),
+    Case("png-option-in-polygon-body", js({"geojson": polygon(RECT), "foreground": "auto"}),
+         "application/json", 422, ("only apply to PNG input",)),
+    Case("unknown-foreground", GOOD, "image/png", 422, ("foreground",),
+         params={"foreground": "white"}),
     Case("option-twice", js({"geojson": polygon(RECT), "beta": 2}), "application/json", 422,
          ("both in the query and the body",), params={"beta": "3"}),
 ]
@@ -330,5 +336,8 @@ def test_valid_odd_pngs_give_the_same_shape(client: TestClient) -> None:
         resp = client.post("/v1/prune", content=data, headers={"content-type": "image/png"})
         assert resp.status_code == 200, resp.text
         docs.append(resp.json())
+    # the skeletons are equal; how the shape was found is reported per file
+    taken = [d.pop("foreground")["shape"] for d in docs]
+    assert taken == ["light", "light", "opaque", "opaque"]
     assert all(d == docs[0] for d in docs[1:])
     assert docs[0]["components"][0]["area"] == int(shape().sum())

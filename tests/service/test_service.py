@@ -17,7 +17,7 @@ from PIL import Image
 
 import skelprune
 from service.schemas import Problem, PruneDocument, Readiness, SkeletonGeoJSON
-from skelprune.io.png import read_mask
+from skelprune.io import read_mask, read_shape
 from testkit import DATA
 
 pytestmark = pytest.mark.timeout(300)
@@ -55,7 +55,10 @@ def assert_problem(resp, status: int, *fragments: str) -> dict:
 
 
 def library_document(png: bytes, **opts: object) -> dict:
-    return json.loads(json.dumps(skelprune.prune(read_mask(png), **opts).to_dict()))
+    mask, taken = read_shape(png)
+    res = skelprune.prune(mask, **opts)
+    res.foreground = taken
+    return json.loads(json.dumps(res.to_dict()))
 
 
 # ----------------------------------------------------------------------- inputs
@@ -87,7 +90,11 @@ def test_png_colour_modes(client: TestClient, mode: str) -> None:
     Image.fromarray(grey).convert(mode).save(buf, "PNG")
     resp = post_png(client, buf.getvalue())
     assert resp.status_code == 200, resp.text
-    assert resp.json() == library_document(BIRD)
+    got, expected = resp.json(), library_document(BIRD)
+    # the mid-range split is reported in the image's own sample values: 0/1 for 1-bit
+    assert got["foreground"].pop("threshold") == (0.5 if mode == "1" else 127.5)
+    expected["foreground"].pop("threshold")
+    assert got == expected
 
 
 @pytest.mark.parametrize(
@@ -133,7 +140,7 @@ def test_polygon_answer_is_in_polygon_units(client: TestClient) -> None:
         assert math.isclose(nb["radius"], na["radius"] * scale, rel_tol=1e-9)
     # Every skeleton point lies inside the polygon, in the polygon's own frame (y up).
     poly = shapely.Polygon(big)
-    pts = [p for br in b["skeleton"]["branches"] for p in br["points"]]
+    pts = [p for br in b["skeleton"]["branches"] for p in br["points"] + br["off_path"]]
     assert all(poly.contains(shapely.Point(x, y)) for x, y, _ in pts)
     assert max(r for *_, r in pts) <= 10 * scale * 1.01  # half the rectangle's height
 

@@ -1,0 +1,85 @@
+"""How clearly the trade-off keeps each branch of the answer: its margin.
+
+For the answer ``Ŝ = S(k)`` of the greedy sequence and ``λ`` its target (eq. 7):
+
+- an **end branch** ``E`` of ``Ŝ`` has margin ``λ(Ŝ − E) − λ(Ŝ)``: how much the target
+  rises if ``E`` alone is removed (with the junction it leaves dissolved, exactly as the
+  pruning would). The end branch the sequence removes next has the smallest one, and
+  since ``Ŝ`` is the argmin (ties to the later skeleton) it is > 0; the others are at
+  least as large, up to the length a dissolved junction adds.
+- an **inner branch** (both ends at junctions, or a cycle) cannot be removed on its own;
+  its margin is ``λ(S(j)) − λ(Ŝ)`` for the first step ``j > k`` at which the sequence
+  removes any of its points (it first becomes part of an end branch, then goes). It is
+  > 0 by the argmin.
+- a branch the sequence never removes (the last path of a tree, the cycles of a shape
+  with holes) has no margin (``None``): nothing in the trade-off would take it.
+
+``removed_at`` is that step ``j`` for every branch (``None``: never removed). Both come
+from the sequence already run: it records, at each step, the area each end branch alone
+covers (what the choice reads anyway) and which branches merged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from ..graph import BranchGraph
+from .bayesian import PruningSequence, objective
+
+__all__ = ["Margins", "branch_margins"]
+
+
+@dataclass(frozen=True)
+class Margins:
+    """Per branch id of the answer's graph: margin and the step that removes it."""
+
+    margin: dict[int, float | None] = field(default_factory=dict)
+    removed_at: dict[int, int | None] = field(default_factory=dict)
+
+
+def branch_margins(graph: BranchGraph, seq: PruningSequence, chosen: int) -> Margins:
+    """Margins of the branches of ``graph``, which is ``S(chosen)`` of ``seq``.
+
+    Parameters
+    ----------
+    graph : BranchGraph
+        The answer's graph (not modified).
+    seq : PruningSequence
+        The sequence ``graph`` is step ``chosen`` of; its recorded end-branch areas and
+        merges are all the margins need.
+    chosen : int
+        The answer's step.
+    """
+    alive = [b for b, br in enumerate(graph.branches) if br.alive]
+    removed_at = _removal_steps(seq, chosen, alive)
+    if seq.alpha is None or not seq.lbar > 0:
+        return Margins({b: None for b in alive}, removed_at)
+    lam = seq.objective
+    base = float(lam[chosen])
+    margin: dict[int, float | None] = {}
+    for b in alive:
+        j = removed_at[b]
+        margin[b] = None if j is None else float(lam[j]) - base
+    if chosen < len(seq.end_areas):
+        lost = seq.lost[chosen]
+        ends, areas = seq.end_areas[chosen]
+        for b, d in zip(ends.tolist(), areas.tolist(), strict=True):
+            na, nd = graph.counts_without(b)
+            margin[b] = objective(lost + d, seq.area, na, nd, seq.alpha, seq.lbar) - base
+    return Margins(margin, removed_at)
+
+
+def _removal_steps(seq: PruningSequence, chosen: int,
+                   alive: list[int]) -> dict[int, int | None]:
+    """The step at which the sequence, from step ``chosen`` on, removes each branch."""
+    held = {b: [b] for b in alive}  # running branch -> the answer's branches it holds
+    steps: dict[int, int | None] = {b: None for b in alive}
+    for i in range(chosen, len(seq.removed)):
+        for b in held.pop(seq.removed[i], []):
+            steps[b] = i + 1
+        merged = seq.merges[i]
+        if merged is not None and merged[0] != merged[1]:  # (a loop closing keeps its id)
+            kept, absorbed = merged
+            moved = held.pop(absorbed, [])
+            held.setdefault(kept, []).extend(moved)
+    return steps

@@ -3,7 +3,9 @@
 On kimia216 and kimia99, every perturbation of ``skelprune.perturb.PERTURBATIONS``: share
 of shapes whose endpoint count is unchanged, for ``coarse=None``, ``coarse="dce"``,
 ``method="dce"`` and the ``skeletonize`` + branch-cut baseline; the noisy rectangles of
-the paper's Table 2; median RER and ms a shape. The computation lives in
+the paper's Table 2; median RER and ms a shape; how far the skeleton moves (skeleton
+distance); and the comparison with the authors' code on the masks of ``data/anchors``
+(``skelprune.eval_anchors``). The computation lives in
 ``skelprune.eval_stability`` (``skelprune eval`` reports the same numbers).
 
 ``python -m benchmarks stability`` runs everything (2 worker processes) and rewrites
@@ -17,9 +19,11 @@ import argparse
 import sys
 from pathlib import Path
 
+from skelprune.eval_anchors import anchors_markdown, run_anchors
 from skelprune.eval_report import (
     agreement_table,
     clean_table,
+    distance_table,
     rectangle_table,
     stability_markdown,
     targets_table,
@@ -48,13 +52,18 @@ def main(argv: list[str] | None = None) -> None:
         print(agreement_table(run, d))
         print(f"\nendpoint count within ±1 / ±2 (not a target), {d}\n")
         print(agreement_table(run, d, within=(1, 2)))
+        print(f"\nskeleton distance (not a target), {d}\n")
+        print(distance_table(run, d))
     print("\nnoisy rectangles\n")
     print(rectangle_table(run))
     print()
     print(clean_table(run))
     print(f"\n{run.seconds:.0f} s")
+    anchors = anchors_markdown(run_anchors(DATA / "anchors", workers=args.workers,
+                                           limit=limit))
+    print("\n" + anchors)
     if not args.quick and args.limit is None:
-        (DOCS / "stability.md").write_text(stability_markdown(run, COMMAND))
+        (DOCS / "stability.md").write_text(stability_markdown(run, COMMAND, anchors))
         print(f"wrote {DOCS / 'stability.md'}")
 
 

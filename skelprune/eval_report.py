@@ -12,6 +12,7 @@ from .eval_stability import RECTANGLE, VARIANTS, StabilityRun
 __all__ = [
     "agreement_table",
     "clean_table",
+    "distance_table",
     "markdown_table",
     "pct",
     "rectangle_table",
@@ -54,6 +55,16 @@ def agreement_table(run: StabilityRun, dataset: str, within: tuple[int, ...] = (
     return markdown_table([head, *run.variants], rows)
 
 
+def distance_table(run: StabilityRun, dataset: str) -> str:
+    """Median skeleton distance (% of √area) per perturbation (rows) and variant (columns)."""
+    def cell(v: str, p: str) -> str:
+        d = run.distance(dataset, v, p)
+        return "–" if math.isnan(d) else f"{100 * d:.2f}"
+
+    rows = [[p, *(cell(v, p) for v in run.variants)] for p in run.perturbations]
+    return markdown_table(["perturbation (median distance, % of √area)", *run.variants], rows)
+
+
 def rectangle_table(run: StabilityRun) -> str:
     """Per noise kind and variant: share with 4 endpoints and mean eq. 13 error (px²)."""
     rows = []
@@ -88,8 +99,9 @@ def targets_table(run: StabilityRun) -> str:
                            "all targets"], rows)
 
 
-def stability_markdown(run: StabilityRun, command: str) -> str:
-    """The whole ``docs/stability.md`` report."""
+def stability_markdown(run: StabilityRun, command: str, anchors: str | None = None) -> str:
+    """The whole ``docs/stability.md`` report; ``anchors``: the comparison with the
+    authors' code (:func:`skelprune.eval_anchors.anchors_markdown`), if run."""
     n = {d: len({r.shape for r in run.shapes if r.dataset == d}) for d in run.datasets}
     labels = "\n".join(f"- `{v}`: {VARIANTS[v].label}" for v in run.variants)
     parts = [
@@ -123,12 +135,22 @@ def stability_markdown(run: StabilityRun, command: str) -> str:
               "above is the exact count."]
     for d in run.datasets:
         parts += ["", f"#### {d}", "", agreement_table(run, d, within=(1, 2))]
+    parts += ["", "### Skeleton distance (not a target)", "",
+              "How far the skeleton moves, not only its endpoint count: the symmetric mean "
+              "distance between the clean shape's skeleton and the perturbed shape's, mapped "
+              "back to the clean frame (the perturbation's own transform undone), over the "
+              "square root of the clean shape's area; median over the shapes, in % (0.5 on a "
+              "100 × 100 shape is half a pixel)."]
+    for d in run.datasets:
+        parts += ["", f"#### {d}", "", distance_table(run, d)]
     if run.rects:
         parts += ["", "## Noisy rectangles (the paper's Table 2)", "",
                   "Share of rectangles whose skeleton has 4 endpoints / mean eq. 13 error "
                   "(px², mean squared distance of the skeleton pixels to the exact medial "
                   "axis), per noise kind. Target: 4 endpoints, error ≤ 1 px².", "",
                   rectangle_table(run)]
+    if anchors:
+        parts += ["", anchors]
     parts += ["", "## Clean shapes: reconstruction error and speed", "",
               "Median RER (target ≤ 1 %) and median wall time a shape, measured in the "
               "worker processes of this run (2 running at once), so the ratios between "

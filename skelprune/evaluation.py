@@ -323,7 +323,13 @@ def run_evaluation(out: Path, data: Path | None = None, limit: int | None = None
     command = "skelprune eval --out docs" + ("" if limit is None else f" --limit {limit}")
     (out / "evaluation.md").write_text(
         _markdown(run, spd, len(sets[DATASETS[0]]), figs, command))
-    (out / "stability.md").write_text(stability_markdown(run, command))
+    anchors = None
+    if (data / "anchors").is_dir():
+        from .eval_anchors import anchors_markdown, run_anchors
+
+        anchors = anchors_markdown(run_anchors(data / "anchors", workers=workers,
+                                               progress=progress, limit=limit))
+    (out / "stability.md").write_text(stability_markdown(run, command, anchors))
     written = {"evaluation": out / "evaluation.md", "stability": out / "stability.md"}
     written.update({k: out / v for k, v in figs.items()})
     return written

@@ -108,7 +108,10 @@ def test_eval_command_writes_report_and_figures(tmp_path: Path) -> None:
     for v in VARIANTS:
         assert v in text
     assert "skelprune eval --out docs --limit 2" in text
-    assert "Endpoint agreement" in (tmp_path / "stability.md").read_text()
+    stab = (tmp_path / "stability.md").read_text()
+    assert "Endpoint agreement" in stab
+    assert "Skeleton distance" in stab
+    assert "Against the authors' code" in stab and "(4 shapes)" in stab
     figs = sorted(p.name for p in (tmp_path / "figures").glob("*.png"))
     assert figs == ["fig11_kimia216.png", "fig3_curves.png", "fig6_7_stability.png",
                     "fig9_rectangles.png", "methods.png"]
@@ -123,3 +126,43 @@ def test_eval_command_reports_missing_data(tmp_path: Path) -> None:
                                       str(tmp_path), "--workers", "1"])
     assert result.exit_code == 1
     assert "no PNG masks" in result.output
+
+
+def test_anchor_run_reads_the_authors_counts_and_ours() -> None:
+    """On the anchor masks, our default reproduces the counts the anchors' CSV recorded
+    for it when it was made, and the authors' shares come straight from the CSV."""
+    import csv
+
+    from skelprune.eval_anchors import ANCHOR, BATCHES, anchor_table, run_anchors
+
+    folder = Path("/work/shared/data/anchors")
+    run = run_anchors(folder, ("bayesian",), workers=1, progress=False, limit=2)
+    assert run.methods == (ANCHOR, "bayesian")
+    assert run.perturbations == ("gaussian-1", "uniform-1.2", "rotate-15", "rotate-30",
+                                 "scale-0.5", "scale-1.5")
+    assert run.n_shapes() == 4
+    rows = {}
+    for b in BATCHES:
+        with (folder / f"authors-matlab-{b}.csv").open() as f:
+            rows.update({(b, r["shape"], r["perturbation"]): int(r["matlab_endpoints"])
+                         for r in csv.DictReader(f)})
+    got = [r for r in run.records if r.method == ANCHOR]
+    assert len(got) == 4 * 7
+    assert all(rows[(r.batch, r.shape, r.perturbation)] == r.endpoints for r in got)
+    shapes = {(r.batch, r.shape) for r in got}
+    want = np.mean([rows[(b, s, "rotate-15")] == rows[(b, s, "clean")] for b, s in shapes])
+    assert run.agreement(ANCHOR, "rotate-15") == want
+    assert 0 <= run.agreement("bayesian", "gaussian-1", 1) <= 1
+    assert run.agreement("bayesian", "gaussian-1", 0) <= run.agreement("bayesian",
+                                                                        "gaussian-1", 1)
+    assert "rotate-30" in anchor_table(run)
+
+
+def test_skeleton_distance_is_zero_for_identity_and_positive_under_noise() -> None:
+    shapes = load_dataset(DATA / "kimia216", limit=2)
+    ident = Perturbation("scale-1", "scale", 1.0)
+    noisy = Perturbation("gaussian-1", "gaussian", 1.0)
+    run = run_stability({"kimia216": shapes}, ("bayesian+dce",), (ident, noisy),
+                        rect_seeds=0, workers=1, progress=False)
+    assert run.distance("kimia216", "bayesian+dce", "scale-1") == 0.0
+    assert 0 < run.distance("kimia216", "bayesian+dce", "gaussian-1") < 0.1

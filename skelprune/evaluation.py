@@ -10,6 +10,8 @@ Writes ``evaluation.md``, ``stability.md`` and ``figures/*.png`` into one folder
 5. Fig. 11: every kimia216 skeleton.
 6. Speed: ms a shape per method and the ratio to bare ``skeletonize`` + EDT.
 7. The baseline users would otherwise pick, in the same tables.
+8. Skeleton pixels against the SkelNetOn ground truth (precision, recall, F1 at 0-3 px)
+   and a figure of the largest misses, when ``data/skelneton-dev`` is there.
 
 Numbers 1–3 come from one :func:`skelprune.eval_stability.run_stability` run (the same
 computation as ``benchmarks/bench_stability.py``). matplotlib is needed only here.
@@ -199,7 +201,7 @@ def figures(sets: dict[str, list[tuple[str, np.ndarray]]], out: Path, seed: int,
 
 
 def _markdown(run: StabilityRun, spd: list[SpeedRow], n_speed: int, figs: dict[str, str],
-              command: str) -> str:
+              command: str, groundtruth: str | None = None) -> str:
     counts = ", ".join(f"{d} ({len({r.shape for r in run.shapes if r.dataset == d})} shapes)"
                        for d in run.datasets)
     labels = "\n".join(f"- `{v}`: {VARIANTS[v].label}" for v in run.variants)
@@ -255,6 +257,7 @@ def _markdown(run: StabilityRun, spd: list[SpeedRow], n_speed: int, figs: dict[s
         "",
         f"![methods]({figs['methods']})",
         "",
+        *([groundtruth, ""] if groundtruth else []),
         "## Fig. 3: the pruning curve",
         "",
         "α·AR, LR and λ over the removal steps of the default method; the chosen skeleton "
@@ -321,8 +324,18 @@ def run_evaluation(out: Path, data: Path | None = None, limit: int | None = None
     spd = speed(sets[DATASETS[0]], progress=progress)
     figs = figures(sets, out, seed, progress=progress, small=limit is not None)
     command = "skelprune eval --out docs" + ("" if limit is None else f" --limit {limit}")
+    groundtruth = None
+    if (data / "skelneton-dev" / "skeletons").is_dir():
+        from .eval_groundtruth import groundtruth_markdown, misses_figure, run_groundtruth
+
+        gt = run_groundtruth(data / "skelneton-dev", TABLE_VARIANTS, workers=workers,
+                             progress=progress, limit=limit)
+        names = misses_figure(gt, TABLE_VARIANTS[0], out / "figures" / "groundtruth_misses.png",
+                              k=2 if limit is not None else 6)
+        figs["groundtruth"] = "figures/groundtruth_misses.png"
+        groundtruth = groundtruth_markdown(gt, figs["groundtruth"], names)
     (out / "evaluation.md").write_text(
-        _markdown(run, spd, len(sets[DATASETS[0]]), figs, command))
+        _markdown(run, spd, len(sets[DATASETS[0]]), figs, command, groundtruth))
     anchors = None
     if (data / "anchors").is_dir():
         from .eval_anchors import anchors_markdown, run_anchors

@@ -114,7 +114,8 @@ def test_eval_command_writes_report_and_figures(tmp_path: Path) -> None:
     assert "Against the authors' code" in stab and "(4 shapes)" in stab
     figs = sorted(p.name for p in (tmp_path / "figures").glob("*.png"))
     assert figs == ["fig11_kimia216.png", "fig3_curves.png", "fig6_7_stability.png",
-                    "fig9_rectangles.png", "methods.png"]
+                    "fig9_rectangles.png", "groundtruth_misses.png", "methods.png"]
+    assert "SkelNetOn ground truth" in text
     for name in figs:
         with Image.open(tmp_path / "figures" / name) as im:
             assert im.width > 100 and im.height > 50
@@ -166,3 +167,23 @@ def test_skeleton_distance_is_zero_for_identity_and_positive_under_noise() -> No
                         rect_seeds=0, workers=1, progress=False)
     assert run.distance("kimia216", "bayesian+dce", "scale-1") == 0.0
     assert 0 < run.distance("kimia216", "bayesian+dce", "gaussian-1") < 0.1
+
+
+def test_pixel_scores_against_ground_truth() -> None:
+    from skelprune.eval_groundtruth import pixel_scores, run_groundtruth
+
+    line = np.zeros((20, 40), bool)
+    line[10, 5:35] = True
+    assert pixel_scores(line, line).tolist() == [[1.0, 1.0, 1.0]] * 4
+    longer = line.copy()
+    longer[10, 35:38] = True  # 3 extra pixels, 1-3 px beyond the truth
+    s = pixel_scores(longer, line)
+    assert s[0, 1] == 1.0 and s[0, 0] == 30 / 33
+    assert s[3, 0] == 1.0  # every extra pixel is within 3 px
+    assert np.all(np.diff(s[:, 2]) >= 0)
+    assert pixel_scores(np.zeros_like(line), line).tolist() == [[0.0, 0.0, 0.0]] * 4
+    run = run_groundtruth(DATA / "skelneton-dev", ("bayesian+dce",), workers=1,
+                          progress=False, limit=2)
+    assert len(run.scores) == 2
+    m = run.mean("bayesian+dce")
+    assert m.shape == (4, 3) and 0.5 < m[2, 2] <= 1.0

@@ -46,7 +46,8 @@ def main(argv: list[str] | None = None) -> None:
     limit = 20 if args.quick and args.limit is None else args.limit
     sets = {name: load_dataset(DATA / name, limit) for name in ("kimia216", "kimia99")}
     run = run_stability(sets, rect_seeds=3 if args.quick else 10, workers=args.workers)
-    print(targets_table(run))
+    anchors = run_anchors(DATA / "anchors", workers=args.workers, limit=limit)
+    print(targets_table(run, anchors))
     for d in run.datasets:
         print(f"\nendpoint agreement, {d}\n")
         print(agreement_table(run, d))
@@ -59,9 +60,7 @@ def main(argv: list[str] | None = None) -> None:
     print()
     print(clean_table(run))
     print(f"\n{run.seconds:.0f} s")
-    anchors = anchors_markdown(run_anchors(DATA / "anchors", workers=args.workers,
-                                           limit=limit))
-    print("\n" + anchors)
+    print("\n" + anchors_markdown(anchors))
     if not args.quick and args.limit is None:
         (DOCS / "stability.md").write_text(stability_markdown(run, COMMAND, anchors))
         print(f"wrote {DOCS / 'stability.md'}")

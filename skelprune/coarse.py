@@ -14,8 +14,9 @@ two additions, both measured in ``docs/stability-findings.md``:
   own code keeps a fixed DCE budget of 50 vertices instead of a stop in pixels; a count
   is scale-free and bounds the number of convex vertices, and so of end branches the
   stage can pass, whatever the boundary does. Here it is a cap on top of the stop (so a
-  shape with few relevant vertices keeps few, and a polygon with fewer than three
-  convex vertices is one segment instead of an error).
+  shape with few relevant vertices keeps few; a polygon with fewer than two convex
+  vertices is one segment, and one with fewer than three claims no corner: never an
+  error, where the authors' code fails below three).
 * **One end branch per convex vertex.** End branches generated only by the two
   segments that meet at one convex vertex all describe that vertex (a corner, or a
   tip): only the one that ends nearest to the vertex is kept. Noise near a true corner

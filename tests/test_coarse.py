@@ -72,6 +72,24 @@ def test_the_vertex_budget_bounds_every_polygon():
     assert [len(v) for v in coarse_partition(square).vertices] == [4]
 
 
+def test_shapes_with_few_convex_vertices_are_pruned_without_error():
+    """A round hole has no vertex convex towards the shape (one segment), and pruning
+    goes on; a small disk and a thin ellipse get their one or two ends."""
+    import skelprune
+
+    rr, cc = np.mgrid[:80, :120]
+    dist = np.hypot(rr - 40, cc - 60)
+    ring = (dist < 30) & (dist >= 12)
+    part = coarse_partition(ring)
+    assert [int(c.sum()) for c in part.convex][1] == 0  # the hole: one segment
+    disk = np.hypot(rr - 40, cc - 60) < 5
+    ellipse = ((rr - 40) / 4.0) ** 2 + ((cc - 60) / 20.0) ** 2 < 1
+    for mask, most in ((ring, 0), (disk, 1), (ellipse, 2)):
+        comp = skelprune.prune(mask).components[0]
+        assert comp.graph.n_endpoints() <= most
+        assert comp.rer < 0.05
+
+
 def test_roughness_of_degenerate_masks():
     assert boundary_roughness(np.zeros((5, 5), bool)) == 0.0
     one = np.zeros((5, 5), bool)

@@ -3,7 +3,9 @@
 On kimia216 and kimia99, every perturbation of ``skelprune.evaluation.perturb.PERTURBATIONS``: share
 of shapes whose endpoint count is unchanged, for ``coarse=None``, ``coarse="dce"``,
 ``method="dce"`` and the ``skeletonize`` + branch-cut baseline; the noisy rectangles of
-the paper's Table 2; median RER and ms a shape. The computation lives in
+the paper's Table 2; median RER and ms a shape; how far the skeleton moves (skeleton
+distance); and the comparison with the authors' code on the masks of ``data/anchors``
+(``skelprune.evaluation.anchors``). The computation lives in
 ``skelprune.evaluation.stability`` (``skelprune eval`` reports the same numbers).
 
 ``python -m benchmarks stability`` runs everything (2 worker processes) and rewrites
@@ -17,9 +19,11 @@ import argparse
 import sys
 from pathlib import Path
 
+from skelprune.evaluation.anchors import anchors_markdown, run_anchors
 from skelprune.evaluation.report import (
     agreement_table,
     clean_table,
+    distance_table,
     rectangle_table,
     stability_markdown,
     targets_table,
@@ -42,19 +46,23 @@ def main(argv: list[str] | None = None) -> None:
     limit = 20 if args.quick and args.limit is None else args.limit
     sets = {name: load_dataset(DATA / name, limit) for name in ("kimia216", "kimia99")}
     run = run_stability(sets, rect_seeds=3 if args.quick else 10, workers=args.workers)
-    print(targets_table(run))
+    anchors = run_anchors(DATA / "anchors", workers=args.workers, limit=limit)
+    print(targets_table(run, anchors))
     for d in run.datasets:
         print(f"\nendpoint agreement, {d}\n")
         print(agreement_table(run, d))
         print(f"\nendpoint count within ±1 / ±2 (not a target), {d}\n")
         print(agreement_table(run, d, within=(1, 2)))
+        print(f"\nskeleton distance (not a target), {d}\n")
+        print(distance_table(run, d))
     print("\nnoisy rectangles\n")
     print(rectangle_table(run))
     print()
     print(clean_table(run))
     print(f"\n{run.seconds:.0f} s")
+    print("\n" + anchors_markdown(anchors))
     if not args.quick and args.limit is None:
-        (DOCS / "stability.md").write_text(stability_markdown(run, COMMAND))
+        (DOCS / "stability.md").write_text(stability_markdown(run, COMMAND, anchors))
         print(f"wrote {DOCS / 'stability.md'}")
 
 

@@ -13,6 +13,7 @@ number). Unperturbed, this round trip reproduces the mask exactly.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
@@ -24,11 +25,14 @@ from .._contours import boundary_polygons
 __all__ = [
     "PERTURBATIONS",
     "Perturbation",
+    "boundary_flips",
     "boundary_noise",
     "noisy_rectangle",
     "rectangle_medial_axis",
+    "resampled_noise",
     "rescale",
     "rotate",
+    "skeleton_distance",
     "skeleton_error",
 ]
 
@@ -166,18 +170,40 @@ def _canvas(rings: list[np.ndarray], margin: int) -> tuple[list[np.ndarray], tup
 
 def _transform(
     mask: np.ndarray, matrix: np.ndarray, centre: np.ndarray, margin: int
-) -> np.ndarray:
+) -> tuple[np.ndarray, np.ndarray]:
+    """The transformed mask, and the shift ``t`` of its frame: a point ``p`` of the input
+    lands at ``(p - centre) @ matrix.T + centre - t`` in the output."""
     mask = np.asarray(mask, dtype=bool)
     rings = _rings(mask)
     if not rings:
-        return mask.copy()
+        return mask.copy(), np.zeros(2)
     seeds = _hole_seeds(rings, mask.shape)
     moved = [(r - centre) @ matrix.T + centre for r in rings]
     moved_seeds = [((s - centre) @ matrix.T + centre).reshape(1, 2) for _, s in seeds]
     n = len(moved)
+    allp = np.concatenate([*moved, *moved_seeds])
+    lo = np.ceil(allp.min(axis=0)).astype(np.int64) - 1  # as _canvas with a margin of 1
     shifted, shape = _canvas([*moved, *moved_seeds], 1)
     holes = [(shifted[k], shifted[n + j][0]) for j, (k, _) in enumerate(seeds)]
-    return _crop(_clean(_fill(shifted[:n], shape), holes), margin)
+    cleaned = _clean(_fill(shifted[:n], shape), holes)
+    rows, cols = np.nonzero(cleaned)
+    box = np.array([rows.min(), cols.min()]) if rows.size else np.zeros(2, np.int64)
+    return _crop(cleaned, margin), (lo + box - margin).astype(np.float64)
+
+
+def _rotation(degrees: float) -> np.ndarray:
+    a = np.deg2rad(degrees)
+    c, s = np.cos(a), np.sin(a)
+    # (row, col) with rows pointing down: counter-clockwise on screen
+    return np.array([[c, -s], [s, c]])
+
+
+def _rotation_centre(mask: np.ndarray) -> np.ndarray:
+    return np.array([mask.shape[0] // 2, mask.shape[1] // 2], np.float64)  # a pixel centre
+
+
+def _scale_centre(mask: np.ndarray) -> np.ndarray:
+    return np.array([mask.shape[0] // 2, mask.shape[1] // 2], np.float64) - 0.5
 
 
 def rotate(mask: np.ndarray, degrees: float, margin: int = 2) -> np.ndarray:
@@ -193,12 +219,7 @@ def rotate(mask: np.ndarray, degrees: float, margin: int = 2) -> np.ndarray:
     >>> bool(np.array_equal(r, np.rot90(m[1:3, 1:7])))
     True
     """
-    a = np.deg2rad(degrees)
-    c, s = np.cos(a), np.sin(a)
-    # (row, col) with rows pointing down: counter-clockwise on screen
-    matrix = np.array([[c, -s], [s, c]])
-    centre = np.array([mask.shape[0] // 2, mask.shape[1] // 2], np.float64)  # a pixel centre
-    return _transform(mask, matrix, centre, margin)
+    return _transform(mask, _rotation(degrees), _rotation_centre(mask), margin)[0]
 
 
 def rescale(mask: np.ndarray, factor: float, margin: int = 2) -> np.ndarray:
@@ -212,8 +233,7 @@ def rescale(mask: np.ndarray, factor: float, margin: int = 2) -> np.ndarray:
     """
     if factor <= 0:
         raise ValueError("factor must be positive")
-    corner = np.array([mask.shape[0] // 2, mask.shape[1] // 2], np.float64) - 0.5
-    return _transform(mask, np.eye(2) * float(factor), corner, margin)
+    return _transform(mask, np.eye(2) * float(factor), _scale_centre(mask), margin)[0]
 
 
 def boundary_noise(
@@ -258,6 +278,122 @@ def boundary_noise(
     shape = (mask.shape[0] + 2 * margin, mask.shape[1] + 2 * margin)
     holes = [(moved[k], seed + margin) for k, seed in _hole_seeds(rings, mask.shape)]
     return _clean(_fill(moved, shape), holes)
+
+
+def resampled_noise(
+    mask: np.ndarray,
+    scale: float,
+    rng: np.random.Generator | int | None = None,
+    margin: int = 2,
+) -> np.ndarray:
+    """Gaussian noise along the normal of a contour resampled at one point a pixel.
+
+    A second noise model, independent of :func:`boundary_noise` in every step: the
+    contours are OpenCV's pixel-centre boundaries (``findContours``, not crack curves),
+    resampled at unit arc length (the original resolution, not one point per crack
+    edge), every sample moves along the normal of its chord by ``N(0, scale²)``, and
+    the polygons are filled by ``fillPoly`` (pixels on or inside the outer polygons,
+    minus the inside of the hole polygons), not by a winding rule on pixel centres.
+    As in :func:`boundary_noise`, the largest 8-connected component is kept and the
+    original holes, only those, are kept (a hole the noise closes keeps one pixel).
+    The output is the input plus ``margin`` pixels on each side.
+
+    Examples
+    --------
+    >>> m = np.zeros((40, 40), bool); m[5:35, 5:35] = True
+    >>> n = resampled_noise(m, 1.0, rng=0)
+    >>> n.shape, abs(int(n.sum()) - 900) < 90
+    ((44, 44), True)
+    """
+    import cv2
+
+    mask = np.asarray(mask, dtype=bool)
+    rng = np.random.default_rng(rng)
+    padded = np.pad(mask, margin).astype(np.uint8)
+    contours, hierarchy = cv2.findContours(padded, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
+    out = np.zeros_like(padded)
+    holes_poly = []
+    for k, c in enumerate(contours):
+        xy = c[:, 0, :].astype(np.float64)
+        if len(xy) >= 3:
+            seg = np.hypot(*np.diff(xy, axis=0, append=xy[:1]).T)
+            arc = np.r_[0.0, np.cumsum(seg)]
+            n = max(3, round(float(arc[-1])))
+            t = np.arange(n) * (arc[-1] / n)
+            closed = np.vstack([xy, xy[:1]])
+            xy = np.stack([np.interp(t, arc, closed[:, 0]), np.interp(t, arc, closed[:, 1])], 1)
+            chord = np.roll(xy, -1, axis=0) - np.roll(xy, 1, axis=0)
+            normal = np.stack([chord[:, 1], -chord[:, 0]], axis=1)
+            normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-12)
+            xy = xy + rng.normal(0.0, scale, n)[:, None] * normal
+        pts = np.round(xy * 16).astype(np.int32).reshape(-1, 1, 2)  # 4 fractional bits
+        if hierarchy[0, k, 3] < 0:
+            cv2.fillPoly(out, [pts], 1, lineType=cv2.LINE_8, shift=4)
+        else:
+            holes_poly.append(pts)
+    for pts in holes_poly:  # the hole's inside goes, its boundary pixels stay shape
+        cv2.fillPoly(out, [pts], 0, lineType=cv2.LINE_8, shift=4)
+        cv2.polylines(out, [pts], True, 1, lineType=cv2.LINE_8, shift=4)
+    rings = _rings(mask)
+    holes = [(rings[k] + margin, seed + margin) for k, seed in _hole_seeds(rings, mask.shape)]
+    return _clean(out.astype(bool), holes)
+
+
+def boundary_flips(
+    mask: np.ndarray,
+    share: float,
+    rng: np.random.Generator | int | None = None,
+    margin: int = 2,
+) -> np.ndarray:
+    """Flip each boundary pixel, inside or outside, with probability ``share``.
+
+    A third noise model, on the pixels themselves: the shape pixels 4-adjacent to the
+    background and the background pixels 4-adjacent to the shape each change side
+    with probability ``share`` (0.5: a coin per pixel). Then, as in
+    :func:`boundary_noise`, the largest 8-connected component and exactly the original
+    holes are kept. The output is the input plus ``margin`` pixels on each side.
+
+    Examples
+    --------
+    >>> m = np.zeros((40, 40), bool); m[5:35, 5:35] = True
+    >>> n = boundary_flips(m, 0.5, rng=0)
+    >>> n.shape, abs(int(n.sum()) - 900) < 60
+    ((44, 44), True)
+    """
+    mask = np.asarray(mask, dtype=bool)
+    rng = np.random.default_rng(rng)
+    padded = np.pad(mask, margin)
+    cross = ndi.generate_binary_structure(2, 1)
+    band = (padded & ~ndi.binary_erosion(padded, cross)) | \
+        (~padded & ndi.binary_dilation(padded, cross))
+    flipped = padded ^ (band & (rng.random(padded.shape) < share))
+    rings = _rings(mask)
+    holes = [(rings[k] + margin, seed + margin) for k, seed in _hole_seeds(rings, mask.shape)]
+    return _clean(flipped, holes)
+
+
+def skeleton_distance(a_rc: np.ndarray, b_rc: np.ndarray, area: float) -> float:
+    """Symmetric mean distance between two skeletons' points, over ``√area``.
+
+    The mean of (mean distance of each point of ``a`` to the nearest of ``b``) and the
+    same from ``b`` to ``a``, divided by the square root of the shape's area, so that
+    it reads the same at every scale. ``nan`` if either skeleton is empty.
+
+    Examples
+    --------
+    >>> a = np.array([[0, 0], [0, 1], [0, 2]]); b = np.array([[1, 0], [1, 1], [1, 2]])
+    >>> skeleton_distance(a, b, 100.0)
+    0.1
+    """
+    from scipy.spatial import cKDTree
+
+    a = np.asarray(a_rc, np.float64).reshape(-1, 2)
+    b = np.asarray(b_rc, np.float64).reshape(-1, 2)
+    if len(a) == 0 or len(b) == 0 or not area > 0:
+        return float("nan")
+    d_ab = cKDTree(b).query(a)[0].mean()
+    d_ba = cKDTree(a).query(b)[0].mean()
+    return float(0.5 * (d_ab + d_ba) / np.sqrt(area))
 
 
 def rectangle_medial_axis(top: float, left: float, bottom: float, right: float) -> np.ndarray:
@@ -333,20 +469,42 @@ class Perturbation:
     """One named perturbation of the stability benchmark (SPEC §5).
 
     ``kind`` is ``"gaussian"``/``"uniform"`` (boundary noise of that ``param``),
-    ``"rotate"`` (degrees) or ``"scale"`` (factor).
+    ``"resampled"`` (:func:`resampled_noise`, σ = ``param``), ``"flips"``
+    (:func:`boundary_flips`, probability ``param``), ``"rotate"`` (degrees) or
+    ``"scale"`` (factor).
     """
 
     name: str
-    kind: Literal["gaussian", "uniform", "rotate", "scale"]
+    kind: Literal["gaussian", "uniform", "resampled", "flips", "rotate", "scale"]
     param: float
 
     def apply(self, mask: np.ndarray, rng: np.random.Generator | int | None = None) -> np.ndarray:
         """Perturb ``mask`` (``rng`` seeds the noise; unused by rotation and scaling)."""
-        if self.kind == "gaussian" or self.kind == "uniform":
-            return boundary_noise(mask, self.kind, self.param, rng, margin=2)
+        return self.apply_mapped(mask, rng)[0]
+
+    def apply_mapped(
+        self, mask: np.ndarray, rng: np.random.Generator | int | None = None
+    ) -> tuple[np.ndarray, Callable[[np.ndarray], np.ndarray]]:
+        """The perturbed mask, and the map of its (row, col) points back to ``mask``'s frame.
+
+        The map undoes the shift of the noise margin or crop and, for rotation and
+        scaling, the transform itself, so that skeletons can be compared point by point.
+        """
+        if self.kind in ("gaussian", "uniform", "resampled", "flips"):
+            if self.kind == "resampled":
+                out = resampled_noise(mask, self.param, rng, margin=2)
+            elif self.kind == "flips":
+                out = boundary_flips(mask, self.param, rng, margin=2)
+            else:
+                out = boundary_noise(mask, self.kind, self.param, rng, margin=2)  # type: ignore[arg-type]
+            return out, lambda q: np.asarray(q, np.float64) - 2.0
         if self.kind == "rotate":
-            return rotate(mask, self.param)
-        return rescale(mask, self.param)
+            matrix, centre = _rotation(self.param), _rotation_centre(mask)
+        else:
+            matrix, centre = np.eye(2) * float(self.param), _scale_centre(mask)
+        out, shift = _transform(mask, matrix, centre, 2)
+        inverse = np.linalg.inv(matrix)
+        return out, lambda q: (np.asarray(q, np.float64) + shift - centre) @ inverse.T + centre
 
 
 #: The perturbations of the stability benchmarks, by name, in a fixed order.
@@ -358,6 +516,8 @@ PERTURBATIONS: dict[str, Perturbation] = {
         Perturbation("uniform-1", "uniform", 1.0),
         Perturbation("uniform-1.2", "uniform", 1.2),
         Perturbation("uniform-1.5", "uniform", 1.5),
+        Perturbation("resampled-1", "resampled", 1.0),
+        Perturbation("flips-0.5", "flips", 0.5),
         Perturbation("rotate-15", "rotate", 15.0),
         Perturbation("rotate-30", "rotate", 30.0),
         Perturbation("rotate-45", "rotate", 45.0),

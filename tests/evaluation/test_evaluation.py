@@ -107,13 +107,17 @@ def test_eval_command_writes_report_and_figures(tmp_path: Path) -> None:
     for v in VARIANTS:
         assert v in text
     assert "skelprune eval --out docs --limit 2" in text
-    assert "Endpoint agreement" in (tmp_path / "stability.md").read_text()
+    stab = (tmp_path / "stability.md").read_text()
+    assert "Endpoint agreement" in stab
+    assert "Skeleton distance" in stab
+    assert "Against the authors' code" in stab and "(4 shapes)" in stab
     margin = (tmp_path / "margin.md").read_text()
     assert "Flips by margin quartile" in margin and "| off (default) |" in margin
     assert margin.count("| rotate-15 |") == 1
     figs = sorted(p.name for p in (tmp_path / "figures").glob("*.png"))
     assert figs == ["fig11_kimia216.png", "fig3_curves.png", "fig6_7_stability.png",
-                    "fig9_rectangles.png", "methods.png"]
+                    "fig9_rectangles.png", "groundtruth_misses.png", "methods.png"]
+    assert "SkelNetOn ground truth" in text
     for name in figs:
         with Image.open(tmp_path / "figures" / name) as im:
             assert im.width > 100 and im.height > 50
@@ -125,3 +129,63 @@ def test_eval_command_reports_missing_data(tmp_path: Path) -> None:
                                       str(tmp_path), "--workers", "1"])
     assert result.exit_code == 1
     assert "no PNG masks" in result.output
+
+
+def test_anchor_run_reads_the_authors_counts_and_ours() -> None:
+    """On the anchor masks, our default reproduces the counts the anchors' CSV recorded
+    for it when it was made, and the authors' shares come straight from the CSV."""
+    import csv
+
+    from skelprune.evaluation.anchors import ANCHOR, BATCHES, anchor_table, run_anchors
+
+    folder = Path("/work/shared/data/anchors")
+    run = run_anchors(folder, ("bayesian",), workers=1, progress=False, limit=2)
+    assert run.methods == (ANCHOR, "bayesian")
+    assert run.perturbations == ("gaussian-1", "uniform-1.2", "rotate-15", "rotate-30",
+                                 "scale-0.5", "scale-1.5")
+    assert run.n_shapes() == 4
+    rows = {}
+    for b in BATCHES:
+        with (folder / f"authors-matlab-{b}.csv").open() as f:
+            rows.update({(b, r["shape"], r["perturbation"]): int(r["matlab_endpoints"])
+                         for r in csv.DictReader(f)})
+    got = [r for r in run.records if r.method == ANCHOR]
+    assert len(got) == 4 * 7
+    assert all(rows[(r.batch, r.shape, r.perturbation)] == r.endpoints for r in got)
+    shapes = {(r.batch, r.shape) for r in got}
+    want = np.mean([rows[(b, s, "rotate-15")] == rows[(b, s, "clean")] for b, s in shapes])
+    assert run.agreement(ANCHOR, "rotate-15") == want
+    assert 0 <= run.agreement("bayesian", "gaussian-1", 1) <= 1
+    assert run.agreement("bayesian", "gaussian-1", 0) <= run.agreement("bayesian",
+                                                                        "gaussian-1", 1)
+    assert "rotate-30" in anchor_table(run)
+
+
+def test_skeleton_distance_is_zero_for_identity_and_positive_under_noise() -> None:
+    shapes = load_dataset(DATA / "kimia216", limit=2)
+    ident = Perturbation("scale-1", "scale", 1.0)
+    noisy = Perturbation("gaussian-1", "gaussian", 1.0)
+    run = run_stability({"kimia216": shapes}, ("bayesian+dce",), (ident, noisy),
+                        rect_seeds=0, workers=1, progress=False)
+    assert run.distance("kimia216", "bayesian+dce", "scale-1") == 0.0
+    assert 0 < run.distance("kimia216", "bayesian+dce", "gaussian-1") < 0.1
+
+
+def test_pixel_scores_against_ground_truth() -> None:
+    from skelprune.evaluation.groundtruth import pixel_scores, run_groundtruth
+
+    line = np.zeros((20, 40), bool)
+    line[10, 5:35] = True
+    assert pixel_scores(line, line).tolist() == [[1.0, 1.0, 1.0]] * 4
+    longer = line.copy()
+    longer[10, 35:38] = True  # 3 extra pixels, 1-3 px beyond the truth
+    s = pixel_scores(longer, line)
+    assert s[0, 1] == 1.0 and s[0, 0] == 30 / 33
+    assert s[3, 0] == 1.0  # every extra pixel is within 3 px
+    assert np.all(np.diff(s[:, 2]) >= 0)
+    assert pixel_scores(np.zeros_like(line), line).tolist() == [[0.0, 0.0, 0.0]] * 4
+    run = run_groundtruth(DATA / "skelneton-dev", ("bayesian+dce",), workers=1,
+                          progress=False, limit=2)
+    assert len(run.scores) == 2
+    m = run.mean("bayesian+dce")
+    assert m.shape == (4, 3) and 0.5 < m[2, 2] <= 1.0

@@ -11,11 +11,14 @@ from skimage.morphology import medial_axis
 from skelprune.evaluation.perturb import (
     PERTURBATIONS,
     Perturbation,
+    boundary_flips,
     boundary_noise,
     noisy_rectangle,
     rectangle_medial_axis,
+    resampled_noise,
     rescale,
     rotate,
+    skeleton_distance,
     skeleton_error,
 )
 from testkit import DATA
@@ -147,7 +150,8 @@ def test_noise_never_creates_holes_and_keeps_one_component():
 def test_perturbations_table():
     assert list(PERTURBATIONS) == [
         "gaussian-1", "gaussian-1.5", "uniform-1", "uniform-1.2", "uniform-1.5",
-        "rotate-15", "rotate-30", "rotate-45", "scale-0.5", "scale-1.5", "scale-2",
+        "resampled-1", "flips-0.5", "rotate-15", "rotate-30", "rotate-45", "scale-0.5",
+        "scale-1.5", "scale-2",
     ]
     assert PERTURBATIONS["uniform-1.2"] == Perturbation("uniform-1.2", "uniform", 1.2)
 
@@ -160,6 +164,51 @@ def test_every_perturbation_applies(kimia):
         assert abs(out.sum() / (factor * kimia.sum()) - 1) < 0.06, p.name
     same = PERTURBATIONS["gaussian-1"]
     assert np.array_equal(same.apply(kimia, rng=3), same.apply(kimia, rng=3))
+
+
+@pytest.mark.parametrize("noise", [resampled_noise, boundary_flips])
+def test_independent_noise_models_keep_topology_and_area(noise, shape_with_hole):
+    m = shape_with_hole
+    for seed in range(4):
+        n = noise(m, 1.0 if noise is resampled_noise else 0.5, rng=seed)
+        assert n.shape == (m.shape[0] + 4, m.shape[1] + 4)
+        assert n_components(n) == 1 and n_holes(n) == 1
+        assert abs(int(n.sum()) / int(m.sum()) - 1) < 0.06
+        assert not np.array_equal(n[2:-2, 2:-2], m)
+    again = noise(m, 0.5, rng=1)
+    assert np.array_equal(again, noise(m, 0.5, rng=1))
+
+
+def test_resampled_contour_without_noise_is_the_shape(kimia):
+    """Resampling moves the polygon by well under a pixel, so the fill is the shape
+    up to a few corner pixels."""
+    out = resampled_noise(kimia, 0.0, rng=0)[2:-2, 2:-2]
+    assert (out ^ kimia).sum() <= 0.02 * kimia.sum()
+
+
+@pytest.mark.parametrize("name", ["rotate-30", "scale-0.5", "scale-2", "gaussian-1",
+                                  "resampled-1"])
+def test_the_map_takes_perturbed_points_back(shape_with_hole, name):
+    """The perturbed shape's pixels, mapped back, land on the clean shape."""
+    kimia = shape_with_hole  # no thin part the noise could cut off and move the centroid
+    out, back = PERTURBATIONS[name].apply_mapped(kimia, rng=0)
+    pts = back(np.argwhere(out))
+    p = PERTURBATIONS[name]
+    # half an output pixel of fill rounding, in input pixels
+    tol = 0.3 / min(1.0, p.param) if p.kind == "scale" else 0.3
+    assert np.allclose(pts.mean(axis=0), np.argwhere(kimia).mean(axis=0), atol=tol)
+    r = np.clip(np.rint(pts).astype(int), 0, np.array(kimia.shape) - 1)
+    inside = ndi.binary_dilation(kimia, iterations=2)[r[:, 0], r[:, 1]]
+    assert inside.mean() > 0.99
+    assert np.array_equal(out, PERTURBATIONS[name].apply(kimia, rng=0))
+
+
+def test_skeleton_distance():
+    a = np.array([[0, 0], [0, 10]])
+    assert skeleton_distance(a, a, 25.0) == 0.0
+    assert skeleton_distance(a, a + np.array([3, 0]), 9.0) == pytest.approx(1.0)
+    assert skeleton_distance(a, np.array([[0, 0]]), 1.0) == pytest.approx(0.5 * (5 + 0))
+    assert np.isnan(skeleton_distance(a, np.zeros((0, 2)), 1.0))
 
 
 # --- rectangle ground truth and eq. 13 ---------------------------------------------

@@ -12,9 +12,11 @@ from skelprune.graph import BranchGraph
 from skelprune.medial_axis import medial_axis, squared_distance
 from skelprune.pruning.bayesian import remove_unsupported
 from skelprune.pruning.coarse import (
+    COARSE_VERTICES,
     ROUGHNESS_FLOOR,
     boundary_roughness,
     coarse_dce,
+    coarse_partition,
     coarse_threshold,
 )
 from skelprune.pruning.dce import (
@@ -50,6 +52,41 @@ def test_boundary_noise_raises_roughness_and_threshold(kind, scale):
         assert boundary_roughness(n) > max(boundary_roughness(c), ROUGHNESS_FLOOR)
         assert coarse_threshold(n) > coarse_threshold(c)
     assert np.median([coarse_threshold(n) for n in noisy]) > 2 * COARSE_PIXEL_THRESHOLD
+
+
+def test_the_vertex_budget_bounds_every_polygon():
+    """A large boundary with many relevant bumps keeps at most the budget; a clean shape
+    with few relevant vertices keeps few (the budget is a cap, not a target)."""
+    from skelprune.evaluation.perturb import resampled_noise
+
+    rr, cc = np.mgrid[:400, :400]
+    radius = np.hypot(rr - 200, cc - 200)
+    wavy = radius < 170 + 6 * np.sin(np.arctan2(rr - 200, cc - 200) * 40)
+    for mask in (wavy, resampled_noise(wavy, 1.5, rng=0)):
+        unbounded = boundary_partition(mask, pixel_threshold=coarse_threshold(mask))
+        assert max(len(v) for v in unbounded.vertices) > COARSE_VERTICES
+        assert max(len(v) for v in coarse_partition(mask).vertices) <= COARSE_VERTICES
+    square = np.zeros((60, 60), bool)
+    square[10:50, 10:50] = True
+    assert [len(v) for v in coarse_partition(square).vertices] == [4]
+
+
+def test_shapes_with_few_convex_vertices_are_pruned_without_error():
+    """A round hole has no vertex convex towards the shape (one segment), and pruning
+    goes on; a small disk and a thin ellipse get their one or two ends."""
+    import skelprune
+
+    rr, cc = np.mgrid[:80, :120]
+    dist = np.hypot(rr - 40, cc - 60)
+    ring = (dist < 30) & (dist >= 12)
+    part = coarse_partition(ring)
+    assert [int(c.sum()) for c in part.convex][1] == 0  # the hole: one segment
+    disk = np.hypot(rr - 40, cc - 60) < 5
+    ellipse = ((rr - 40) / 4.0) ** 2 + ((cc - 60) / 20.0) ** 2 < 1
+    for mask, most in ((ring, 0), (disk, 1), (ellipse, 2)):
+        comp = skelprune.prune(mask).components[0]
+        assert comp.graph.n_endpoints() <= most
+        assert comp.rer < 0.05
 
 
 def test_roughness_of_degenerate_masks():
@@ -97,7 +134,7 @@ def test_the_corner_rule_is_what_removes_forks():
     for seed in range(5):
         mask, _ = noisy_rectangle(60, 160, "gaussian", 1.5, rng=seed)
         crop, ma = _axis(mask)
-        part = boundary_partition(crop, pixel_threshold=coarse_threshold(crop))
+        part = coarse_partition(crop)
         support_only = BranchGraph(ma.rows, ma.cols, crop.shape)
         labels = generating_segments(np.stack([ma.rows, ma.cols], axis=1), ma.r2, part)
         remove_unsupported(support_only, labels[:, 1] != -1)
@@ -155,7 +192,7 @@ def reference_coarse(graph: BranchGraph, crop: np.ndarray, r2: np.ndarray) -> li
     """
     from skelprune.pruning.coarse import _convex_vertices
 
-    part = boundary_partition(crop, pixel_threshold=coarse_threshold(crop))
+    part = coarse_partition(crop)
     labels = generating_segments(np.stack([graph.rows, graph.cols], axis=1), r2, part)
     supported = labels[:, 1] != -1
     before, after, positions = _convex_vertices(part)

@@ -23,11 +23,12 @@ import importlib
 import numpy as np
 
 from skelprune import prune
-from skelprune.api import components, oriented
+from skelprune._orientation import oriented
+from skelprune.api import components
 from skelprune.evaluation.perturb import rescale, rotate
 from skelprune.evaluation.stability import PERTURBATIONS, _rng, load_dataset
 from skelprune.graph import BranchGraph
-from skelprune.pruning.coarse import coarse_dce
+from skelprune.pruning.coarse import coarse_removals
 
 from .common import DATA, table
 
@@ -69,7 +70,7 @@ def _choices(mask: np.ndarray) -> tuple[int, np.ndarray, list[tuple[np.ndarray, 
         ma = medial_axis_module.medial_axis(crop, medial_axis_module.squared_distance(crop))
         graph = BranchGraph(ma.rows, ma.cols, crop.shape)
         if graph.ends:
-            coarse_dce(graph, crop, ma.r2)
+            coarse_removals(graph, crop, ma.r2)
         counts = [graph.n_endpoints()]
         coarse += counts[0]
         for b in comp.sequence.removed:

@@ -18,9 +18,8 @@ from skimage.morphology import skeletonize
 import skelprune
 from skelprune.api import components
 from skelprune.evaluation.stability import PERTURBATIONS, _rng
-from skelprune.graph import BranchGraph
-from skelprune.medial_axis import medial_axis, squared_distance
-from skelprune.pruning.bayesian import bayesian_sequence, normalisation
+from skelprune.pruning.bayesian import bayesian_sequence
+from skelprune.skeleton import Skeleton
 
 from .common import dataset, table, upscale
 
@@ -59,14 +58,14 @@ def from_medial_axis(m: np.ndarray) -> None:
 def _sequence_only(crop, naive: bool) -> float:
     from testkit.oracle import naive_sequence
 
-    ma = medial_axis(crop, squared_distance(crop))
-    g = BranchGraph(ma.rows, ma.cols, crop.shape)
-    norm = normalisation(g, ma.r2, 9.0)
+    medial = Skeleton.medial_axis(crop)
+    norm = medial.normalisation(9.0)
+    graph = medial.working_graph()  # (the fast sequence copies its own)
     t = time.perf_counter()
     if naive:
-        naive_sequence(g, crop, ma.r2, norm.alpha, norm.lbar)
+        naive_sequence(graph, medial.shape, medial.r2, norm.alpha, norm.lbar)
     else:
-        bayesian_sequence(g, crop, ma.r2, norm.alpha, norm.lbar)
+        bayesian_sequence(medial, norm.alpha, norm.lbar)
     return 1000 * (time.perf_counter() - t)
 
 

@@ -120,13 +120,11 @@ class Measurement:
 def _lbar(mask: np.ndarray) -> float:
     """``ℓ̄`` of the largest component's medial axis: the length unit of SS (SPEC §2.3),
     measured on the axis the pruning itself starts from (the canonical frame)."""
-    from ..api import canonical_medial_axis, components
-    from ..graph import BranchGraph
-    from ..pruning.bayesian import normalisation
+    from ..api import components
+    from ..skeleton import Skeleton
 
     crop = max((c for c, _ in components(mask)), key=lambda c: int(c.sum()))
-    crop, _, ma = canonical_medial_axis(crop)
-    return normalisation(BranchGraph(ma.rows, ma.cols, crop.shape), ma.r2, 9.0).lbar
+    return Skeleton.medial_axis(crop).normalisation(9.0).lbar
 
 
 def measure(variant: Variant, mask: np.ndarray, with_ss: bool = False,

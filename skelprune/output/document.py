@@ -12,12 +12,13 @@ from typing import Any
 
 import numpy as np
 
-from .._orientation import IDENTITY_ORIENTATION, Orientation
-from ..graph import BranchGraph, step_length
+from .._orientation import Orientation
+from ..graph import BranchGraph
 from ..io.foreground import Foreground
 from ..io.frame import IDENTITY, PixelFrame
 from ..pruning.bayesian import PruningSequence
 from ..pruning.margin import Margins
+from ..skeleton import Skeleton
 from .render import encode_png, render_overlay
 
 __all__ = ["ComponentResult", "PruneResult", "branch_line"]
@@ -25,43 +26,58 @@ __all__ = ["ComponentResult", "PruneResult", "branch_line"]
 
 @dataclass(frozen=True)
 class GraphSummary:
-    """Size of a skeleton graph, kept for the medial axis once pruning has begun."""
+    """Size of a skeleton, kept for the medial axis once pruning has begun."""
 
     length: float
     endpoints: int
     branches: int
 
     @classmethod
-    def of(cls, graph: BranchGraph) -> GraphSummary:
-        return cls(step_length(graph.na, graph.nd), graph.n_endpoints(),
-                   sum(1 for b in graph.branches if b.alive))
+    def of(cls, skeleton: Skeleton) -> GraphSummary:
+        return cls(skeleton.length, skeleton.n_endpoints, skeleton.n_branches)
 
 
 @dataclass
 class ComponentResult:
     """Pruned skeleton of one 8-connected component.
 
-    Coordinates in ``graph``/``r2`` are in a padded crop seen in its canonical
-    ``orientation`` (see :func:`skelprune.api.oriented`); :meth:`image_coordinates` maps
-    them to the image: back to the crop's own orientation, then ``+ origin`` (row, col).
+    ``skeleton`` is the answer, ``S(chosen_step)`` of ``sequence``; its pixel coordinates
+    are in the component's padded crop seen in its canonical orientation, and
+    :meth:`image_coordinates` maps them to the image.
     """
 
-    origin: tuple[int, int]
-    area: int
-    r2: np.ndarray
+    skeleton: Skeleton
     medial_axis: GraphSummary
-    graph: BranchGraph
     sequence: PruningSequence
     chosen_step: int
     ma_rer: float
-    orientation: Orientation = IDENTITY_ORIENTATION
     margins: Margins = field(default_factory=Margins)
+
+    # the answer's parts, as the reporting below reads them
+    @property
+    def graph(self) -> BranchGraph:
+        return self.skeleton.graph
+
+    @property
+    def r2(self) -> np.ndarray:
+        return self.skeleton.r2
+
+    @property
+    def origin(self) -> tuple[int, int]:
+        return self.skeleton.origin
+
+    @property
+    def orientation(self) -> Orientation:
+        return self.skeleton.orientation
+
+    @property
+    def area(self) -> int:
+        return self.skeleton.area
 
     def image_coordinates(self, rows: np.ndarray,
                           cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Rows and columns of graph points in the image frame."""
-        rows, cols = self.orientation.points_back(rows, cols, self.graph.shape)
-        return rows + self.origin[0], cols + self.origin[1]
+        return self.skeleton.image_coordinates(rows, cols)
 
     @property
     def alpha(self) -> float | None:

@@ -17,19 +17,19 @@ import heapq
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from numba import njit
 
-from ..graph import SQRT2, BranchGraph, step_length
+from ..graph import BranchGraph, step_length
 from ..reconstruction import Coverage
+from ..skeleton import Skeleton
 
 __all__ = [
-    "Normalisation",
     "PruningSequence",
     "bayesian_sequence",
     "choose_step",
-    "normalisation",
     "objective",
     "remove_unsupported",
 ]
@@ -40,67 +40,15 @@ def objective(lost: int, area: int, na: int, nd: int, alpha: float, lbar: float)
     return alpha * lost / area + math.log(step_length(na, nd) / lbar + 1.0)
 
 
-@dataclass(frozen=True)
-class Normalisation:
-    """Seed point, mean end-path length ``ℓ̄`` and ``α`` of a medial axis."""
-
-    seed: int
-    lbar: float
-    alpha: float | None
-
-
-def normalisation(graph: BranchGraph, r2: np.ndarray, beta: float) -> Normalisation:
-    """Seed ``o`` (largest radius; ties: smallest (row, col)), ``ℓ̄`` and ``α``.
-
-    ``α`` is ``None`` where pruning is undefined: no end branch or ``ℓ̄ = 0``.
-    """
-    rows, cols = graph.rows, graph.cols
-    seed = int(np.lexsort((cols, rows, -r2))[0])
-    ends = sorted({graph.endpoint(b) for b in range(len(graph.branches))
-                   if graph.is_end_branch(b)})
-    if not ends:
-        return Normalisation(seed, 0.0, None)
-    dist = _path_lengths(graph.nbr, seed)
-    lbar = float(np.mean(dist[ends]))
-    length = step_length(graph.na, graph.nd)
-    if not lbar > 0 or not length > 0:
-        return Normalisation(seed, lbar, None)
-    return Normalisation(seed, lbar, beta * math.log(length / lbar))
-
-
-@njit(cache=True)
-def _path_lengths(nbr, seed):
-    """Shortest path lengths along the skeleton from ``seed`` (Dijkstra; steps 1, √2).
-
-    Neighbour slots follow :data:`skelprune.medial_axis.NEIGHBOURS`: even slots are
-    diagonal.
-    """
-    dist = np.full(nbr.shape[0], np.inf)
-    dist[seed] = 0.0
-    heap = [(0.0, seed)]
-    while heap:
-        d, u = heapq.heappop(heap)
-        if d > dist[u]:
-            continue
-        for i in range(8):
-            q = nbr[u, i]
-            if q < 0:
-                continue
-            nd = d + (SQRT2 if i % 2 == 0 else 1.0)
-            if nd < dist[q]:
-                dist[q] = nd
-                heapq.heappush(heap, (nd, q))
-    return dist
-
-
 @dataclass
 class PruningSequence:
     """The greedy removal sequence of one component.
 
     ``removed[i]`` is the branch removed at step ``i + 1``; the per-step arrays have
-    one entry per skeleton ``S(0) = M, …, S(n)``.
+    one entry per skeleton ``S(0)``, …, ``S(n)``, ``S(0)`` being ``start``.
     """
 
+    start: Skeleton
     removed: list[int]
     lost: list[int]
     na: list[int]
@@ -108,6 +56,8 @@ class PruningSequence:
     area: int
     alpha: float | None
     lbar: float
+    #: The graph of ``S(n)``, the last skeleton of the sequence.
+    end: BranchGraph
     #: Flat indices (into the mask) of the pixels of ``D`` that ``S(0)`` misses; recorded
     #: only when asked for (``bayesian_sequence(..., uncovered=True)``).
     uncovered: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
@@ -117,26 +67,35 @@ class PruningSequence:
     #: Per step ``i``: ``(kept, absorbed)`` if the removal merged two branches, else None.
     merges: list[tuple[int, int] | None] = field(default_factory=list)
 
-    @property
+    @cached_property
     def length(self) -> np.ndarray:
         return step_length(np.asarray(self.na, float), np.asarray(self.nd, float))
 
-    @property
+    @cached_property
     def ar(self) -> np.ndarray:
         return np.asarray(self.lost, float) / self.area
 
-    @property
+    @cached_property
     def lr(self) -> np.ndarray:
         if not self.lbar > 0:
             return np.zeros(len(self.lost))
         return np.log(self.length / self.lbar + 1.0)
 
-    @property
+    @cached_property
     def objective(self) -> np.ndarray:
         if self.alpha is None:
             return self.lr
         return np.array([objective(lo, self.area, a, d, self.alpha, self.lbar)
                          for lo, a, d in zip(self.lost, self.na, self.nd, strict=True)])
+
+    def skeleton_at(self, step: int) -> Skeleton:
+        """``S(step)``: the start with the first ``step`` removals made (on a copy)."""
+        if step == len(self.removed):
+            return self.start.with_graph(self.end)
+        graph = self.start.working_graph()
+        for b in self.removed[:step]:
+            graph.remove_end_branch(b)
+        return self.start.with_graph(graph)
 
 
 def choose_step(objectives: np.ndarray) -> int:
@@ -149,9 +108,7 @@ def choose_step(objectives: np.ndarray) -> int:
 
 
 def bayesian_sequence(
-    graph: BranchGraph,
-    mask: np.ndarray,
-    r2: np.ndarray,
+    start: Skeleton,
     alpha: float | None,
     lbar: float,
     order: list[int] | None = None,
@@ -161,12 +118,8 @@ def bayesian_sequence(
 
     Parameters
     ----------
-    graph : BranchGraph
-        The skeleton to prune, from its current state; modified in place.
-    mask : (H, W) bool array
-        The shape ``D`` in the graph's frame.
-    r2 : (n,) int array
-        Squared radius of each graph point.
+    start : Skeleton
+        The skeleton to prune, ``S(0)`` (left as it is: the sequence works on a copy).
     alpha, lbar : float
         ``α`` and ``ℓ̄`` of the medial axis. Bayesian order (eqs. 9–11); with
         ``alpha=None`` (degenerate shapes) nothing is removed.
@@ -177,7 +130,8 @@ def bayesian_sequence(
     uncovered : bool
         Also record which pixels ``S(0)`` misses (``PruningSequence.uncovered``).
     """
-    area = int(mask.sum())
+    graph, mask, r2 = start.working_graph(), start.shape, start.r2
+    area = start.area
     nb = len(graph.branches)
     labels = np.zeros(graph.rows.size, np.int64)
     for b, br in enumerate(graph.branches):
@@ -189,7 +143,8 @@ def bayesian_sequence(
     alive = graph.alive_points()
     cov = Coverage(mask, graph.rows[alive], graph.cols[alive], r2[alive], labels[alive],
                    nb + len(graph.junctions) + 1)
-    seq = PruningSequence([], [cov.lost], [graph.na], [graph.nd], area, alpha, lbar)
+    seq = PruningSequence(start, [], [cov.lost], [graph.na], [graph.nd], area, alpha, lbar,
+                          end=graph)
     if uncovered:
         seq.uncovered = np.flatnonzero(mask & (cov.c == 0))
     if alpha is None and order is None:

@@ -33,6 +33,7 @@ import numba
 import numpy as np
 
 from ..graph import BranchGraph
+from ..skeleton import Skeleton
 from ._generating import SegmentRaster, rim_labels
 from .bayesian import remove_unsupported
 from .dce import (
@@ -48,6 +49,7 @@ __all__ = [
     "boundary_roughness",
     "coarse_dce",
     "coarse_partition",
+    "coarse_removals",
     "coarse_threshold",
 ]
 
@@ -310,7 +312,24 @@ def _branch_states(flat: np.ndarray, offsets: np.ndarray, seg_lo: np.ndarray,
     return sup, claimed
 
 
-def coarse_dce(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> list[int]:
+def coarse_dce(skeleton: Skeleton) -> Skeleton:
+    """The coarse skeleton: ``skeleton`` (a medial axis) pruned by :func:`coarse_removals`.
+
+    Examples
+    --------
+    >>> from skelprune.evaluation.perturb import boundary_noise
+    >>> m = np.zeros((44, 64), bool); m[4:40, 4:60] = True
+    >>> axis = Skeleton.medial_axis(boundary_noise(m, "gaussian", 1.0, rng=1))
+    >>> coarse = coarse_dce(axis)
+    >>> axis.n_endpoints > coarse.n_endpoints == 4
+    True
+    """
+    graph = skeleton.working_graph()
+    coarse_removals(graph, skeleton.shape, skeleton.r2)
+    return skeleton.with_graph(graph)
+
+
+def coarse_removals(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> list[int]:
     """Prune ``graph`` (the medial axis of ``mask``) to the coarse level, in place.
 
     End branches none of whose points two DCE segments generate are removed

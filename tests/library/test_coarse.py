@@ -15,8 +15,8 @@ from skelprune.pruning.coarse import (
     COARSE_VERTICES,
     ROUGHNESS_FLOOR,
     boundary_roughness,
-    coarse_dce,
     coarse_partition,
+    coarse_removals,
     coarse_threshold,
 )
 from skelprune.pruning.dce import (
@@ -139,7 +139,7 @@ def test_the_corner_rule_is_what_removes_forks():
         labels = generating_segments(np.stack([ma.rows, ma.cols], axis=1), ma.r2, part)
         remove_unsupported(support_only, labels[:, 1] != -1)
         full = BranchGraph(ma.rows, ma.cols, crop.shape)
-        coarse_dce(full, crop, ma.r2)
+        coarse_removals(full, crop, ma.r2)
         assert full.n_endpoints() <= support_only.n_endpoints()
         forked += support_only.n_endpoints() > full.n_endpoints()
     assert forked >= 3
@@ -151,7 +151,7 @@ def test_coarse_removals_replay_and_keep_topology(path):
     crop, ma = _axis(mask)
     graph = BranchGraph(ma.rows, ma.cols, crop.shape)
     before_ends = graph.n_endpoints()
-    removed = coarse_dce(graph, crop, ma.r2)
+    removed = coarse_removals(graph, crop, ma.r2)
     assert removed and graph.n_endpoints() < before_ends
     replay = BranchGraph(ma.rows, ma.cols, crop.shape)
     for b in removed:
@@ -256,4 +256,4 @@ def test_lazy_coarse_stage_equals_the_eager_reference(name, mask):
         if not fast.ends:
             continue
         slow = BranchGraph(ma.rows, ma.cols, crop.shape)
-        assert coarse_dce(fast, crop, ma.r2) == reference_coarse(slow, crop, ma.r2)
+        assert coarse_removals(fast, crop, ma.r2) == reference_coarse(slow, crop, ma.r2)

@@ -6,9 +6,8 @@ import numpy as np
 import pytest
 
 from skelprune.api import components
-from skelprune.graph import BranchGraph
-from skelprune.medial_axis import medial_axis, squared_distance
-from skelprune.pruning.bayesian import bayesian_sequence, normalisation
+from skelprune.pruning.bayesian import bayesian_sequence
+from skelprune.skeleton import Skeleton
 from testkit.oracle import naive_sequence
 from testkit.shapes import (
     blobs,
@@ -58,13 +57,12 @@ def test_fast_equals_naive(case):
     assert crops
     steps = 0
     for crop, _ in crops:
-        ma = medial_axis(crop, squared_distance(crop))
-        fast_graph = BranchGraph(ma.rows, ma.cols, crop.shape)
-        norm = normalisation(fast_graph, ma.r2, 9.0)
+        medial = Skeleton.medial_axis(crop)  # the canonical frame prune() works in
+        norm = medial.normalisation(9.0)
         if norm.alpha is None:
             continue
-        fast = bayesian_sequence(fast_graph, crop, ma.r2, norm.alpha, norm.lbar)
-        removed, lams = naive_sequence(BranchGraph(ma.rows, ma.cols, crop.shape), crop, ma.r2,
+        fast = bayesian_sequence(medial, norm.alpha, norm.lbar)
+        removed, lams = naive_sequence(medial.working_graph(), medial.shape, medial.r2,
                                        norm.alpha, norm.lbar)
         assert fast.removed == removed
         np.testing.assert_allclose(fast.objective, lams, rtol=0, atol=1e-9)
@@ -95,22 +93,19 @@ def test_fast_equals_naive_from_the_coarse_dce_skeleton(case):
     mask = make_noisy(case) if len(case) == 3 else make(case)
     steps = 0
     for crop, _ in components(mask):
-        ma = medial_axis(crop, squared_distance(crop))
-        graphs = [BranchGraph(ma.rows, ma.cols, crop.shape) for _ in range(2)]
-        norm = normalisation(graphs[0], ma.r2, 9.0)
+        medial = Skeleton.medial_axis(crop)
+        if medial.normalisation(9.0).alpha is None:
+            continue
+        start = coarse_dce(medial)
+        norm = start.normalisation(9.0)
         if norm.alpha is None:
             continue
-        coarse = coarse_dce(graphs[0], crop, ma.r2)
-        for b in coarse:
-            graphs[1].remove_end_branch(b)
-        norm = normalisation(graphs[0], ma.r2, 9.0)
-        if norm.alpha is None:
-            continue
-        fast = bayesian_sequence(graphs[0], crop, ma.r2, norm.alpha, norm.lbar)
-        removed, lams = naive_sequence(graphs[1], crop, ma.r2, norm.alpha, norm.lbar)
+        fast = bayesian_sequence(start, norm.alpha, norm.lbar)
+        removed, lams = naive_sequence(start.working_graph(), start.shape, start.r2,
+                                       norm.alpha, norm.lbar)
         assert fast.removed == removed
         np.testing.assert_allclose(fast.objective, lams, rtol=0, atol=1e-9)
-        steps += len(removed) + len(coarse)
+        steps += len(removed) + (medial.n_points - start.n_points)
     assert steps > 0
 
 

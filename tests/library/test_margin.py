@@ -13,7 +13,8 @@ from fastapi.testclient import TestClient
 import skelprune
 from service.app import create_app
 from service.settings import Settings
-from skelprune.api import components, oriented
+from skelprune._orientation import oriented
+from skelprune.api import components
 from skelprune.errors import InvalidOptionError
 from skelprune.reconstruction import reconstruction
 from testkit.oracle import objective

@@ -1,0 +1,187 @@
+"""The skeleton of one shape component: the one type every stage of the pipeline passes on.
+
+A :class:`Skeleton` holds the shape it came from (the padded crop, in its canonical
+orientation, with where that crop sits in the image), the medial-axis pixels with their
+squared radii, and the branch graph saying which of those pixels are still in it. The
+medial axis is a ``Skeleton``; the coarse stage turns one into another; the Bayesian
+sequence starts from one and answers with one for any of its steps. Stages never change
+a skeleton they are given: each works on its own copy of the graph
+(:meth:`Skeleton.working_graph`) and returns a new ``Skeleton``.
+
+The pixel arrays are shared by every skeleton derived from the same medial axis (no
+stage adds a pixel), so a derived skeleton costs only its graph.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from dataclasses import dataclass, replace
+from functools import cached_property
+
+import numpy as np
+from numba import njit
+
+from ._orientation import IDENTITY_ORIENTATION, Orientation, oriented
+from .graph import SQRT2, BranchGraph, step_length
+from .medial_axis import oriented_medial_axis, squared_distance
+from .reconstruction import reconstruction
+
+__all__ = ["Normalisation", "Skeleton", "normalisation"]
+
+
+@dataclass(frozen=True)
+class Normalisation:
+    """Seed point, mean end-path length ``ℓ̄`` and ``α`` of a medial axis."""
+
+    seed: int
+    lbar: float
+    alpha: float | None
+
+
+def normalisation(graph: BranchGraph, r2: np.ndarray, beta: float) -> Normalisation:
+    """Seed ``o`` (largest radius; ties: smallest (row, col)), ``ℓ̄`` and ``α``.
+
+    ``α`` is ``None`` where pruning is undefined: no end branch or ``ℓ̄ = 0``.
+    """
+    rows, cols = graph.rows, graph.cols
+    seed = int(np.lexsort((cols, rows, -r2))[0])
+    ends = sorted({graph.endpoint(b) for b in range(len(graph.branches))
+                   if graph.is_end_branch(b)})
+    if not ends:
+        return Normalisation(seed, 0.0, None)
+    dist = _path_lengths(graph.nbr, seed)
+    lbar = float(np.mean(dist[ends]))
+    length = step_length(graph.na, graph.nd)
+    if not lbar > 0 or not length > 0:
+        return Normalisation(seed, lbar, None)
+    return Normalisation(seed, lbar, beta * math.log(length / lbar))
+
+
+@njit(cache=True)
+def _path_lengths(nbr, seed):
+    """Shortest path lengths along the skeleton from ``seed`` (Dijkstra; steps 1, √2).
+
+    Neighbour slots follow :data:`skelprune.medial_axis.NEIGHBOURS`: even slots are
+    diagonal.
+    """
+    dist = np.full(nbr.shape[0], np.inf)
+    dist[seed] = 0.0
+    heap = [(0.0, seed)]
+    while heap:
+        d, u = heapq.heappop(heap)
+        if d > dist[u]:
+            continue
+        for i in range(8):
+            q = nbr[u, i]
+            if q < 0:
+                continue
+            nd = d + (SQRT2 if i % 2 == 0 else 1.0)
+            if nd < dist[q]:
+                dist[q] = nd
+                heapq.heappush(heap, (nd, q))
+    return dist
+
+
+@dataclass(frozen=True, eq=False)
+class Skeleton:
+    """A skeleton of one component, in the canonical frame of its padded crop.
+
+    Attributes
+    ----------
+    shape : (H, W) bool array
+        The shape ``D``: the component's padded crop, seen in ``orientation``.
+    rows, cols, r2 : (n,) int64 arrays
+        Every medial-axis pixel of the shape and its squared radius (shared by all
+        skeletons derived from the same axis).
+    graph : BranchGraph
+        Which of those pixels are in this skeleton, as branches and junctions. Read it;
+        never change it (take :meth:`working_graph` for that).
+    orientation : Orientation
+        How ``shape`` is turned from the crop as it lies in the image.
+    origin : (int, int)
+        (row, col) of the crop's corner in the image.
+
+    Examples
+    --------
+    >>> m = np.zeros((12, 22), bool); m[2:10, 2:20] = True
+    >>> s = Skeleton.medial_axis(m)
+    >>> s.n_endpoints, s.area, round(s.length, 2)
+    (4, 144, 24.31)
+    """
+
+    shape: np.ndarray
+    rows: np.ndarray
+    cols: np.ndarray
+    r2: np.ndarray
+    graph: BranchGraph
+    orientation: Orientation = IDENTITY_ORIENTATION
+    origin: tuple[int, int] = (0, 0)
+
+    @classmethod
+    def medial_axis(cls, crop: np.ndarray, origin: tuple[int, int] = (0, 0)) -> Skeleton:
+        """The medial axis of a padded one-component crop, in the crop's canonical
+        orientation: the frame every stage works in (ties included), so that a turned or
+        mirrored shape gets the turned or mirrored result."""
+        shape, orientation = oriented(crop)
+        axis = oriented_medial_axis(shape, squared_distance(shape))
+        graph = BranchGraph(axis.rows, axis.cols, shape.shape)
+        return cls(shape, axis.rows, axis.cols, axis.r2, graph, orientation, origin)
+
+    def with_graph(self, graph: BranchGraph) -> Skeleton:
+        """The same shape and pixels with another graph over them (a stage's answer)."""
+        return replace(self, graph=graph)
+
+    def working_graph(self) -> BranchGraph:
+        """A copy of the graph that a stage may change."""
+        return self.graph.copy()
+
+    # -- what the stages ask --------------------------------------------------------
+    @cached_property
+    def area(self) -> int:
+        """Pixels of the shape."""
+        return int(self.shape.sum())
+
+    @property
+    def length(self) -> float:
+        """Total length of the branches (steps of 1 and √2)."""
+        return step_length(self.graph.na, self.graph.nd)
+
+    @property
+    def n_endpoints(self) -> int:
+        return self.graph.n_endpoints()
+
+    @property
+    def n_points(self) -> int:
+        """Pixels in this skeleton."""
+        graph = self.graph
+        return (sum(len(b.points) for b in graph.branches if b.alive)
+                + sum(len(j.points) for j in graph.junctions if j.alive))
+
+    @property
+    def n_branches(self) -> int:
+        return sum(1 for b in self.graph.branches if b.alive)
+
+    def end_branches(self) -> list[int]:
+        """Ids of the end branches (SPEC §2.4), sorted."""
+        return self.graph.end_branches()
+
+    def points(self) -> np.ndarray:
+        """Indices (into ``rows``, ``cols``, ``r2``) of the pixels in this skeleton."""
+        return self.graph.alive_points()
+
+    def normalisation(self, beta: float) -> Normalisation:
+        """Seed point, mean end-path length ``ℓ̄`` and ``α = β·log(L/ℓ̄)`` (SPEC §2.3)."""
+        return normalisation(self.graph, self.r2, beta)
+
+    def reconstruction(self) -> np.ndarray:
+        """``R(S)``: the union of the skeleton's maximal disks, in the frame of ``shape``."""
+        idx = self.points()
+        return reconstruction(self.shape.shape, self.rows[idx], self.cols[idx], self.r2[idx])
+
+    def image_coordinates(self, rows: np.ndarray,
+                          cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Rows and columns of pixels of ``shape`` in the image frame: back to the crop's
+        own orientation, then ``+ origin``."""
+        rows, cols = self.orientation.points_back(rows, cols, self.shape.shape)
+        return rows + self.origin[0], cols + self.origin[1]

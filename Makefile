@@ -22,7 +22,7 @@ test: lint
 
 # ruff for the Python, shellcheck for the shell scripts CI runs
 lint: $(STAMP)
-	$(BIN)/ruff check skelprune service tests benchmarks
+	$(BIN)/ruff check skelprune service tests testkit benchmarks
 	$(BIN)/shellcheck scripts/*.sh .ci/run
 
 bench: $(STAMP)

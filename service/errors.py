@@ -23,6 +23,7 @@ from service.pool import (
     JobFailedError,
     JobTimeoutError,
     PoolClosedError,
+    PoolStartingError,
     QueueFullError,
     WorkerCrashedError,
 )
@@ -84,6 +85,7 @@ PROBLEMS: dict[type[BaseException], Problem] = {
     UnsupportedMediaTypeError: Problem(415, "unsupported-media-type", "Unsupported media type"),
     NotAcceptableError: Problem(406, "not-acceptable", "Not acceptable"),
     QueueFullError: Problem(503, "queue-full", "Service busy"),
+    PoolStartingError: Problem(503, "starting", "Service starting"),
     PoolClosedError: Problem(503, "unavailable", "Service unavailable"),
     JobTimeoutError: Problem(504, "job-timeout", "Job timed out"),
     WorkerCrashedError: Problem(500, "worker-crashed", "Worker crashed"),

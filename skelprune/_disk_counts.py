@@ -22,7 +22,7 @@ from numba import njit
 
 from ._digital import disk_half_width, isqrt
 
-__all__ = ["BLOCK", "DiskCounts", "coverage", "disk_loss", "disk_remove",
+__all__ = ["BLOCK", "TILE", "DiskCounts", "coverage", "disk_loss", "disk_remove",
            "drop_redundant_anchors", "last_cover"]
 
 BLOCK = 16
@@ -183,31 +183,70 @@ def _find(nxt, x) -> int:
     return root
 
 
+# Side of the square tiles :func:`last_cover` skips once they are all painted.
+TILE = 32
+
+
 @njit(cache=True, inline="always")  # called from compiled code and from tests: see coverage
-def last_cover(shape_h: int, shape_w: int, rows, cols, r2s) -> np.ndarray:
+def last_cover(inside, rows, cols, r2s) -> np.ndarray:
     """For every pixel, the largest ``k`` whose disk ``(rows[k], cols[k], r2s[k])``
     covers it, -1 where none does.
 
-    Disks are painted last to first, each onto the pixels no later disk took; a
-    union-find per row skips the painted runs, so the cost is the painted area plus
-    the disks' heights.
+    ``inside`` (bool, the grid's shape) must hold every pixel a disk covers: the shape,
+    for its own maximal disks.
+
+    Disks are painted last to first, each onto the pixels no later disk took. Most disks
+    of a large shape lie where later (larger) disks have painted everything already, so
+    the grid is cut into ``TILE`` × ``TILE`` tiles that count their unpainted pixels: a
+    disk visits only the tiles still unpainted somewhere (a union-find per row of tiles
+    skips the full ones), and in them, a union-find per pixel row skips the painted
+    runs. A disk thus costs the pixels it paints, the partly painted tiles it meets and
+    one step per row of tiles, instead of one step for each of its pixel rows. A tile
+    is full when its pixels of ``inside`` are painted: the background never is.
     """
+    shape_h, shape_w = inside.shape
     last = np.full((shape_h, shape_w), -1, dtype=np.int32)
     nxt = np.empty((shape_h, shape_w + 1), dtype=np.int32)
     for y in range(shape_h):
         for x in range(shape_w + 1):
             nxt[y, x] = x
+    th, tw = (shape_h + TILE - 1) // TILE, (shape_w + TILE - 1) // TILE
+    left = np.zeros((th, tw), dtype=np.int32)  # unpainted pixels of each tile
+    for y in range(shape_h):
+        for x in range(shape_w):
+            if inside[y, x]:
+                left[y // TILE, x // TILE] += 1
+    tnxt = np.empty((th, tw + 1), dtype=np.int32)  # next tile with a pixel left
+    for ty in range(th):
+        for tx in range(tw + 1):
+            tnxt[ty, tx] = tx
     for k in range(rows.size - 1, -1, -1):
         r, c, v = rows[k], cols[k], r2s[k]
         h = isqrt(v - 1)
-        for dy in range(-h, h + 1):
-            w = disk_half_width(v, dy)
-            row = nxt[r + dy]
-            x = _find(row, c - w)
-            while x <= c + w:
-                last[r + dy, x] = k
-                row[x] = x + 1
-                x = _find(row, x + 1)
+        for ty in range((r - h) // TILE, (r + h) // TILE + 1):
+            y0, y1 = max(r - h, ty * TILE), min(r + h, ty * TILE + TILE - 1)
+            # the widest row of the disk within this row of tiles
+            near = min(max(r, y0), y1)
+            wide = disk_half_width(v, near - r)
+            trow = tnxt[ty]
+            tx = _find(trow, (c - wide) // TILE)
+            while tx <= (c + wide) // TILE:
+                x0, x1 = tx * TILE, tx * TILE + TILE - 1
+                for y in range(y0, y1 + 1):
+                    w = disk_half_width(v, y - r)
+                    a, e = max(c - w, x0), min(c + w, x1)
+                    if a > e:
+                        continue
+                    row = nxt[y]
+                    x = _find(row, a)
+                    while x <= e:
+                        last[y, x] = k
+                        row[x] = x + 1
+                        left[ty, tx] -= 1
+                        x = _find(row, x + 1)
+                if left[ty, tx] == 0:
+                    trow[tx] = tx + 1
+                tx = _find(trow, tx + 1)
     return last
 
 
@@ -230,7 +269,7 @@ def drop_redundant_anchors(anchor, r2, rows, cols) -> None:
     r2s = np.empty(n, dtype=np.int64)
     for k in range(n):
         r2s[k] = r2[rows[k], cols[k]]
-    last = last_cover(h, w, rows, cols, r2s).ravel()
+    last = last_cover(r2 > 0, rows, cols, r2s).ravel()
     # pixels grouped by their last cover (a counting sort)
     start = np.zeros(n + 1, dtype=np.int64)
     for p in range(last.size):

@@ -183,8 +183,35 @@ def _find(nxt, x) -> int:
     return root
 
 
-# Side of the square tiles :func:`last_cover` skips once they are all painted.
+# Side of the square tiles :func:`last_cover` works in: 32 pixels, one int64 word holds
+# a tile's row as 32 bits (the other 32 stay clear, so no arithmetic ever overflows).
 TILE = 32
+_DE_BRUIJN = np.array([0, 1, 28, 2, 29, 14, 24, 3, 30, 22, 20, 15, 25, 17, 4, 8,
+                       31, 27, 13, 23, 21, 19, 16, 7, 26, 12, 18, 6, 11, 5, 10, 9],
+                      dtype=np.int64)
+
+
+@njit(cache=True, inline="always")
+def _bit_index(low) -> int:
+    """Position of the one set bit of ``low`` (a power of two below 2**32)."""
+    return _DE_BRUIJN[((low * 0x077CB531) & 0xFFFFFFFF) >> 27]
+
+
+@njit(cache=True, inline="always")
+def _top_bit(word) -> int:
+    """Position of the highest set bit of ``word`` (0 < word < 2**32)."""
+    word |= word >> 1
+    word |= word >> 2
+    word |= word >> 4
+    word |= word >> 8
+    word |= word >> 16
+    return _bit_index((word + 1) >> 1)
+
+
+@njit(cache=True, inline="always")
+def _bits(a, e) -> int:
+    """Bits ``a`` to ``e`` set (0 <= a <= e <= 31)."""
+    return ((1 << (e + 1)) - 1) ^ ((1 << a) - 1)
 
 
 @njit(cache=True, inline="always")  # called from compiled code and from tests: see coverage
@@ -197,54 +224,88 @@ def last_cover(inside, rows, cols, r2s) -> np.ndarray:
 
     Disks are painted last to first, each onto the pixels no later disk took. Most disks
     of a large shape lie where later (larger) disks have painted everything already, so
-    the grid is cut into ``TILE`` × ``TILE`` tiles that count their unpainted pixels: a
-    disk visits only the tiles still unpainted somewhere (a union-find per row of tiles
-    skips the full ones), and in them, a union-find per pixel row skips the painted
-    runs. A disk thus costs the pixels it paints, the partly painted tiles it meets and
-    one step per row of tiles, instead of one step for each of its pixel rows. A tile
-    is full when its pixels of ``inside`` are painted: the background never is.
+    the work is organised to cost the pixels painted, not the disks' size. The pixels
+    still to paint are a bitmap, one 32-bit word per row of a ``TILE`` × ``TILE`` tile,
+    and each tile keeps a 32-bit mask of its rows with a bit left. A disk walks its rows
+    of tiles (one step each); in each, a union-find skips the tiles with nothing left,
+    and in the others it looks only at the rows with a bit left, painting a row's run
+    with one mask. A disk that paints nothing then costs about one step per row of tiles
+    plus one per tile it meets that is not yet full.
     """
     shape_h, shape_w = inside.shape
     last = np.full((shape_h, shape_w), -1, dtype=np.int32)
-    nxt = np.empty((shape_h, shape_w + 1), dtype=np.int32)
-    for y in range(shape_h):
-        for x in range(shape_w + 1):
-            nxt[y, x] = x
     th, tw = (shape_h + TILE - 1) // TILE, (shape_w + TILE - 1) // TILE
-    left = np.zeros((th, tw), dtype=np.int32)  # unpainted pixels of each tile
+    todo = np.zeros((shape_h, tw), dtype=np.int64)  # bit i of [y, t]: pixel (y, 32 t + i)
+    busy = np.zeros((th, tw), dtype=np.int64)  # bit i of [s, t]: row 32 s + i of a tile has one
+    across = np.zeros((th, tw), dtype=np.int64)  # columns of a tile with a bit left (or more)
     for y in range(shape_h):
         for x in range(shape_w):
             if inside[y, x]:
-                left[y // TILE, x // TILE] += 1
-    tnxt = np.empty((th, tw + 1), dtype=np.int32)  # next tile with a pixel left
+                todo[y, x // TILE] |= 1 << (x % TILE)
+                busy[y // TILE, x // TILE] |= 1 << (y % TILE)
+                across[y // TILE, x // TILE] |= 1 << (x % TILE)
+    tnxt = np.empty((th, tw + 1), dtype=np.int32)  # next tile of the row with a bit left
     for ty in range(th):
         for tx in range(tw + 1):
-            tnxt[ty, tx] = tx
+            tnxt[ty, tx] = tx if tx == tw or busy[ty, tx] else tx + 1
+    for ty in range(th):  # compress: every entry points at a busy tile (or the end)
+        for tx in range(tw - 1, -1, -1):
+            tnxt[ty, tx] = tnxt[ty, tnxt[ty, tx]] if tnxt[ty, tx] != tx else tx
     for k in range(rows.size - 1, -1, -1):
         r, c, v = rows[k], cols[k], r2s[k]
         h = isqrt(v - 1)
         for ty in range((r - h) // TILE, (r + h) // TILE + 1):
             y0, y1 = max(r - h, ty * TILE), min(r + h, ty * TILE + TILE - 1)
             # the widest row of the disk within this row of tiles
-            near = min(max(r, y0), y1)
-            wide = disk_half_width(v, near - r)
+            wide = disk_half_width(v, min(max(r, y0), y1) - r)
             trow = tnxt[ty]
+            span = _bits(y0 - ty * TILE, y1 - ty * TILE)
             tx = _find(trow, (c - wide) // TILE)
             while tx <= (c + wide) // TILE:
-                x0, x1 = tx * TILE, tx * TILE + TILE - 1
-                for y in range(y0, y1 + 1):
+                x0 = tx * TILE
+                ys = busy[ty, tx] & span
+                # the box of the bits left in these rows (their columns: those of the
+                # whole tile): skip the tile if the disk misses it (most tiles a disk
+                # meets have their bits elsewhere)
+                if ys:
+                    cols_left = across[ty, tx]
+                    ya = ty * TILE + _bit_index(ys & -ys)
+                    ye = ty * TILE + _top_bit(ys)
+                    xa = x0 + _bit_index(cols_left & -cols_left)
+                    xe = x0 + _top_bit(cols_left)
+                    dy = ya - r if r < ya else (r - ye if r > ye else 0)
+                    dx = xa - c if c < xa else (c - xe if c > xe else 0)
+                    if dy * dy + dx * dx >= v:
+                        ys = 0
+                painted = False
+                while ys:
+                    low = ys & -ys
+                    ys ^= low
+                    y = ty * TILE + _bit_index(low)
                     w = disk_half_width(v, y - r)
-                    a, e = max(c - w, x0), min(c + w, x1)
+                    a, e = max(c - w, x0), min(c + w, x0 + TILE - 1)
                     if a > e:
                         continue
-                    row = nxt[y]
-                    x = _find(row, a)
-                    while x <= e:
-                        last[y, x] = k
-                        row[x] = x + 1
-                        left[ty, tx] -= 1
-                        x = _find(row, x + 1)
-                if left[ty, tx] == 0:
+                    paint = todo[y, tx] & _bits(a - x0, e - x0)
+                    if paint == 0:
+                        continue
+                    painted = True
+                    todo[y, tx] ^= paint
+                    if todo[y, tx] == 0:
+                        busy[ty, tx] ^= low
+                    while paint:
+                        bit = paint & -paint
+                        paint ^= bit
+                        last[y, x0 + _bit_index(bit)] = k
+                if painted:  # the columns box again, from the rows left
+                    cols_left = 0
+                    rest = busy[ty, tx]
+                    while rest:
+                        low = rest & -rest
+                        rest ^= low
+                        cols_left |= todo[ty * TILE + _bit_index(low), tx]
+                    across[ty, tx] = cols_left
+                if busy[ty, tx] == 0:
                     trow[tx] = tx + 1
                 tx = _find(trow, tx + 1)
     return last

@@ -203,9 +203,11 @@ def create_app(
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        log.info("starting %d workers: the first one warms up alone, then the others (a "
-                 "cold numba cache compiles the kernels first, half a minute to a minute on one "
-                 "core; `make setup` and the image build compile them ahead)", pool.size)
+        if settings.warmup:
+            log.info("starting %d workers: the first one warms up alone, then the others "
+                     "(a cold numba cache compiles the kernels first, half a minute to a "
+                     "minute on one core; `make setup` and the image build compile them "
+                     "ahead)", pool.size)
         warming = None
         if warm_in_background:
             warming = asyncio.create_task(start_in_background())

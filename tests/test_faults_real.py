@@ -37,13 +37,13 @@ PROBLEM = "application/problem+json"
 
 
 def boxes(n: int) -> bytes:
-    """``n`` × ``n`` small rectangles as one MultiPolygon rasterised at 4096 px: as many
+    """``n`` × ``n`` small rectangles as one MultiPolygon rasterised at 4000 px: as many
     components, each pruned on its own, so the job's time is mostly per-component work
     rather than compiled kernels."""
     polygons = [[[[j, i], [j + 0.7, i], [j + 0.7, i + 0.5], [j, i + 0.5], [j, i]]]
                 for i in range(n) for j in range(n)]
     return json.dumps({"geojson": {"type": "MultiPolygon", "coordinates": polygons},
-                       "longest_side": 4096, "curve": False}).encode()
+                       "longest_side": 4000, "curve": False}).encode()
 
 
 #: Long enough to outlast a 3 s time limit on any machine: 19,600 components (98,000

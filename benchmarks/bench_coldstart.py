@@ -5,6 +5,7 @@ compiled ahead as ``make setup`` leaves them (numba's cache next to the sources)
 
 - ``python -m service`` (2 workers): seconds from the start to the port answering
   ``/healthz``, to ``/readyz`` 200, and to the first ``POST /v1/prune`` answered 200;
+  and on a port already in use, to its exit;
 - a fresh ``python`` process: ``import skelprune`` and its first ``prune()`` of a kimia
   shape (what a script or a notebook meets);
 - with an empty numba cache: the compile a first start would pay (``python -m
@@ -123,8 +124,24 @@ def _server_times() -> tuple[float, float, float]:
         proc.wait(60)
 
 
+def _port_in_use() -> float:
+    """Seconds until ``python -m service`` on a port already taken has exited."""
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        t0 = time.monotonic()
+        proc = subprocess.run(
+            [sys.executable, "-m", "service"], cwd=ROOT, capture_output=True, check=False,
+            env=_env(SKELPRUNE_HOST="127.0.0.1", SKELPRUNE_PORT=str(taken.getsockname()[1])))
+        assert proc.returncode == 1, proc.stderr
+        return time.monotonic() - t0
+
+
 def main() -> None:
     rows = []
+    busy = [_port_in_use() for _ in range(ROUNDS)]
+    rows.append(["`python -m service` on a port in use: exited (code 1)",
+                 f"{np.median(busy):.2f}", f"{min(busy):.2f}–{max(busy):.2f}"])
     server = [_server_times() for _ in range(ROUNDS)]
     for i, name in enumerate(("/healthz 200", "/readyz 200", "first POST /v1/prune 200")):
         values = [s[i] for s in server]

@@ -63,7 +63,10 @@ def test_last_cover_is_the_largest_covering_index(seed):
     expected = np.full(disks[0].shape, -1)
     for k, d in enumerate(disks):
         expected[d] = k
-    assert np.array_equal(last_cover(*disks[0].shape, rows, cols, r2s), expected)
+    union = np.logical_or.reduce(disks)
+    assert np.array_equal(last_cover(union, rows, cols, r2s), expected)
+    # tiles holding only background never fill up: still the same answer
+    assert np.array_equal(last_cover(np.ones_like(union), rows, cols, r2s), expected)
 
 
 def _drop_plainly(anchor, r2, rows, cols) -> None:

@@ -162,16 +162,6 @@ def disk_remove(cover, bmin, bcnt, lazy, r, c, v) -> None:
         _row_decrement(cover, bmin, bcnt, lazy, r + dy, c - w, c + w)
 
 
-@njit(cache=True)
-def true_counts(cover, lazy) -> np.ndarray:
-    """The plain count array (for tests)."""
-    out = cover.copy()
-    for y in range(cover.shape[0]):
-        for x in range(cover.shape[1]):
-            out[y, x] += lazy[y, x // BLOCK]
-    return out
-
-
 @njit(cache=True, inline="always")
 def _find(nxt, x) -> int:
     """First unpainted pixel at or after ``x`` in a row (union-find, path compression)."""

@@ -6,6 +6,11 @@ Start it with ``python -m service``; build the app in code with
 
 from __future__ import annotations
 
-from skelprune import __version__
+from importlib.metadata import version
 
 __all__ = ["__version__"]
+
+#: The installed distribution's version (written once, in ``skelprune/__init__.py``).
+#: Read from the package metadata, not by importing skelprune: ``python -m service``
+#: binds its port and seeds the numba cache before the library is imported.
+__version__ = version("skelprune")

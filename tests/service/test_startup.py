@@ -189,3 +189,19 @@ def test_warm_start_serves_after_make_setup(tmp_path: Path) -> None:
     warm = [m for m in messages(log) if " of 2 warm" in m]
     assert len(warm) == 2
     assert all("loaded from the cache" in m and "compiled" not in m for m in warm), warm
+
+
+def test_the_entry_point_imports_no_library_before_it_seeds() -> None:
+    # Importing skelprune writes numba's cache index into NUMBA_CACHE_DIR, and the seed
+    # copies the image's prebuilt cache only into an empty folder: python -m service must
+    # bind its port and seed before anything imports the library.
+    code = "import sys, service, service.__main__; print('skelprune' in sys.modules)"
+    done = subprocess.run(
+        [sys.executable, "-c", code],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=True,
+    )
+    assert done.stdout.strip() == "False"

@@ -1,4 +1,4 @@
-"""How flat is λ where the Bayesian pruning chooses? (issue #3, docs/stability-findings.md)
+"""How flat is λ where the Bayesian pruning chooses? (docs/stability-findings.md)
 
 On every second kimia216 shape and four perturbations, with the default pipeline:
 

@@ -1,7 +1,7 @@
 """Speed of the full pipeline (SPEC §5), one core, medians over shapes of the best of 3.
 
-The default pipeline (coarse DCE stage) beside ``coarse=None`` (issue #3: the coarse stage
-must not cost time), on the datasets and, because that is what the stage is for, on every
+The default pipeline (coarse DCE stage) beside ``coarse=None`` (the coarse stage must not
+cost much time), on the datasets and, because that is what the stage is for, on every
 second kimia216 shape with boundary noise N(0, 1) and scaled by 2. In the same run: bare
 ``skimage.morphology.skeletonize`` plus a distance transform on the same masks, and the
 naive from-scratch oracle on a few small shapes.

@@ -1,4 +1,4 @@
-"""Stability benchmark (SPEC §5, issue #3 part 2): which pruning variant keeps its endpoints.
+"""Stability benchmark (SPEC §5): which pruning variant keeps its endpoints.
 
 On kimia216 and kimia99, every perturbation of ``skelprune.evaluation.perturb.PERTURBATIONS``: share
 of shapes whose endpoint count is unchanged, for ``coarse=None``, ``coarse="dce"``,

@@ -1,6 +1,6 @@
 """Stability measurements shared by ``benchmarks/bench_stability.py`` and ``skelprune eval``.
 
-One module computes, both report (issue #3 part 2, issue #6):
+One module computes, both report:
 
 * **Endpoint agreement** (SPEC §5, the paper's Figs. 6–7): for every shape of a dataset and
   every perturbation of :data:`skelprune.evaluation.perturb.PERTURBATIONS`, is the number

@@ -266,6 +266,7 @@ async def prune(
     job = Job(
         output=output, png=png, geojson=geojson, prune_options=prune_options.kwargs(),
         raster=raster, curve=output_options.curve, overlay=output_options.overlay,
+        sequence=output_options.sequence,
         max_pixels=settings.max_pixels, foreground=read_options.foreground,
     )
     result = await pool.run(fn, job)

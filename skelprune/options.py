@@ -186,6 +186,10 @@ class OutputOptions:
                           _flag)
     overlay: bool = _option(False, "Add the overlay image as a base64 PNG (overlay_png).",
                             _flag)
+    sequence: bool = _option(
+        False, "Add the pruning sequence (sequence): every branch and junction of the "
+        "starting skeleton with its points and the step that removes it, from which a "
+        "viewer draws the skeleton of any step.", _flag)
 
     def __post_init__(self) -> None:
         _check_fields(self)
@@ -256,7 +260,7 @@ def option_fields(*groups: type) -> list[tuple[str, Any, str, tuple[str, ...] | 
     what the CLI and the service describe their options from.
 
     >>> [name for name, *_ in option_fields(OutputOptions)]
-    ['curve', 'overlay']
+    ['curve', 'overlay', 'sequence']
     """
     return [(f.name, f.default, f.metadata["help"], f.metadata["choices"])
             for group in groups for f in fields(group)]

@@ -1,0 +1,221 @@
+"""The viewer page at ``/``, in a real browser against the real server.
+
+Debian's headless Chromium and its chromedriver (apt ``chromium chromium-driver``, which
+``.ci/run`` installs) drive the page with selenium: upload a dataset shape, wait for the
+skeleton, walk the pruning sequence with the keyboard and the slider, and check the
+drawing against the library's own skeleton of each step; then the readable problem
+messages. One server and one browser for the whole module. Screenshots go to
+``artefacts/page/`` (not tracked) for people to look at.
+"""
+
+from __future__ import annotations
+
+import io
+import re
+import shutil
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+import httpx
+import numpy as np
+import pytest
+from PIL import Image
+
+import skelprune
+from skelprune.io import read_mask
+from testkit import DATA, REPO
+from testkit.realserver import Running, running_server
+
+SHOTS = REPO / "artefacts" / "page"
+BIRD = DATA / "kimia216" / "bird-2.png"
+#: Small enough that a test image can exceed it, large enough for the large shape.
+MAX_PIXELS = 1_200_000
+CHROMIUM_FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                  "--disable-background-networking", "--disable-component-update",
+                  "--disable-sync", "--no-first-run", "--window-size=1400,1000")
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Running]:
+    log = tmp_path_factory.mktemp("page") / "server.log"
+    with running_server(log, workers="1", max_pixels=str(MAX_PIXELS)) as running:
+        yield running
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[object]:
+    chromium = shutil.which("chromium")
+    driver_path = shutil.which("chromedriver")
+    if chromium is None or driver_path is None:
+        pytest.fail("the browser test needs Debian's chromium and chromedriver: "
+                    "apt-get install -y chromium chromium-driver (.ci/run installs them)")
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    options = webdriver.ChromeOptions()
+    options.binary_location = chromium
+    for flag in CHROMIUM_FLAGS:
+        options.add_argument(flag)
+    with tempfile.TemporaryDirectory(prefix="skelprune-chromium-") as profile:
+        options.add_argument(f"--user-data-dir={profile}")
+        # the driver found on PATH, never one selenium-manager would download
+        driver = webdriver.Chrome(options=options, service=Service(executable_path=driver_path))
+        driver.set_page_load_timeout(30)
+        try:
+            yield driver
+        finally:
+            driver.quit()
+
+
+def _wait(driver, condition, timeout: float = 60):
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    return WebDriverWait(driver, timeout).until(condition)
+
+
+def _upload(driver, base: str, path: Path) -> None:
+    from selenium.webdriver.common.by import By
+
+    driver.get(base + "/")
+    driver.find_element(By.ID, "file").send_keys(str(path))
+
+
+def _result(driver) -> dict[str, int]:
+    """The step the page shows and what it drew, once the skeleton is there."""
+    from selenium.webdriver.common.by import By
+
+    _wait(driver, lambda d: d.find_element(By.ID, "result").is_displayed()
+          and d.find_element(By.ID, "step-info").get_attribute("data-step") not in (None, ""))
+    info = driver.find_element(By.ID, "step-info")
+    drawn = driver.find_elements(By.CSS_SELECTOR, "#branches .branch")
+    ends = driver.find_elements(By.CSS_SELECTOR, "#nodes circle.endpoint")
+    return {"step": int(info.get_attribute("data-step")), "drawn": len(drawn),
+            "endpoints_drawn": len(ends),
+            "branches": int(info.get_attribute("data-branches")),
+            "error": int(info.get_attribute("data-error-pixels")),
+            "expected_error": int(info.get_attribute("data-expected-error-pixels"))}
+
+
+def _shot(driver, name: str) -> Path:
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    path = SHOTS / name
+    driver.save_screenshot(str(path))
+    return path
+
+
+def _press(driver, key: str, times: int = 1) -> None:
+    from selenium.webdriver.common.by import By
+
+    body = driver.find_element(By.TAG_NAME, "body")
+    for _ in range(times):
+        body.send_keys(key)
+
+
+def test_page_and_assets_are_served_by_the_service(server: Running) -> None:
+    _, base = server
+    page = httpx.get(base + "/", timeout=10)
+    assert page.status_code == 200 and page.headers["content-type"].startswith("text/html")
+    # no asset from anywhere else: the page works offline
+    refs = re.findall(r'(?:src|href)="([^"]+)"', page.text)
+    assert refs and all(r.startswith("/") for r in refs), refs
+    for path, kind in (("/ui/app.js", "text/javascript"), ("/ui/style.css", "text/css")):
+        r = httpx.get(base + path, timeout=10)
+        assert r.status_code == 200 and r.headers["content-type"].startswith(kind)
+        assert not re.search(r"https?://(?!www\.w3\.org)", r.text), path
+
+
+def test_a_shape_and_its_pruning_sequence(server: Running, browser) -> None:
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+
+    _, base = server
+    comp = skelprune.prune(read_mask(BIRD)).components[0]
+    seq = comp.sequence
+    n = len(seq.removed)
+    assert n >= 3  # a sequence worth walking
+
+    _upload(browser, base, BIRD)
+    shown = _result(browser)
+    # the answer first: what the library answers, drawn branch by branch
+    assert shown["step"] == comp.chosen_step
+    assert shown["drawn"] == shown["branches"] == comp.skeleton.n_branches
+    assert shown["endpoints_drawn"] == comp.skeleton.n_endpoints
+    assert shown["error"] == shown["expected_error"] == seq.lost[comp.chosen_step]
+    _shot(browser, "bird-answer.png")
+
+    # to the medial axis end (step 0) and back with the keyboard, then the slider
+    _press(browser, Keys.HOME)
+    for k in (0, 1, 2):
+        if k:
+            _press(browser, Keys.ARROW_RIGHT)
+        shown = _result(browser)
+        truth = seq.skeleton_at(k)
+        assert shown["step"] == k
+        assert shown["drawn"] == shown["branches"] == truth.n_branches, k
+        assert shown["endpoints_drawn"] == truth.n_endpoints, k
+        assert shown["error"] == shown["expected_error"] == seq.lost[k], k
+    _press(browser, Keys.HOME)
+    _shot(browser, "bird-step0.png")
+    slider = browser.find_element(By.ID, "step")
+    slider.send_keys(Keys.END)  # the range input's own keys
+    shown = _result(browser)
+    assert shown["step"] == n
+    assert shown["drawn"] == seq.skeleton_at(n).n_branches
+    assert shown["error"] == seq.lost[n]
+    _shot(browser, "bird-last.png")
+
+    # the medial axis the coarse stage pruned, on request
+    assert not browser.find_elements(By.CSS_SELECTOR, "#medial rect")
+    browser.find_element(By.ID, "show-medial").click()
+    assert browser.find_elements(By.CSS_SELECTOR, "#medial rect")
+
+    # another method: the controls re-run the request
+    from selenium.webdriver.support.ui import Select
+
+    Select(browser.find_element(By.ID, "coarse")).select_by_visible_text("none")
+    full = skelprune.prune(read_mask(BIRD), coarse=None).components[0]
+    _wait(browser, lambda d: _result(d)["step"] == full.chosen_step
+          and "medial axis" in d.find_element(By.ID, "sequence-note").text)
+    assert _result(browser)["drawn"] == full.skeleton.n_branches
+
+
+def test_a_large_shape(server: Running, browser, tmp_path: Path) -> None:
+    mask = read_mask(DATA / "kimia99" / "hand-1.png")
+    big = np.kron(mask, np.ones((7, 7), bool))  # about 900 px a side
+    path = tmp_path / "hand-x7.png"
+    Image.fromarray(big.astype(np.uint8) * 255).save(path)
+    comp = skelprune.prune(big).components[0]
+    _, base = server
+    _upload(browser, base, path)
+    shown = _result(browser)
+    assert shown["drawn"] == comp.skeleton.n_branches
+    assert shown["error"] == shown["expected_error"] == comp.sequence.lost[comp.chosen_step]
+    _shot(browser, "hand-x7-answer.png")
+
+
+def _png(array: np.ndarray) -> bytes:
+    buf = io.BytesIO()
+    Image.fromarray(array).save(buf, format="PNG")
+    return buf.getvalue()
+
+
+@pytest.mark.parametrize(("name", "image", "words"), [
+    ("empty.png", np.zeros((40, 60), np.uint8), ("Empty mask (422)", "no foreground")),
+    ("huge.png", np.pad(np.full((10, 10), 255, np.uint8), ((0, 1190), (0, 1190))),
+     ("Image too large (413)", str(MAX_PIXELS))),
+])
+def test_problems_are_readable_messages(server: Running, browser, tmp_path: Path,
+                                        name: str, image: np.ndarray,
+                                        words: tuple[str, ...]) -> None:
+    from selenium.webdriver.common.by import By
+
+    path = tmp_path / name
+    path.write_bytes(_png(image))
+    _, base = server
+    _upload(browser, base, path)
+    box = _wait(browser, lambda d: (e := d.find_element(By.ID, "problem")).is_displayed() and e)
+    for w in words:
+        assert w in box.text, box.text
+    assert not browser.find_element(By.ID, "result").is_displayed()
+    _shot(browser, f"problem-{Path(name).stem}.png")

@@ -403,7 +403,7 @@ function drawCurve() {
   const k = state.comps[state.selected], c = k.c;
   const svg = $("curve");
   svg.replaceChildren();
-  const L = 44, R = 410, T = 12, B = 196;
+  const L = 44, R = 410, T = 14, B = 190;
   const n = Math.max(k.n, 1);
   const alpha = c.alpha;
   const series = [
@@ -427,12 +427,14 @@ function drawCurve() {
   el("line", { class: "current", x1: X(k.step), x2: X(k.step), y1: T, y2: B, id: "curve-current" }, svg);
   el("text", { x: L, y: B + 14, "text-anchor": "middle" }, svg).textContent = "0";
   el("text", { x: R, y: B + 14, "text-anchor": "middle" }, svg).textContent = String(k.n);
-  el("text", { x: X(c.chosen_step), y: T - 2, "text-anchor": "middle" }, svg).textContent = `chosen ${c.chosen_step}`;
+  const left = c.chosen_step <= n / 2;
+  el("text", { x: X(c.chosen_step) + (left ? 4 : -4), y: T + 10, "text-anchor": left ? "start" : "end" },
+     svg).textContent = `chosen: step ${c.chosen_step}`;
   el("text", { x: (L + R) / 2, y: B + 28, "text-anchor": "middle" }, svg).textContent = "step (branches removed)";
   series.forEach(([cls, name], i) => {
-    const x = R - 150 + i * 52;
-    el("line", { class: cls, x1: x, x2: x + 14, y1: T + 6, y2: T + 6 }, svg);
-    el("text", { x: x + 17, y: T + 10 }, svg).textContent = name;
+    const x = L + i * 70, y = B + 44;
+    el("line", { class: cls, x1: x, x2: x + 16, y1: y - 4, y2: y - 4 }, svg);
+    el("text", { x: x + 20, y }, svg).textContent = name;
   });
   const pickStep = (ev) => {
     const box = svg.getBoundingClientRect();

@@ -11,6 +11,7 @@ messages. One server and one browser for the whole module. Screenshots go to
 from __future__ import annotations
 
 import io
+import json
 import re
 import shutil
 import tempfile
@@ -23,6 +24,7 @@ import pytest
 from PIL import Image
 
 import skelprune
+from service.schemas import PruneDocument
 from skelprune.io import read_mask
 from testkit import DATA, REPO
 from testkit.realserver import Running, running_server
@@ -33,7 +35,7 @@ BIRD = DATA / "kimia216" / "bird-2.png"
 MAX_PIXELS = 1_200_000
 CHROMIUM_FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
                   "--disable-background-networking", "--disable-component-update",
-                  "--disable-sync", "--no-first-run", "--window-size=1400,1000")
+                  "--disable-sync", "--no-first-run", "--window-size=1400,1250")
 
 
 @pytest.fixture(scope="module")
@@ -44,7 +46,12 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Running]:
 
 
 @pytest.fixture(scope="module")
-def browser() -> Iterator[object]:
+def downloads(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("downloads")
+
+
+@pytest.fixture(scope="module")
+def browser(downloads: Path) -> Iterator[object]:
     chromium = shutil.which("chromium")
     driver_path = shutil.which("chromedriver")
     if chromium is None or driver_path is None:
@@ -62,6 +69,8 @@ def browser() -> Iterator[object]:
         # the driver found on PATH, never one selenium-manager would download
         driver = webdriver.Chrome(options=options, service=Service(executable_path=driver_path))
         driver.set_page_load_timeout(30)
+        driver.execute_cdp_cmd("Browser.setDownloadBehavior",
+                               {"behavior": "allow", "downloadPath": str(downloads)})
         try:
             yield driver
         finally:
@@ -125,7 +134,23 @@ def test_page_and_assets_are_served_by_the_service(server: Running) -> None:
         assert not re.search(r"https?://(?!www\.w3\.org)", r.text), path
 
 
-def test_a_shape_and_its_pruning_sequence(server: Running, browser) -> None:
+@pytest.mark.parametrize("query", ["sequence=true", "sequence=true&coarse=none",
+                                   "sequence=true&method=dce", ""])
+def test_the_sequence_opt_in_is_in_the_schema(server: Running, query: str) -> None:
+    _, base = server
+    r = httpx.post(f"{base}/v1/prune?{query}", content=BIRD.read_bytes(),
+                   headers={"Content-Type": "image/png"}, timeout=60)
+    assert r.status_code == 200
+    doc = PruneDocument.model_validate(r.json())  # strict: no extra keys, right types
+    seq = doc.components[0].sequence
+    assert (seq is None) == (query == "")
+    if seq is not None:
+        assert seq.start == ("coarse" if query == "sequence=true" else "medial_axis")
+        assert bool(seq.coarse_removed) == (seq.start == "coarse")
+
+
+def test_a_shape_and_its_pruning_sequence(server: Running, browser, downloads: Path) -> None:
+    from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.common.by import By
     from selenium.webdriver.common.keys import Keys
 
@@ -142,7 +167,23 @@ def test_a_shape_and_its_pruning_sequence(server: Running, browser) -> None:
     assert shown["drawn"] == shown["branches"] == comp.skeleton.n_branches
     assert shown["endpoints_drawn"] == comp.skeleton.n_endpoints
     assert shown["error"] == shown["expected_error"] == seq.lost[comp.chosen_step]
+    # a radius on hover: that of the endpoint under the pointer
+    tip = browser.find_element(By.CSS_SELECTOR, "#nodes circle.endpoint")
+    ActionChains(browser).move_to_element(tip).perform()
+    hover = browser.find_element(By.ID, "hover").text
+    radii = {f"{r:.3f}" for r in np.sqrt(comp.skeleton.r2)}
+    assert (m := re.search(r"radius (\d+\.\d{3})", hover)) and m.group(1) in radii, hover
+    assert "margin" in hover
     _shot(browser, "bird-answer.png")
+
+    # the three downloads
+    for button in browser.find_elements(By.CSS_SELECTOR, "[data-download]"):
+        button.click()
+    names = ("bird-2.json", "bird-2.geojson", "bird-2.overlay.png")
+    _wait(browser, lambda d: all((downloads / n).is_file() for n in names), 30)
+    assert "sequence" in json.loads((downloads / "bird-2.json").read_text())["components"][0]
+    assert json.loads((downloads / "bird-2.geojson").read_text())["type"] == "FeatureCollection"
+    assert Image.open(downloads / "bird-2.overlay.png").size == Image.open(BIRD).size
 
     # to the medial axis end (step 0) and back with the keyboard, then the slider
     _press(browser, Keys.HOME)
@@ -192,6 +233,37 @@ def test_a_large_shape(server: Running, browser, tmp_path: Path) -> None:
     assert shown["drawn"] == comp.skeleton.n_branches
     assert shown["error"] == shown["expected_error"] == comp.sequence.lost[comp.chosen_step]
     _shot(browser, "hand-x7-answer.png")
+
+
+def test_a_geojson_polygon(server: Running, browser, tmp_path: Path) -> None:
+    """A polygon in map coordinates (y northwards), with a hole: drawn in its raster."""
+    from selenium.webdriver.common.by import By
+
+    x0, y0 = 530000.0, 4100000.0
+    outer = [[x0, y0], [x0 + 900, y0], [x0 + 900, y0 + 300], [x0 + 560, y0 + 300],
+             [x0 + 560, y0 + 700], [x0 + 340, y0 + 700], [x0 + 340, y0 + 300],
+             [x0, y0 + 300], [x0, y0]]
+    hole = [[x0 + 400, y0 + 100], [x0 + 500, y0 + 100], [x0 + 500, y0 + 200],
+            [x0 + 400, y0 + 200], [x0 + 400, y0 + 100]]
+    polygon = {"type": "Polygon", "coordinates": [outer, hole]}
+    path = tmp_path / "tee.geojson"
+    path.write_text(json.dumps(polygon))
+    _, base = server
+    doc = httpx.post(base + "/v1/prune?sequence=true", content=path.read_bytes(),
+                     headers={"Content-Type": "application/geo+json"}, timeout=60).json()
+    comp = doc["components"][0]
+    _upload(browser, base, path)
+    shown = _result(browser)
+    assert shown["step"] == comp["chosen_step"]
+    assert shown["drawn"] == len(comp["skeleton"]["branches"])
+    assert shown["endpoints_drawn"] == len(comp["skeleton"]["endpoints"])
+    assert shown["error"] == shown["expected_error"] == round(comp["rer"] * comp["area"])
+    # the raster is drawn north up: the stem of the T (larger y) at the top
+    svg = browser.find_element(By.ID, "view")
+    ends = [e.location["y"] - svg.location["y"]
+            for e in browser.find_elements(By.CSS_SELECTOR, "#nodes circle.endpoint")]
+    assert min(ends) < 0.25 * svg.size["height"] < max(ends)
+    _shot(browser, "tee-geojson.png")
 
 
 def _png(array: np.ndarray) -> bytes:

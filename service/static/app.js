@@ -384,7 +384,7 @@ function drawNumbers() {
   }
   const info = $("step-info");
   info.textContent = `step ${k.step} of ${k.n}` + (k.step === c.chosen_step ? " (the answer)" : "") +
-    ` — ${branches} branches, ${endpoints} endpoints`;
+    ` — ${branches} branch${branches === 1 ? "" : "es"}, ${endpoints} endpoint${endpoints === 1 ? "" : "s"}`;
   Object.assign(info.dataset, {
     step: k.step, branches, endpoints, errorPixels: k.errorPixels,
     expectedErrorPixels: Math.round(cur.ar * c.area),
@@ -444,7 +444,13 @@ function drawCurve() {
   svg.onmousedown = (ev) => { pickStep(ev); svg.onmousemove = (e) => e.buttons && pickStep(e); };
 }
 
+function clearHover() {
+  $("hover-disk").replaceChildren();
+  $("hover").textContent = "Hover over the skeleton for its radius.";
+}
+
 function drawAll() {
+  clearHover();  // what it showed belongs to the step before
   drawRaster();
   drawSkeletons();
   drawNumbers();
@@ -470,10 +476,10 @@ function hover(ev) {
       if (d < bestD) { bestD = d; best = { k, ci, i }; }
     });
   });
+  clearHover();
   const g = $("hover-disk");
-  g.replaceChildren();
   document.querySelectorAll(".branch.hovered").forEach((e) => e.classList.remove("hovered"));
-  if (!best) { $("hover").textContent = "Hover over the skeleton for its radius."; return; }
+  if (!best) return;
   const { k, ci, i } = best;
   const [x, y, r2] = k.px[i];
   const [wx, wy, wr] = k.world[i];

@@ -197,6 +197,7 @@ def test_a_shape_and_its_pruning_sequence(server: Running, browser, downloads: P
         assert shown["endpoints_drawn"] == truth.n_endpoints, k
         assert shown["error"] == shown["expected_error"] == seq.lost[k], k
     _press(browser, Keys.HOME)
+    assert "margin" not in browser.find_element(By.ID, "hover").text  # not the old step's
     _shot(browser, "bird-step0.png")
     slider = browser.find_element(By.ID, "step")
     slider.send_keys(Keys.END)  # the range input's own keys
@@ -219,6 +220,37 @@ def test_a_shape_and_its_pruning_sequence(server: Running, browser, downloads: P
     _wait(browser, lambda d: _result(d)["step"] == full.chosen_step
           and "medial axis" in d.find_element(By.ID, "sequence-note").text)
     assert _result(browser)["drawn"] == full.skeleton.n_branches
+    _shot(browser, "bird-coarse-none.png")
+
+
+def test_several_components(server: Running, browser, tmp_path: Path) -> None:
+    """Each component walks its own sequence; the others stay at their answer."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+    from selenium.webdriver.support.ui import Select
+
+    bird = read_mask(BIRD)
+    hand = read_mask(DATA / "kimia99" / "hand-1.png")
+    h = max(bird.shape[0], hand.shape[0])
+    both = np.zeros((h, bird.shape[1] + hand.shape[1] + 10), bool)
+    both[: bird.shape[0], : bird.shape[1]] = bird
+    both[: hand.shape[0], bird.shape[1] + 10 :] = hand
+    path = tmp_path / "two.png"
+    Image.fromarray(both.astype(np.uint8) * 255).save(path)
+    comps = skelprune.prune(both).components
+    assert len(comps) == 2
+    _, base = server
+    _upload(browser, base, path)
+    shown = _result(browser)
+    assert shown["drawn"] == sum(c.skeleton.n_branches for c in comps)
+    assert shown["error"] == comps[0].sequence.lost[comps[0].chosen_step]
+    Select(browser.find_element(By.ID, "component")).select_by_index(1)
+    _press(browser, Keys.HOME)
+    shown = _result(browser)
+    assert shown["step"] == 0
+    assert shown["drawn"] == comps[0].skeleton.n_branches + comps[1].sequence.start.n_branches
+    assert shown["error"] == shown["expected_error"] == comps[1].sequence.lost[0]
+    _shot(browser, "two-components.png")
 
 
 def test_a_large_shape(server: Running, browser, tmp_path: Path) -> None:

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -85,5 +89,17 @@ def test_sequence_is_opt_in_and_leaves_the_rest_alone() -> None:
     plain = res.to_dict()
     with_seq = res.to_dict(sequence=True)
     assert "sequence" not in plain["components"][0]
+    del with_seq["components"][0]["sequence"]
+    assert with_seq == plain
+
+
+def test_the_command_line_prints_the_sequence_on_request() -> None:
+    png = DATA / "kimia216" / "bird-2.png"
+    cli = [sys.executable, "-m", "skelprune.cli", "prune", str(png)]
+    plain = json.loads(subprocess.run(cli, capture_output=True, text=True, timeout=300,
+                                      check=True).stdout)
+    with_seq = json.loads(subprocess.run([*cli, "--sequence"], capture_output=True, text=True,
+                                         timeout=300, check=True).stdout)
+    assert with_seq["components"][0]["sequence"]["start"] == "coarse"
     del with_seq["components"][0]["sequence"]
     assert with_seq == plain

@@ -16,7 +16,8 @@ const state = {
   width: 0,
   height: 0,
   cnt: null,        // per pixel: disks of the drawn skeletons covering it
-  image: null,      // ImageData of shape and error
+  image: null,      // ImageData of shape and error ...
+  pixels: null,     // ... as one word per pixel
 };
 
 function el(tag, attrs, parent) {
@@ -201,11 +202,13 @@ function show() {
     k.step = 0;
     moveTo(k, target, false);
   }
-  const svg = $("view");
-  svg.setAttribute("viewBox", `-0.5 -0.5 ${W} ${H}`);
+  $("view").setAttribute("viewBox", `-0.5 -0.5 ${W} ${H}`);
   const raster = $("raster");
-  raster.setAttribute("x", -0.5); raster.setAttribute("y", -0.5);
-  raster.setAttribute("width", W); raster.setAttribute("height", H);
+  raster.width = W; raster.height = H;
+  state.image = raster.getContext("2d").createImageData(W, H);
+  state.pixels = new Uint32Array(state.image.data.buffer);
+  // a tall shape fits the window's height
+  $("stage").style.maxWidth = `calc(80vh * ${W / H})`;
   const choice = $("component");
   choice.replaceChildren(...state.comps.map((k, i) => new Option(`${i + 1} (area ${k.c.area})`, i)));
   $("component-choice").hidden = state.comps.length < 2;
@@ -238,26 +241,24 @@ function moveTo(k, target, redraw = true) {
   if (redraw) drawAll();
 }
 
+// One 32-bit RGBA word per pixel, in the platform's byte order (ImageData is RGBA bytes).
+const LITTLE = new Uint8Array(new Uint32Array([1]).buffer)[0] === 1;
+const word = ([r, g, b]) => (LITTLE ? ((255 << 24) | (b << 16) | (g << 8) | r) >>> 0
+  : ((r << 24) | (g << 16) | (b << 8) | 255) >>> 0);
+const WORDS = { shape: word(COLOURS.shape), error: word(COLOURS.error), background: word(COLOURS.background) };
+
 function drawRaster() {
-  const W = state.width, H = state.height, cnt = state.cnt;
-  const canvas = document.createElement("canvas");
-  canvas.width = W; canvas.height = H;
-  const ctx = canvas.getContext("2d");
-  const img = ctx.createImageData(W, H);
-  const d = img.data;
-  for (let i = 0; i < W * H; i++) {
-    d.set(COLOURS.background, 4 * i); d[4 * i + 3] = 255;
-  }
+  const cnt = state.cnt, px = state.pixels;
+  px.fill(WORDS.background);
   for (const k of state.comps) {
     let missing = 0;
     for (const i of k.shape) {
-      const colour = cnt[i] > 0 ? COLOURS.shape : (missing++, COLOURS.error);
-      d.set(colour, 4 * i);
+      if (cnt[i] > 0) px[i] = WORDS.shape;
+      else { px[i] = WORDS.error; missing++; }
     }
     k.errorPixels = missing;
   }
-  ctx.putImageData(img, 0, 0);
-  $("raster").setAttribute("href", canvas.toDataURL("image/png"));
+  $("raster").getContext("2d").putImageData(state.image, 0, 0);
 }
 
 function ownerAt(seq, b, step) {
@@ -542,7 +543,7 @@ function init() {
   $("view").addEventListener("mousemove", hover);
   window.addEventListener("resize", () => state.comps.length && drawSkeletons());
   document.addEventListener("keydown", (e) => {
-    if (!state.comps.length || e.target.matches("input, select, textarea")) return;
+    if (!state.comps.length || (e.target instanceof Element && e.target.matches("input, select, textarea"))) return;
     const k = state.comps[state.selected];
     const to = { ArrowLeft: k.step - 1, ArrowRight: k.step + 1, Home: 0, End: k.n }[e.key];
     if (to !== undefined) { e.preventDefault(); setStep(to); }

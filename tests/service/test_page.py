@@ -13,8 +13,6 @@ from __future__ import annotations
 import io
 import json
 import re
-import shutil
-import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -27,15 +25,14 @@ import skelprune
 from service.schemas import PruneDocument
 from skelprune.io import read_mask
 from testkit import DATA, REPO
+from testkit.browser import MISSING, chromium
+from testkit.browser import missing as browser_missing
 from testkit.realserver import Running, running_server
 
 SHOTS = REPO / "artefacts" / "page"
 BIRD = DATA / "kimia216" / "bird-2.png"
 #: Small enough that a test image can exceed it, large enough for the large shape.
 MAX_PIXELS = 1_200_000
-CHROMIUM_FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                  "--disable-background-networking", "--disable-component-update",
-                  "--disable-sync", "--no-first-run", "--window-size=1400,1250")
 
 
 @pytest.fixture(scope="module")
@@ -52,29 +49,10 @@ def downloads(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="module")
 def browser(downloads: Path) -> Iterator[object]:
-    chromium = shutil.which("chromium")
-    driver_path = shutil.which("chromedriver")
-    if chromium is None or driver_path is None:
-        pytest.fail("the browser test needs Debian's chromium and chromedriver: "
-                    "apt-get install -y chromium chromium-driver (.ci/run installs them)")
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service
-
-    options = webdriver.ChromeOptions()
-    options.binary_location = chromium
-    for flag in CHROMIUM_FLAGS:
-        options.add_argument(flag)
-    with tempfile.TemporaryDirectory(prefix="skelprune-chromium-") as profile:
-        options.add_argument(f"--user-data-dir={profile}")
-        # the driver found on PATH, never one selenium-manager would download
-        driver = webdriver.Chrome(options=options, service=Service(executable_path=driver_path))
-        driver.set_page_load_timeout(30)
-        driver.execute_cdp_cmd("Browser.setDownloadBehavior",
-                               {"behavior": "allow", "downloadPath": str(downloads)})
-        try:
-            yield driver
-        finally:
-            driver.quit()
+    if browser_missing():
+        pytest.fail(f"the browser test {MISSING}")
+    with chromium(downloads) as driver:
+        yield driver
 
 
 def _wait(driver, condition, timeout: float = 60):

@@ -396,6 +396,10 @@ function drawNumbers() {
   const dce = doc.method === "dce"
     ? "With method=dce the steps are the DCE pruning's removals, in its order, and the answer is the last; λ is shown for comparison, it did not choose. "
     : "The answer is the step with the smallest λ (ties to the later step). ";
+  if (c.alpha === null) {
+    $("sequence-note").textContent = start + "This component has no end branch to prune (or a mean end-path length of 0): α is undefined, the sequence has only step 0, and λ is LR alone.";
+    return;
+  }
   $("sequence-note").textContent = start + dce +
     "Each step removes one end branch; where that leaves a junction with two branches, they become one. The drawing at every step and its red error follow exactly from the document.";
 }
@@ -412,7 +416,7 @@ function drawCurve() {
     ["lr", "LR", c.curve.map((s) => s.lr)],
   ];
   if (alpha !== null) series.push(["ar", "α·AR", c.curve.map((s) => alpha * s.ar)]);
-  const top = Math.max(1e-9, ...series.flatMap((s) => s[2]));
+  const top = Math.max(...series.flatMap((s) => s[2])) || 1;  // all 0: nothing pruned
   const X = (i) => L + (R - L) * (i / n);
   const Y = (v) => B - (B - T) * (v / top);
   for (const f of [0, 0.5, 1]) {

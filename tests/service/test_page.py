@@ -105,7 +105,7 @@ def test_page_and_assets_are_served_by_the_service(server: Running) -> None:
     assert page.status_code == 200 and page.headers["content-type"].startswith("text/html")
     # no asset from anywhere else: the page works offline
     refs = re.findall(r'(?:src|href)="([^"]+)"', page.text)
-    assert refs and all(r.startswith("/") for r in refs), refs
+    assert refs and all(r.startswith(("/", "data:")) for r in refs), refs
     for path, kind in (("/ui/app.js", "text/javascript"), ("/ui/style.css", "text/css")):
         r = httpx.get(base + path, timeout=10)
         assert r.status_code == 200 and r.headers["content-type"].startswith(kind)
@@ -274,6 +274,34 @@ def test_a_geojson_polygon(server: Running, browser, tmp_path: Path) -> None:
             for e in browser.find_elements(By.CSS_SELECTOR, "#nodes circle.endpoint")]
     assert min(ends) < 0.25 * svg.size["height"] < max(ends)
     _shot(browser, "tee-geojson.png")
+
+
+def _ring_and_dot() -> np.ndarray:
+    yy, xx = np.mgrid[:90, :140]
+    d2 = (yy - 45) ** 2 + (xx - 45) ** 2
+    ring = (d2 < 40 ** 2) & (d2 >= 25 ** 2)  # a loop and no end branch: nothing to prune
+    dot = (np.abs(yy - 45) <= 1) & (np.abs(xx - 120) <= 1)  # 3 x 3: one point
+    return ((ring | dot) * 255).astype(np.uint8)
+
+
+def test_shapes_with_nothing_to_prune(server: Running, browser, tmp_path: Path) -> None:
+    from selenium.webdriver.common.by import By
+
+    image = _ring_and_dot()
+    path = tmp_path / "ring.png"
+    path.write_bytes(_png(image))
+    comps = skelprune.prune(image > 0).components
+    assert [len(c.sequence.removed) for c in comps] == [0, 0]
+    _, base = server
+    _upload(browser, base, path)
+    shown = _result(browser)
+    assert shown["step"] == 0
+    assert shown["drawn"] == sum(c.skeleton.n_branches for c in comps)
+    assert shown["error"] == shown["expected_error"] == comps[0].sequence.lost[0]
+    assert browser.find_elements(By.CSS_SELECTOR, "#nodes circle.loop")
+    severe = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+    assert not severe, severe  # no script error
+    _shot(browser, "ring-and-dot.png")
 
 
 def _png(array: np.ndarray) -> bytes:

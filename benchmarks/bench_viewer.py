@@ -27,9 +27,11 @@ from testkit.realserver import running_server
 from .common import table, upscale
 
 SIZES = (512, 1024, 2048)
-STEP = ("const t = performance.now();"
-        "document.dispatchEvent(new KeyboardEvent('keydown', {key: arguments[0]}));"
-        "return performance.now() - t;")
+STEP = (
+    "const t = performance.now();"
+    "document.dispatchEvent(new KeyboardEvent('keydown', {key: arguments[0]}));"
+    "return performance.now() - t;"
+)
 
 
 def main() -> None:
@@ -41,9 +43,11 @@ def main() -> None:
 
     hand = np.asarray(Image.open(DATA / "kimia99" / "hand-1.png")) > 0
     rows = []
-    with tempfile.TemporaryDirectory() as tmp, \
-            running_server(Path(tmp) / "server.log", workers="1", job_timeout="120") as (_, base), \
-            chromium() as driver:
+    with (
+        tempfile.TemporaryDirectory() as tmp,
+        running_server(Path(tmp) / "server.log", workers="1", job_timeout="120") as (_, base),
+        chromium() as driver,
+    ):
         for size in SIZES:
             path = Path(tmp) / f"hand-{size}.png"
             Image.fromarray(upscale(hand, size).astype(np.uint8) * 255).save(path)
@@ -53,7 +57,8 @@ def main() -> None:
                 t = time.perf_counter()
                 driver.find_element(By.ID, "file").send_keys(str(path))
                 WebDriverWait(driver, 300, poll_frequency=0.01).until(
-                    lambda d: d.find_element(By.ID, "result").is_displayed())
+                    lambda d: d.find_element(By.ID, "result").is_displayed()
+                )
                 shown.append(time.perf_counter() - t)
                 request.append(driver.execute_script("return state.elapsed") / 1000)
                 mb = driver.execute_script("return state.text.length") / 1e6
@@ -61,7 +66,26 @@ def main() -> None:
                     whole.append(driver.execute_script(STEP, "Home"))
                     one.append(driver.execute_script(STEP, "ArrowRight"))
                     whole.append(driver.execute_script(STEP, "End"))
-            rows.append([size, statistics.median(shown), statistics.median(request),
-                         statistics.median(one), statistics.median(whole), mb])
-    print(table(["px a side", "upload to drawn s", "request s", "one step ms",
-                 "whole sequence ms", "document MB"], rows))
+            rows.append(
+                [
+                    size,
+                    statistics.median(shown),
+                    statistics.median(request),
+                    statistics.median(one),
+                    statistics.median(whole),
+                    mb,
+                ]
+            )
+    print(
+        table(
+            [
+                "px a side",
+                "upload to drawn s",
+                "request s",
+                "one step ms",
+                "whole sequence ms",
+                "document MB",
+            ],
+            rows,
+        )
+    )

@@ -77,8 +77,15 @@ def negotiate(accept: str | None) -> Output:
         main = candidate.split("/")[0]
         best, best_rank = 0.0, -1
         for media, q in ranges:
-            rank = 2 if media == candidate else 1 if media == f"{main}/*" else 0 if media == "*/*" \
+            rank = (
+                2
+                if media == candidate
+                else 1
+                if media == f"{main}/*"
+                else 0
+                if media == "*/*"
                 else -1
+            )
             if rank > best_rank:
                 best, best_rank = q, rank
         return best if best_rank >= 0 else 0.0
@@ -102,9 +109,7 @@ async def job_function() -> Callable[[Job], Any]:
 
 
 def _validation(errors: list[dict[str, Any]], prefix: tuple[str, ...]) -> RequestValidationError:
-    return RequestValidationError(
-        [{**e, "loc": (*prefix, *e.get("loc", ()))} for e in errors]
-    )
+    return RequestValidationError([{**e, "loc": (*prefix, *e.get("loc", ()))} for e in errors])
 
 
 def parse_query(params: QueryParams) -> PruneQuery:
@@ -182,12 +187,18 @@ async def _png_from_multipart(request: Request) -> bytes:
         if misplaced:
             raise InvalidOptionError(
                 f"option(s) {', '.join(misplaced)} sent as multipart fields; options go in "
-                "the query string")
+                "the query string"
+            )
         if not isinstance(upload, UploadFile):
-            raise RequestValidationError([{
-                "loc": ("body", "file"), "type": "missing",
-                "msg": "multipart field 'file' with the PNG is required",
-            }])
+            raise RequestValidationError(
+                [
+                    {
+                        "loc": ("body", "file"),
+                        "type": "missing",
+                        "msg": "multipart field 'file' with the PNG is required",
+                    }
+                ]
+            )
         return await upload.read()
 
 
@@ -215,8 +226,10 @@ Compute the pruned skeleton of a shape.
     response_class=Response,
     responses=examples.PRUNE_RESPONSES,
     # the query options are parsed in the handler (parse_query): documented from the model
-    openapi_extra={"requestBody": examples.PRUNE_REQUEST_BODY,
-                   "parameters": query_parameters(PruneQuery)},
+    openapi_extra={
+        "requestBody": examples.PRUNE_REQUEST_BODY,
+        "parameters": query_parameters(PruneQuery),
+    },
     tags=["prune"],
 )
 async def prune(
@@ -264,10 +277,16 @@ async def prune(
             given.setdefault("longest_side", settings.polygon_longest_side)
         raster = {**RasterOptions(**given).kwargs(), "max_vertices": settings.max_vertices}
     job = Job(
-        output=output, png=png, geojson=geojson, prune_options=prune_options.kwargs(),
-        raster=raster, curve=output_options.curve, overlay=output_options.overlay,
+        output=output,
+        png=png,
+        geojson=geojson,
+        prune_options=prune_options.kwargs(),
+        raster=raster,
+        curve=output_options.curve,
+        overlay=output_options.overlay,
         sequence=output_options.sequence,
-        max_pixels=settings.max_pixels, foreground=read_options.foreground,
+        max_pixels=settings.max_pixels,
+        foreground=read_options.foreground,
     )
     result = await pool.run(fn, job)
     request.app.state.metrics.prune_seconds.observe(result.prune_seconds)
@@ -276,7 +295,10 @@ async def prune(
 
 
 @router.get(
-    "/healthz", response_model=Health, summary="Liveness: the process answers", tags=["ops"],
+    "/healthz",
+    response_model=Health,
+    summary="Liveness: the process answers",
+    tags=["ops"],
     responses={200: {"content": {"application/json": {"example": {"status": "ok"}}}}},
 )
 async def healthz() -> Health:
@@ -288,10 +310,22 @@ async def healthz() -> Health:
     response_model=Readiness,
     summary="Readiness: worker pool up and the queue not full",
     responses={
-        200: {"content": {"application/json": {"example": {
-            "status": "ready", "workers": 4, "busy": 1, "queued": 0, "queue_size": 16}}}},
-        503: examples.problem_response(503, "queue-full", "Service busy",
-                                       "the queue is full (16 jobs waiting)", "/readyz"),
+        200: {
+            "content": {
+                "application/json": {
+                    "example": {
+                        "status": "ready",
+                        "workers": 4,
+                        "busy": 1,
+                        "queued": 0,
+                        "queue_size": 16,
+                    }
+                }
+            }
+        },
+        503: examples.problem_response(
+            503, "queue-full", "Service busy", "the queue is full (16 jobs waiting)", "/readyz"
+        ),
     },
     tags=["ops"],
 )
@@ -299,7 +333,8 @@ async def readyz(request: Request) -> Readiness:
     pool: WorkerPool = request.app.state.pool
     if pool.starting and not pool.closed:
         raise PoolStartingError(
-            f"the worker pool is warming up ({pool.warm} of {pool.size} workers ready)")
+            f"the worker pool is warming up ({pool.warm} of {pool.size} workers ready)"
+        )
     failure = request.app.state.pool_failure
     if failure is not None:
         raise PoolClosedError(f"the worker pool failed to start: {failure}")
@@ -308,7 +343,10 @@ async def readyz(request: Request) -> Readiness:
     if not pool.ready:
         raise QueueFullError(f"the queue is full ({pool.waiting} jobs waiting)")
     return Readiness(
-        status="ready", workers=pool.alive(), busy=pool.busy, queued=pool.waiting,
+        status="ready",
+        workers=pool.alive(),
+        busy=pool.busy,
+        queued=pool.waiting,
         queue_size=pool.queue_size,
     )
 
@@ -317,12 +355,18 @@ async def readyz(request: Request) -> Readiness:
     "/metrics",
     summary="Prometheus metrics",
     response_class=Response,
-    responses={200: {"description": "Prometheus text exposition format.",
-                     "content": {"text/plain": {"schema": {"type": "string"},
-                                                "example": examples.METRICS_EXAMPLE}}},
-               401: examples.UNAUTHORIZED},
+    responses={
+        200: {
+            "description": "Prometheus text exposition format.",
+            "content": {
+                "text/plain": {"schema": {"type": "string"}, "example": examples.METRICS_EXAMPLE}
+            },
+        },
+        401: examples.UNAUTHORIZED,
+    },
     tags=["ops"],
 )
 async def metrics(request: Request) -> Response:
-    return Response(generate_latest(request.app.state.metrics.registry),
-                    media_type=CONTENT_TYPE_LATEST)
+    return Response(
+        generate_latest(request.app.state.metrics.registry), media_type=CONTENT_TYPE_LATEST
+    )

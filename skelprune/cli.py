@@ -35,8 +35,9 @@ from .options import (
 if TYPE_CHECKING:
     from .output.document import PruneResult
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="Parameter-free Bayesian skeleton pruning.")
+app = typer.Typer(
+    add_completion=False, no_args_is_help=True, help="Parameter-free Bayesian skeleton pruning."
+)
 
 
 def _prune(path: str, read: ReadOptions, options: PruneOptions) -> PruneResult:
@@ -49,11 +50,14 @@ def _prune(path: str, read: ReadOptions, options: PruneOptions) -> PruneResult:
     return res
 
 
-def _prune_file(path: str, read: ReadOptions, options: PruneOptions,
-                curve: bool, sequence: bool = False) -> dict[str, Any]:
+def _prune_file(
+    path: str, read: ReadOptions, options: PruneOptions, curve: bool, sequence: bool = False
+) -> dict[str, Any]:
     try:
-        return {"file": path, "result": _prune(path, read, options).to_dict(
-            curve=curve, sequence=sequence)}
+        return {
+            "file": path,
+            "result": _prune(path, read, options).to_dict(curve=curve, sequence=sequence),
+        }
     except (SkelpruneError, OSError) as exc:
         return {"file": path, "error": f"{type(exc).__name__}: {exc}"}
 
@@ -65,8 +69,7 @@ def _expand(paths: list[Path]) -> list[Path]:
     return files
 
 
-HELP = {name: text for name, _, text, _ in option_fields(PruneOptions, OutputOptions,
-                                                          ReadOptions)}
+HELP = {name: text for name, _, text, _ in option_fields(PruneOptions, OutputOptions, ReadOptions)}
 # the choices as typer shows them (it lists an Enum's values in --help)
 Method = enum.Enum("Method", {name: name for name in METHODS}, type=str)
 Coarse = enum.Enum("Coarse", {name: name for name in COARSE}, type=str)
@@ -81,18 +84,25 @@ def prune_command(
     coarse: Annotated[Coarse, typer.Option(help=HELP["coarse"])] = Coarse("dce"),
     dce_threshold: Annotated[float | None, typer.Option(help=HELP["dce_threshold"])] = None,
     min_margin: Annotated[float | None, typer.Option(help=HELP["min_margin"])] = None,
-    foreground: Annotated[Rule, typer.Option(help=HELP["foreground"])
-                          ] = Rule(ReadOptions.foreground),
-    overlay: Annotated[Path | None, typer.Option(help="Write the overlay PNG here "
-                                                 "(one input file only).")] = None,
+    foreground: Annotated[Rule, typer.Option(help=HELP["foreground"])] = Rule(
+        ReadOptions.foreground
+    ),
+    overlay: Annotated[
+        Path | None, typer.Option(help="Write the overlay PNG here (one input file only).")
+    ] = None,
     curve: Annotated[bool, typer.Option(help=HELP["curve"])] = OutputOptions.curve,
     sequence: Annotated[bool, typer.Option(help=HELP["sequence"])] = OutputOptions.sequence,
     workers: Annotated[int, typer.Option(help="Worker processes for several files.")] = 0,
 ) -> None:
     """Prune the skeleton of each shape and print the result as JSON."""
     try:  # checked once, before any file is read
-        options = PruneOptions(beta=beta, method=method.value, coarse=coarse.value,
-                               dce_threshold=dce_threshold, min_margin=min_margin)
+        options = PruneOptions(
+            beta=beta,
+            method=method.value,
+            coarse=coarse.value,
+            dce_threshold=dce_threshold,
+            min_margin=min_margin,
+        )
         read = ReadOptions(foreground=foreground.value)
     except SkelpruneError as exc:
         typer.echo(f"error: {exc}", err=True)
@@ -121,8 +131,14 @@ def prune_command(
     failed = 0
     with ProcessPoolExecutor(max_workers=n) as pool:
         k = len(inputs)
-        jobs = pool.map(_prune_file, [str(p) for p in inputs], [read] * k, [options] * k,
-                        [curve] * k, [sequence] * k)
+        jobs = pool.map(
+            _prune_file,
+            [str(p) for p in inputs],
+            [read] * k,
+            [options] * k,
+            [curve] * k,
+            [sequence] * k,
+        )
         for line in tqdm(jobs, total=len(inputs), file=sys.stderr, unit="shape"):
             failed += "error" in line
             sys.stdout.write(json.dumps(line) + "\n")
@@ -132,23 +148,30 @@ def prune_command(
 
 @app.command("eval")
 def eval_command(
-    out: Annotated[Path, typer.Option(help="Folder for evaluation.md, stability.md "
-                                      "and figures/.")] = Path("docs"),
-    data: Annotated[Path | None, typer.Option(help="Folder with kimia216/ and kimia99/ "
-                                              "(default: $SKELPRUNE_DATA or "
-                                              "../shared/data).")] = None,
+    out: Annotated[
+        Path, typer.Option(help="Folder for evaluation.md, stability.md and figures/.")
+    ] = Path("docs"),
+    data: Annotated[
+        Path | None,
+        typer.Option(
+            help="Folder with kimia216/ and kimia99/ (default: $SKELPRUNE_DATA or ../shared/data)."
+        ),
+    ] = None,
     workers: Annotated[int, typer.Option(help="Processes of the stability run.")] = 2,
-    limit: Annotated[int | None, typer.Option(hidden=True,
-                                              help="First N shapes a dataset.")] = None,
-    rect_seeds: Annotated[int, typer.Option(hidden=True,
-                                            help="Noisy rectangles a noise kind.")] = 10,
+    limit: Annotated[
+        int | None, typer.Option(hidden=True, help="First N shapes a dataset.")
+    ] = None,
+    rect_seeds: Annotated[
+        int, typer.Option(hidden=True, help="Noisy rectangles a noise kind.")
+    ] = 10,
 ) -> None:
     """Regenerate the evaluation report and figures (needs the bench extra: matplotlib)."""
     from .evaluation.run import run_evaluation
 
     try:
-        written = run_evaluation(out, data=data, limit=limit, workers=workers,
-                                 rect_seeds=rect_seeds)
+        written = run_evaluation(
+            out, data=data, limit=limit, workers=workers, rect_seeds=rect_seeds
+        )
     except (FileNotFoundError, ImportError) as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(1) from None

@@ -17,11 +17,21 @@ from typing import Any
 __all__ = ["FLAGS", "MISSING", "chromium", "missing"]
 
 #: What Chromium needs to run headless as root, and nothing reaching the network.
-FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-         "--disable-background-networking", "--disable-component-update",
-         "--disable-sync", "--no-first-run", "--window-size=1400,1250")
-MISSING = ("needs Debian's chromium and chromedriver: apt-get install -y chromium "
-           "chromium-driver (.ci/run installs them)")
+FLAGS = (
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-dev-shm-usage",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+    "--window-size=1400,1250",
+)
+MISSING = (
+    "needs Debian's chromium and chromedriver: apt-get install -y chromium "
+    "chromium-driver (.ci/run installs them)"
+)
 
 
 def missing() -> bool:
@@ -41,12 +51,14 @@ def chromium(downloads: Path | None = None) -> Iterator[Any]:
         options.add_argument(flag)
     with tempfile.TemporaryDirectory(prefix="skelprune-chromium-") as profile:
         options.add_argument(f"--user-data-dir={profile}")
-        driver = webdriver.Chrome(options=options,
-                                  service=Service(executable_path=shutil.which("chromedriver")))
+        driver = webdriver.Chrome(
+            options=options, service=Service(executable_path=shutil.which("chromedriver"))
+        )
         driver.set_page_load_timeout(30)
         if downloads is not None:
-            driver.execute_cdp_cmd("Browser.setDownloadBehavior",
-                                   {"behavior": "allow", "downloadPath": str(downloads)})
+            driver.execute_cdp_cmd(
+                "Browser.setDownloadBehavior", {"behavior": "allow", "downloadPath": str(downloads)}
+            )
         try:
             yield driver
         finally:

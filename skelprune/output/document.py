@@ -75,8 +75,9 @@ class ComponentResult:
     def area(self) -> int:
         return self.skeleton.area
 
-    def image_coordinates(self, rows: np.ndarray,
-                          cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def image_coordinates(
+        self, rows: np.ndarray, cols: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Rows and columns of graph points in the image frame."""
         return self.skeleton.image_coordinates(rows, cols)
 
@@ -132,7 +133,8 @@ class ComponentResult:
         # Owners as the sequence goes: a graph branch holds the S(0) branches and
         # junctions merged into it.
         held: dict[int, tuple[list[int], list[int]]] = {
-            gb: ([db], []) for gb, db in branch_id.items()}
+            gb: ([db], []) for gb, db in branch_id.items()
+        }
         graph = start.working_graph()
         for step, pick in enumerate(seq.removed, start=1):
             merged = graph.remove_end_branch(pick)
@@ -155,8 +157,7 @@ class ComponentResult:
                 held[kept][0].extend(more_b)
                 held[kept][1].extend(more_j)
         idx = start.points()
-        covered = reconstruction(start.shape.shape, start.rows[idx], start.cols[idx],
-                                 start.r2[idx])
+        covered = reconstruction(start.shape.shape, start.rows[idx], start.cols[idx], start.r2[idx])
         miss_r, miss_c = np.nonzero(start.shape & ~covered)
         miss_r, miss_c = self.image_coordinates(miss_r, miss_c)
         gone = np.ones(start.rows.size, bool)
@@ -166,15 +167,23 @@ class ComponentResult:
             "start": "medial_axis" if not gone.any() else "coarse",
             "nodes": nodes,
             "branches": branches,
-            "uncovered": [[float(x), float(y)] for y, x in zip(miss_r.tolist(),
-                                                               miss_c.tolist(), strict=True)],
-            "coarse_removed": [[float(x), float(y), float(r)] for y, x, r in zip(
-                gone_r.tolist(), gone_c.tolist(), np.sqrt(start.r2[gone].astype(float)).tolist(),
-                strict=True)],
+            "uncovered": [
+                [float(x), float(y)] for y, x in zip(miss_r.tolist(), miss_c.tolist(), strict=True)
+            ],
+            "coarse_removed": [
+                [float(x), float(y), float(r)]
+                for y, x, r in zip(
+                    gone_r.tolist(),
+                    gone_c.tolist(),
+                    np.sqrt(start.r2[gone].astype(float)).tolist(),
+                    strict=True,
+                )
+            ],
         }
 
-    def to_dict(self, curve: bool = True, frame: PixelFrame = IDENTITY,
-                sequence: bool = False) -> dict[str, Any]:
+    def to_dict(
+        self, curve: bool = True, frame: PixelFrame = IDENTITY, sequence: bool = False
+    ) -> dict[str, Any]:
         nodes, branches = self.skeleton_table()
 
         def mapped(pts: list[list[float]]) -> list[list[float]]:
@@ -215,10 +224,16 @@ class ComponentResult:
         }
         if curve:
             doc["curve"] = [
-                {"step": i, "length": frame.distance(float(L)), "ar": float(a),
-                 "lr": float(lr), "objective": float(o)}
+                {
+                    "step": i,
+                    "length": frame.distance(float(L)),
+                    "ar": float(a),
+                    "lr": float(lr),
+                    "objective": float(o),
+                }
                 for i, (L, a, lr, o) in enumerate(
-                    zip(seq.length, seq.ar, seq.lr, seq.objective, strict=True))
+                    zip(seq.length, seq.ar, seq.lr, seq.objective, strict=True)
+                )
             ]
         if sequence:
             table = self.sequence_table()
@@ -226,15 +241,19 @@ class ComponentResult:
             table["uncovered"] = [list(frame.point(x, y)) for x, y in table["uncovered"]]
             table["coarse_removed"] = mapped(table["coarse_removed"])
             # how to get back to the raster's pixels (the error is painted on them)
-            table["frame"] = {"x0": frame.x0, "y0": frame.y0, "pixel_size": frame.pixel_size,
-                              "flip_y": frame.flip_y}
+            table["frame"] = {
+                "x0": frame.x0,
+                "y0": frame.y0,
+                "pixel_size": frame.pixel_size,
+                "flip_y": frame.flip_y,
+            }
             doc["sequence"] = table
         return doc
 
 
-def _graph_table(sk: Skeleton, margins: Margins | None
-                 ) -> tuple[list[dict[str, Any]], list[dict[str, Any]], dict[int, int],
-                            dict[int, int]]:
+def _graph_table(
+    sk: Skeleton, margins: Margins | None
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]], dict[int, int], dict[int, int]]:
     """Nodes and branches of a skeleton's graph in image pixel coordinates, with the
     document id of each live graph branch and junction."""
     g, r2 = sk.graph, sk.r2
@@ -254,13 +273,20 @@ def _graph_table(sk: Skeleton, margins: Margins | None
         pts = sorted(junc.points, key=lambda p: (-r2[p], g.rows[p], g.cols[p]))
         x, y, r = xyr(pts[0])
         junction_node[j] = len(nodes)
-        nodes.append({"id": len(nodes), "x": x, "y": y, "radius": r, "kind": "junction",
-                      "points": [xyr(p) for p in sorted(junc.points)]})
+        nodes.append(
+            {
+                "id": len(nodes),
+                "x": x,
+                "y": y,
+                "radius": r,
+                "kind": "junction",
+                "points": [xyr(p) for p in sorted(junc.points)],
+            }
+        )
 
     def new_node(p: int, kind: str) -> int:
         x, y, r = xyr(p)
-        nodes.append({"id": len(nodes), "x": x, "y": y, "radius": r, "kind": kind,
-                      "points": []})
+        nodes.append({"id": len(nodes), "x": x, "y": y, "radius": r, "kind": kind, "points": []})
         return len(nodes) - 1
 
     branches: list[dict[str, Any]] = []
@@ -281,13 +307,18 @@ def _graph_table(sk: Skeleton, margins: Margins | None
                 else:
                     ends.append(new_node(p, "endpoint"))
             src, dst = ends
-        branches.append({"id": len(branches), "source": src, "target": dst,
-                         "length": float(br.length),
-                         "points": [xyr(p) for p in path],
-                         "off_path": [xyr(p) for p in sorted(br.side)],
-                         "margin": None if margins is None else margins.margin.get(b),
-                         "removed_at": None if margins is None
-                         else margins.removed_at.get(b)})
+        branches.append(
+            {
+                "id": len(branches),
+                "source": src,
+                "target": dst,
+                "length": float(br.length),
+                "points": [xyr(p) for p in path],
+                "off_path": [xyr(p) for p in sorted(br.side)],
+                "margin": None if margins is None else margins.margin.get(b),
+                "removed_at": None if margins is None else margins.removed_at.get(b),
+            }
+        )
         branch_id[b] = len(branches) - 1
     return nodes, branches, branch_id, junction_node
 
@@ -343,8 +374,13 @@ class PruneResult:
             return e, e, e
         return tuple(np.concatenate(a) for a in zip(*parts, strict=True))  # type: ignore[return-value]
 
-    def to_dict(self, curve: bool = True, overlay: bool = False,
-                frame: PixelFrame = IDENTITY, sequence: bool = False) -> dict[str, Any]:
+    def to_dict(
+        self,
+        curve: bool = True,
+        overlay: bool = False,
+        frame: PixelFrame = IDENTITY,
+        sequence: bool = False,
+    ) -> dict[str, Any]:
         """The output document of SPEC §3 (plain JSON types).
 
         Examples
@@ -356,11 +392,15 @@ class PruneResult:
         (40, 4)
         """
         doc: dict[str, Any] = {
-            "width": self.width, "height": self.height, "method": self.method,
-            "beta": float(self.beta), "coarse": self.coarse,
+            "width": self.width,
+            "height": self.height,
+            "method": self.method,
+            "beta": float(self.beta),
+            "coarse": self.coarse,
             "foreground": self.foreground.to_dict(),
-            "components": [c.to_dict(curve=curve, frame=frame, sequence=sequence)
-                           for c in self.components],
+            "components": [
+                c.to_dict(curve=curve, frame=frame, sequence=sequence) for c in self.components
+            ],
         }
         if overlay:
             doc["overlay_png"] = base64.b64encode(self.overlay_png()).decode("ascii")
@@ -373,22 +413,39 @@ class PruneResult:
             sk = comp["skeleton"]
             for br in sk["branches"]:
                 line = branch_line(sk, br)
-                features.append({
-                    "type": "Feature",
-                    "geometry": {"type": "LineString",
-                                 "coordinates": [[x, y] for x, y, _ in line]},
-                    "properties": {"component": ci, "kind": "branch", "id": br["id"],
-                                   "source": br["source"], "target": br["target"],
-                                   "length": br["length"], "radii": [r for *_, r in line],
-                                   "margin": br["margin"], "removed_at": br["removed_at"]},
-                })
+                features.append(
+                    {
+                        "type": "Feature",
+                        "geometry": {
+                            "type": "LineString",
+                            "coordinates": [[x, y] for x, y, _ in line],
+                        },
+                        "properties": {
+                            "component": ci,
+                            "kind": "branch",
+                            "id": br["id"],
+                            "source": br["source"],
+                            "target": br["target"],
+                            "length": br["length"],
+                            "radii": [r for *_, r in line],
+                            "margin": br["margin"],
+                            "removed_at": br["removed_at"],
+                        },
+                    }
+                )
             for nd in sk["nodes"]:
-                features.append({
-                    "type": "Feature",
-                    "geometry": {"type": "Point", "coordinates": [nd["x"], nd["y"]]},
-                    "properties": {"component": ci, "kind": nd["kind"], "id": nd["id"],
-                                   "radius": nd["radius"]},
-                })
+                features.append(
+                    {
+                        "type": "Feature",
+                        "geometry": {"type": "Point", "coordinates": [nd["x"], nd["y"]]},
+                        "properties": {
+                            "component": ci,
+                            "kind": nd["kind"],
+                            "id": nd["id"],
+                            "radius": nd["radius"],
+                        },
+                    }
+                )
         return {"type": "FeatureCollection", "features": features}
 
     def to_networkx(self, frame: PixelFrame = IDENTITY) -> Any:
@@ -410,18 +467,27 @@ class PruneResult:
         try:
             import networkx as nx
         except ImportError:  # an optional dependency: say how to get it
-            raise ImportError("to_networkx needs networkx: pip install 'skelprune[graph]'") \
-                from None
+            raise ImportError(
+                "to_networkx needs networkx: pip install 'skelprune[graph]'"
+            ) from None
         g = nx.MultiGraph()
         for ci, comp in enumerate(self.to_dict(curve=False, frame=frame)["components"]):
             sk = comp["skeleton"]
             for nd in sk["nodes"]:
-                g.add_node((ci, nd["id"]), component=ci,
-                           **{k: v for k, v in nd.items() if k != "id"})
+                g.add_node(
+                    (ci, nd["id"]), component=ci, **{k: v for k, v in nd.items() if k != "id"}
+                )
             for br in sk["branches"]:
-                g.add_edge((ci, br["source"]), (ci, br["target"]), key=br["id"], component=ci,
-                           length=br["length"], points=br["points"], off_path=br["off_path"],
-                           line=branch_line(sk, br))
+                g.add_edge(
+                    (ci, br["source"]),
+                    (ci, br["target"]),
+                    key=br["id"],
+                    component=ci,
+                    length=br["length"],
+                    points=br["points"],
+                    off_path=br["off_path"],
+                    line=branch_line(sk, br),
+                )
         return g
 
     def render_overlay(self) -> np.ndarray:
@@ -440,9 +506,14 @@ class PruneResult:
             for n in comp.skeleton_table()[0]:
                 if n["kind"] in marks:
                     marks[n["kind"]].append((int(n["y"]), int(n["x"])))
-        return render_overlay(self.mask, rows, cols, r2,
-                              np.array(marks["endpoint"], int).reshape(-1, 2),
-                              np.array(marks["junction"], int).reshape(-1, 2))
+        return render_overlay(
+            self.mask,
+            rows,
+            cols,
+            r2,
+            np.array(marks["endpoint"], int).reshape(-1, 2),
+            np.array(marks["junction"], int).reshape(-1, 2),
+        )
 
     def overlay_png(self) -> bytes:
         return encode_png(self.render_overlay())

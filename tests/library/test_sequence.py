@@ -22,30 +22,44 @@ def _alive(item: dict, k: int) -> bool:
 def step_skeleton(seq: dict, k: int) -> tuple[int, int, list[list[float]]]:
     """What a viewer derives for S(k): branch count, endpoint count, pixels [x, y, r]
     (the rules docs/viewer.md states)."""
-    branches = [b for b in seq["branches"] if _alive(b, k)
-                and (b["absorbed_at"] is None or b["absorbed_at"] > k)]
+    branches = [
+        b
+        for b in seq["branches"]
+        if _alive(b, k) and (b["absorbed_at"] is None or b["absorbed_at"] > k)
+    ]
     pixels = [p for b in seq["branches"] if _alive(b, k) for p in b["points"] + b["off_path"]]
-    pixels += [p for n in seq["nodes"] if n["kind"] == "junction" and _alive(n, k)
-               for p in n["points"]]
+    pixels += [
+        p for n in seq["nodes"] if n["kind"] == "junction" and _alive(n, k) for p in n["points"]
+    ]
     ends = {n["id"] for n in seq["nodes"] if n["kind"] == "endpoint"}
-    endpoints = sum((b["source"] in ends) + (b["target"] in ends and b["target"] != b["source"])
-                    for b in seq["branches"] if _alive(b, k))
+    endpoints = sum(
+        (b["source"] in ends) + (b["target"] in ends and b["target"] != b["source"])
+        for b in seq["branches"]
+        if _alive(b, k)
+    )
     return len(branches), endpoints, pixels
 
 
 def error_pixels(seq: dict, k: int, shape: tuple[int, int]) -> int:
     """|D \\ R(S(k))| from the sequence alone: S(0)'s misses plus what S(k)'s disks lose."""
+
     def cover(pts: list[list[float]]) -> np.ndarray:
         a = np.array(pts, float).reshape(-1, 3)
-        return reconstruction(shape, a[:, 1].astype(int), a[:, 0].astype(int),
-                              np.rint(a[:, 2] ** 2).astype(int))
+        return reconstruction(
+            shape, a[:, 1].astype(int), a[:, 0].astype(int), np.rint(a[:, 2] ** 2).astype(int)
+        )
+
     start = cover(step_skeleton(seq, 0)[2])  # nothing is removed at step 0
     now = cover(step_skeleton(seq, k)[2])
     return len(seq["uncovered"]) + int((start & ~now).sum())
 
 
-CASES = [("kimia216/bird-2.png", {}), ("kimia216/bird-2.png", {"coarse": None}),
-         ("kimia99/hand-1.png", {}), ("kimia216/elephant-1.png", {"method": "dce"})]
+CASES = [
+    ("kimia216/bird-2.png", {}),
+    ("kimia216/bird-2.png", {"coarse": None}),
+    ("kimia99/hand-1.png", {}),
+    ("kimia216/elephant-1.png", {"method": "dce"}),
+]
 
 
 @pytest.mark.parametrize(("name", "options"), CASES)
@@ -96,10 +110,14 @@ def test_sequence_is_opt_in_and_leaves_the_rest_alone() -> None:
 def test_the_command_line_prints_the_sequence_on_request() -> None:
     png = DATA / "kimia216" / "bird-2.png"
     cli = [sys.executable, "-m", "skelprune.cli", "prune", str(png)]
-    plain = json.loads(subprocess.run(cli, capture_output=True, text=True, timeout=300,
-                                      check=True).stdout)
-    with_seq = json.loads(subprocess.run([*cli, "--sequence"], capture_output=True, text=True,
-                                         timeout=300, check=True).stdout)
+    plain = json.loads(
+        subprocess.run(cli, capture_output=True, text=True, timeout=300, check=True).stdout
+    )
+    with_seq = json.loads(
+        subprocess.run(
+            [*cli, "--sequence"], capture_output=True, text=True, timeout=300, check=True
+        ).stdout
+    )
     assert with_seq["components"][0]["sequence"]["start"] == "coarse"
     del with_seq["components"][0]["sequence"]
     assert with_seq == plain

@@ -72,16 +72,24 @@ def _result(driver) -> dict[str, int]:
     """The step the page shows and what it drew, once the skeleton is there."""
     from selenium.webdriver.common.by import By
 
-    _wait(driver, lambda d: d.find_element(By.ID, "result").is_displayed()
-          and d.find_element(By.ID, "step-info").get_attribute("data-step") not in (None, ""))
+    _wait(
+        driver,
+        lambda d: (
+            d.find_element(By.ID, "result").is_displayed()
+            and d.find_element(By.ID, "step-info").get_attribute("data-step") not in (None, "")
+        ),
+    )
     info = driver.find_element(By.ID, "step-info")
     drawn = driver.find_elements(By.CSS_SELECTOR, "#branches .branch")
     ends = driver.find_elements(By.CSS_SELECTOR, "#nodes circle.endpoint")
-    return {"step": int(info.get_attribute("data-step")), "drawn": len(drawn),
-            "endpoints_drawn": len(ends),
-            "branches": int(info.get_attribute("data-branches")),
-            "error": int(info.get_attribute("data-error-pixels")),
-            "expected_error": int(info.get_attribute("data-expected-error-pixels"))}
+    return {
+        "step": int(info.get_attribute("data-step")),
+        "drawn": len(drawn),
+        "endpoints_drawn": len(ends),
+        "branches": int(info.get_attribute("data-branches")),
+        "error": int(info.get_attribute("data-error-pixels")),
+        "expected_error": int(info.get_attribute("data-expected-error-pixels")),
+    }
 
 
 def _shot(driver, name: str) -> Path:
@@ -112,12 +120,17 @@ def test_page_and_assets_are_served_by_the_service(server: Running) -> None:
         assert not re.search(r"https?://(?!www\.w3\.org)", r.text), path
 
 
-@pytest.mark.parametrize("query", ["sequence=true", "sequence=true&coarse=none",
-                                   "sequence=true&method=dce", ""])
+@pytest.mark.parametrize(
+    "query", ["sequence=true", "sequence=true&coarse=none", "sequence=true&method=dce", ""]
+)
 def test_the_sequence_opt_in_is_in_the_schema(server: Running, query: str) -> None:
     _, base = server
-    r = httpx.post(f"{base}/v1/prune?{query}", content=BIRD.read_bytes(),
-                   headers={"Content-Type": "image/png"}, timeout=60)
+    r = httpx.post(
+        f"{base}/v1/prune?{query}",
+        content=BIRD.read_bytes(),
+        headers={"Content-Type": "image/png"},
+        timeout=60,
+    )
     assert r.status_code == 200
     doc = PruneDocument.model_validate(r.json())  # strict: no extra keys, right types
     seq = doc.components[0].sequence
@@ -195,8 +208,13 @@ def test_a_shape_and_its_pruning_sequence(server: Running, browser, downloads: P
 
     Select(browser.find_element(By.ID, "coarse")).select_by_visible_text("none")
     full = skelprune.prune(read_mask(BIRD), coarse=None).components[0]
-    _wait(browser, lambda d: _result(d)["step"] == full.chosen_step
-          and "medial axis" in d.find_element(By.ID, "sequence-note").text)
+    _wait(
+        browser,
+        lambda d: (
+            _result(d)["step"] == full.chosen_step
+            and "medial axis" in d.find_element(By.ID, "sequence-note").text
+        ),
+    )
     assert _result(browser)["drawn"] == full.skeleton.n_branches
     _shot(browser, "bird-coarse-none.png")
 
@@ -250,17 +268,34 @@ def test_a_geojson_polygon(server: Running, browser, tmp_path: Path) -> None:
     from selenium.webdriver.common.by import By
 
     x0, y0 = 530000.0, 4100000.0
-    outer = [[x0, y0], [x0 + 900, y0], [x0 + 900, y0 + 300], [x0 + 560, y0 + 300],
-             [x0 + 560, y0 + 700], [x0 + 340, y0 + 700], [x0 + 340, y0 + 300],
-             [x0, y0 + 300], [x0, y0]]
-    hole = [[x0 + 400, y0 + 100], [x0 + 500, y0 + 100], [x0 + 500, y0 + 200],
-            [x0 + 400, y0 + 200], [x0 + 400, y0 + 100]]
+    outer = [
+        [x0, y0],
+        [x0 + 900, y0],
+        [x0 + 900, y0 + 300],
+        [x0 + 560, y0 + 300],
+        [x0 + 560, y0 + 700],
+        [x0 + 340, y0 + 700],
+        [x0 + 340, y0 + 300],
+        [x0, y0 + 300],
+        [x0, y0],
+    ]
+    hole = [
+        [x0 + 400, y0 + 100],
+        [x0 + 500, y0 + 100],
+        [x0 + 500, y0 + 200],
+        [x0 + 400, y0 + 200],
+        [x0 + 400, y0 + 100],
+    ]
     polygon = {"type": "Polygon", "coordinates": [outer, hole]}
     path = tmp_path / "tee.geojson"
     path.write_text(json.dumps(polygon))
     _, base = server
-    doc = httpx.post(base + "/v1/prune?sequence=true", content=path.read_bytes(),
-                     headers={"Content-Type": "application/geo+json"}, timeout=60).json()
+    doc = httpx.post(
+        base + "/v1/prune?sequence=true",
+        content=path.read_bytes(),
+        headers={"Content-Type": "application/geo+json"},
+        timeout=60,
+    ).json()
     comp = doc["components"][0]
     _upload(browser, base, path)
     shown = _result(browser)
@@ -270,8 +305,10 @@ def test_a_geojson_polygon(server: Running, browser, tmp_path: Path) -> None:
     assert shown["error"] == shown["expected_error"] == round(comp["rer"] * comp["area"])
     # the raster is drawn north up: the stem of the T (larger y) at the top
     svg = browser.find_element(By.ID, "view")
-    ends = [e.location["y"] - svg.location["y"]
-            for e in browser.find_elements(By.CSS_SELECTOR, "#nodes circle.endpoint")]
+    ends = [
+        e.location["y"] - svg.location["y"]
+        for e in browser.find_elements(By.CSS_SELECTOR, "#nodes circle.endpoint")
+    ]
     assert min(ends) < 0.25 * svg.size["height"] < max(ends)
     _shot(browser, "tee-geojson.png")
 
@@ -279,7 +316,7 @@ def test_a_geojson_polygon(server: Running, browser, tmp_path: Path) -> None:
 def _ring_and_dot() -> np.ndarray:
     yy, xx = np.mgrid[:90, :140]
     d2 = (yy - 45) ** 2 + (xx - 45) ** 2
-    ring = (d2 < 40 ** 2) & (d2 >= 25 ** 2)  # a loop and no end branch: nothing to prune
+    ring = (d2 < 40**2) & (d2 >= 25**2)  # a loop and no end branch: nothing to prune
     dot = (np.abs(yy - 45) <= 1) & (np.abs(xx - 120) <= 1)  # 3 x 3: one point
     return ((ring | dot) * 255).astype(np.uint8)
 
@@ -310,14 +347,20 @@ def _png(array: np.ndarray) -> bytes:
     return buf.getvalue()
 
 
-@pytest.mark.parametrize(("name", "image", "words"), [
-    ("empty.png", np.zeros((40, 60), np.uint8), ("Empty mask (422)", "no foreground")),
-    ("huge.png", np.pad(np.full((10, 10), 255, np.uint8), ((0, 1190), (0, 1190))),
-     ("Image too large (413)", str(MAX_PIXELS))),
-])
-def test_problems_are_readable_messages(server: Running, browser, tmp_path: Path,
-                                        name: str, image: np.ndarray,
-                                        words: tuple[str, ...]) -> None:
+@pytest.mark.parametrize(
+    ("name", "image", "words"),
+    [
+        ("empty.png", np.zeros((40, 60), np.uint8), ("Empty mask (422)", "no foreground")),
+        (
+            "huge.png",
+            np.pad(np.full((10, 10), 255, np.uint8), ((0, 1190), (0, 1190))),
+            ("Image too large (413)", str(MAX_PIXELS)),
+        ),
+    ],
+)
+def test_problems_are_readable_messages(
+    server: Running, browser, tmp_path: Path, name: str, image: np.ndarray, words: tuple[str, ...]
+) -> None:
     from selenium.webdriver.common.by import By
 
     path = tmp_path / name

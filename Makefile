@@ -25,7 +25,12 @@ setup: $(KERNELS)
 run: $(KERNELS)
 	$(BIN)/python -m service
 
-test: lint $(KERNELS)
+# the viewer page's browser test drives Debian's Chromium (installed once, with apt)
+BROWSER := /usr/bin/chromedriver
+$(BROWSER):
+	bash scripts/install-browser.sh
+
+test: lint $(KERNELS) $(BROWSER)
 	$(BIN)/python -m pytest -q
 
 # ruff (lint and format) for the Python, shellcheck for the shell scripts CI runs

@@ -21,6 +21,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 from service import __version__, examples
 from service.errors import BodyTooLargeError, install_error_handlers, problem
 from service.jobs import warmup
+from service.page import router as page_router
 from service.pool import WorkerPool
 from service.routes import router
 from service.schemas import Problem, PruneDocument, SkeletonGeoJSON, polygon_request_adapter
@@ -259,6 +260,7 @@ def create_app(
     app.state.pool_failure = None  # why the pool did not start, if it did not
     app.state.metrics = _metrics(registry, pool)
     app.include_router(router)
+    app.include_router(page_router)
     install_error_handlers(app, retry_after=settings.retry_after)
     Instrumentator(registry=registry, excluded_handlers=["/metrics"]).instrument(app)
     # Middlewares, innermost first (each add wraps the ones before it):

@@ -47,6 +47,7 @@ class Job:
     raster: dict[str, Any] = field(default_factory=dict)
     curve: bool = True
     overlay: bool = False
+    sequence: bool = False
     max_pixels: int | None = None
     foreground: str = "auto"
 
@@ -138,7 +139,9 @@ def run_job(job: Job) -> JobResult:
     elif job.output == "geojson":
         body = _dumps(res.to_geojson(**framing))
     else:
-        body = _dumps(res.to_dict(curve=job.curve, overlay=job.overlay, **framing))
+        body = _dumps(
+            res.to_dict(curve=job.curve, overlay=job.overlay, sequence=job.sequence, **framing)
+        )
     return JobResult(body=body, media_type=MEDIA_TYPES[job.output], prune_seconds=elapsed)
 
 

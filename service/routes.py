@@ -284,6 +284,7 @@ async def prune(
         raster=raster,
         curve=output_options.curve,
         overlay=output_options.overlay,
+        sequence=output_options.sequence,
         max_pixels=settings.max_pixels,
         foreground=read_options.foreground,
     )

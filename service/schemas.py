@@ -265,6 +265,87 @@ class CurveStep(BaseModel):
     objective: float
 
 
+Point2 = Annotated[list[float], Field(min_length=2, max_length=2, description="[x, y]")]
+
+
+class SequenceNode(BaseModel):
+    """A node of the sequence's starting skeleton S(0)."""
+
+    model_config = STRICT
+    id: int
+    x: float
+    y: float
+    radius: float
+    kind: Literal["endpoint", "junction", "loop"]
+    points: list[Point3] = Field(description="Pixels of a junction cluster; empty otherwise.")
+    removed_at: int | None = Field(
+        None,
+        description="Junctions only: step whose removal takes the cluster's pixels (null: never).",
+    )
+    dissolved_at: int | None = Field(
+        None,
+        description="Junctions only: step at which it "
+        "stops being a junction (two branch ends left).",
+    )
+    dissolved_into: int | None = Field(
+        None, description="Junctions only: the sequence branch its pixels then belong to."
+    )
+
+
+class SequenceBranch(BaseModel):
+    """A branch of S(0) and what the sequence does to it."""
+
+    model_config = STRICT
+    id: int
+    source: int
+    target: int
+    length: float
+    points: list[Point3] = Field(description="Its path in S(0), from source to target.")
+    off_path: list[Point3]
+    removed_at: int | None = Field(
+        description="Step whose removal takes its pixels "
+        "(its own, or that of the branch it became part of); "
+        "null: never."
+    )
+    absorbed_at: int | None = Field(
+        description="Step at which it became part of another "
+        "branch (a junction dissolved between them); null: never."
+    )
+    absorbed_into: int | None = Field(description="The branch it became part of.")
+
+
+class SequenceFrame(BaseModel):
+    """Pixel centre (col, row) -> (x, y) of this document: x = x0 + col·pixel_size,
+    y = y0 ∓ row·pixel_size (minus when flip_y)."""
+
+    model_config = STRICT
+    x0: float
+    y0: float
+    pixel_size: float
+    flip_y: bool
+
+
+class Sequence(BaseModel):
+    """The pruning sequence S(0) … S(n), one entry per step of ``curve``: S(k) is S(0)
+    without the pixels of every branch and junction whose ``removed_at`` ≤ k."""
+
+    model_config = STRICT
+    start: Literal["medial_axis", "coarse"] = Field(
+        description="What S(0) is: the medial axis, or the coarse skeleton (coarse=dce)."
+    )
+    nodes: list[SequenceNode]
+    branches: list[SequenceBranch]
+    uncovered: list[Point2] = Field(
+        description="Pixels of the shape S(0) does not reconstruct (the error of step 0)."
+    )
+    coarse_removed: list[Point3] = Field(
+        description="Medial-axis pixels the coarse stage "
+        "removed before step 0 (empty if S(0) is the "
+        "medial axis)."
+    )
+    frame: SequenceFrame
+
+
 class Component(BaseModel):
     model_config = STRICT
     area: int = Field(description="Λ(D) in pixels of the raster.")
@@ -276,6 +357,7 @@ class Component(BaseModel):
     skeleton: Skeleton
     curve: list[CurveStep] | None = Field(None, description="Absent when curve=false.")
     chosen_step: int
+    sequence: Sequence | None = Field(None, description="Only with sequence=true.")
 
 
 class ForegroundTaken(BaseModel):

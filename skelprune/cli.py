@@ -50,9 +50,14 @@ def _prune(path: str, read: ReadOptions, options: PruneOptions) -> PruneResult:
     return res
 
 
-def _prune_file(path: str, read: ReadOptions, options: PruneOptions, curve: bool) -> dict[str, Any]:
+def _prune_file(
+    path: str, read: ReadOptions, options: PruneOptions, curve: bool, sequence: bool = False
+) -> dict[str, Any]:
     try:
-        return {"file": path, "result": _prune(path, read, options).to_dict(curve=curve)}
+        return {
+            "file": path,
+            "result": _prune(path, read, options).to_dict(curve=curve, sequence=sequence),
+        }
     except (SkelpruneError, OSError) as exc:
         return {"file": path, "error": f"{type(exc).__name__}: {exc}"}
 
@@ -86,6 +91,7 @@ def prune_command(
         Path | None, typer.Option(help="Write the overlay PNG here (one input file only).")
     ] = None,
     curve: Annotated[bool, typer.Option(help=HELP["curve"])] = OutputOptions.curve,
+    sequence: Annotated[bool, typer.Option(help=HELP["sequence"])] = OutputOptions.sequence,
     workers: Annotated[int, typer.Option(help="Worker processes for several files.")] = 0,
 ) -> None:
     """Prune the skeleton of each shape and print the result as JSON."""
@@ -113,7 +119,7 @@ def prune_command(
             raise typer.Exit(1) from None
         if overlay is not None:
             overlay.write_bytes(res.overlay_png())
-        json.dump(res.to_dict(curve=curve), sys.stdout)
+        json.dump(res.to_dict(curve=curve, sequence=sequence), sys.stdout)
         sys.stdout.write("\n")
         return
     if overlay is not None:
@@ -126,7 +132,12 @@ def prune_command(
     with ProcessPoolExecutor(max_workers=n) as pool:
         k = len(inputs)
         jobs = pool.map(
-            _prune_file, [str(p) for p in inputs], [read] * k, [options] * k, [curve] * k
+            _prune_file,
+            [str(p) for p in inputs],
+            [read] * k,
+            [options] * k,
+            [curve] * k,
+            [sequence] * k,
         )
         for line in tqdm(jobs, total=len(inputs), file=sys.stderr, unit="shape"):
             failed += "error" in line

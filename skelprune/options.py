@@ -205,6 +205,13 @@ class OutputOptions:
 
     curve: bool = _option(True, "Include the pruning curve (α·AR, LR and λ at every step).", _flag)
     overlay: bool = _option(False, "Add the overlay image as a base64 PNG (overlay_png).", _flag)
+    sequence: bool = _option(
+        False,
+        "Add the pruning sequence (sequence): every branch and junction of the "
+        "starting skeleton with its points and the step that removes it, from which a "
+        "viewer draws the skeleton of any step.",
+        _flag,
+    )
 
     def __post_init__(self) -> None:
         _check_fields(self)
@@ -278,7 +285,7 @@ def option_fields(*groups: type) -> list[tuple[str, Any, str, tuple[str, ...] | 
     what the CLI and the service describe their options from.
 
     >>> [name for name, *_ in option_fields(OutputOptions)]
-    ['curve', 'overlay']
+    ['curve', 'overlay', 'sequence']
     """
     return [
         (f.name, f.default, f.metadata["help"], f.metadata["choices"])

@@ -18,6 +18,7 @@ from ..io.foreground import Foreground
 from ..io.frame import IDENTITY, PixelFrame
 from ..pruning.bayesian import PruningSequence
 from ..pruning.margin import Margins
+from ..reconstruction import reconstruction
 from ..skeleton import Skeleton
 from .render import encode_png, render_overlay
 
@@ -105,86 +106,100 @@ class ComponentResult:
     def skeleton_table(self) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
         """Nodes and branches of the pruned skeleton, in image pixel coordinates
         (the ``skeleton`` part of the document before any frame is applied)."""
-        g, r2 = self.graph, self.r2
-        rows, cols = self.image_coordinates(g.rows, g.cols)
-        xs = cols.astype(float).tolist()
-        ys = rows.astype(float).tolist()
-        rs = np.sqrt(r2.astype(float)).tolist()
-
-        def xyr(p: int) -> list[float]:
-            return [xs[p], ys[p], rs[p]]
-
-        nodes: list[dict[str, Any]] = []
-        junction_node: dict[int, int] = {}
-        for j, junc in enumerate(g.junctions):
-            if not junc.alive:
-                continue
-            pts = sorted(junc.points, key=lambda p: (-r2[p], g.rows[p], g.cols[p]))
-            x, y, r = xyr(pts[0])
-            junction_node[j] = len(nodes)
-            nodes.append(
-                {
-                    "id": len(nodes),
-                    "x": x,
-                    "y": y,
-                    "radius": r,
-                    "kind": "junction",
-                    "points": [xyr(p) for p in sorted(junc.points)],
-                }
-            )
-
-        def new_node(p: int, kind: str) -> int:
-            x, y, r = xyr(p)
-            nodes.append(
-                {"id": len(nodes), "x": x, "y": y, "radius": r, "kind": kind, "points": []}
-            )
-            return len(nodes) - 1
-
-        branches: list[dict[str, Any]] = []
-        for b, br in enumerate(g.branches):
-            if not br.alive:
-                continue
-            path = br.path()
-            if br.loop:
-                src = dst = new_node(path[0], "loop")
-            else:
-                ends = []
-                for e, p in ((0, path[0]), (1, path[-1])):
-                    if br.node[e] is not None:
-                        ends.append(junction_node[br.node[e]])
-                    elif e == 1 and len(path) == 1 and br.node[0] is None:
-                        ends.append(ends[0])  # a single point: one node
-                    else:
-                        ends.append(new_node(p, "endpoint"))
-                src, dst = ends
-            branches.append(
-                {
-                    "id": len(branches),
-                    "source": src,
-                    "target": dst,
-                    "length": float(br.length),
-                    "points": [xyr(p) for p in path],
-                    "off_path": [xyr(p) for p in sorted(br.side)],
-                    "margin": self.margins.margin.get(b),
-                    "removed_at": self.margins.removed_at.get(b),
-                }
-            )
+        nodes, branches, _, _ = _graph_table(self.skeleton, self.margins)
         return nodes, branches
 
-    def to_dict(self, curve: bool = True, frame: PixelFrame = IDENTITY) -> dict[str, Any]:
+    def sequence_table(self) -> dict[str, Any]:
+        """The pruning sequence as a viewer needs it (image pixel coordinates).
+
+        ``S(0)``'s nodes and branches (ids of their own), each branch with the step whose
+        removal takes its pixels (``removed_at``) and, where a junction dissolved into a
+        merge, the step and the branch it became part of (``absorbed_at``,
+        ``absorbed_into``); each junction node with the step that dissolved it and the
+        branch its pixels joined. Replayed on a copy of the start's graph, so the events
+        are exactly those of :attr:`sequence`. ``uncovered`` lists the shape's pixels
+        ``S(0)`` misses, so that ``D \\ R(S(k))`` follows from the disks alone, and
+        ``coarse_removed`` the medial axis's pixels the coarse stage took before step 0.
+        """
+        seq = self.sequence
+        start = seq.start
+        nodes, branches, branch_id, junction_id = _graph_table(start, None)
+        for b in branches:  # margins belong to the answer; here: the events
+            del b["margin"]
+            b.update(removed_at=None, absorbed_at=None, absorbed_into=None)
+        for n in nodes:
+            if n["kind"] == "junction":
+                n.update(removed_at=None, dissolved_at=None, dissolved_into=None)
+        # Owners as the sequence goes: a graph branch holds the S(0) branches and
+        # junctions merged into it.
+        held: dict[int, tuple[list[int], list[int]]] = {
+            gb: ([db], []) for gb, db in branch_id.items()
+        }
+        graph = start.working_graph()
+        for step, pick in enumerate(seq.removed, start=1):
+            merged = graph.remove_end_branch(pick)
+            own_b, own_j = held.pop(pick)
+            for db in own_b:
+                branches[db]["removed_at"] = step
+            for nid in own_j:
+                nodes[nid]["removed_at"] = step
+            if merged is None:
+                continue
+            kept, absorbed, jid = merged
+            nid = junction_id[jid]
+            nodes[nid]["dissolved_at"] = step
+            nodes[nid]["dissolved_into"] = branch_id[kept]
+            held[kept][1].append(nid)
+            if absorbed != kept:
+                branches[branch_id[absorbed]]["absorbed_at"] = step
+                branches[branch_id[absorbed]]["absorbed_into"] = branch_id[kept]
+                more_b, more_j = held.pop(absorbed)
+                held[kept][0].extend(more_b)
+                held[kept][1].extend(more_j)
+        idx = start.points()
+        covered = reconstruction(start.shape.shape, start.rows[idx], start.cols[idx], start.r2[idx])
+        miss_r, miss_c = np.nonzero(start.shape & ~covered)
+        miss_r, miss_c = self.image_coordinates(miss_r, miss_c)
+        gone = np.ones(start.rows.size, bool)
+        gone[idx] = False
+        gone_r, gone_c = self.image_coordinates(start.rows[gone], start.cols[gone])
+        return {
+            "start": "medial_axis" if not gone.any() else "coarse",
+            "nodes": nodes,
+            "branches": branches,
+            "uncovered": [
+                [float(x), float(y)] for y, x in zip(miss_r.tolist(), miss_c.tolist(), strict=True)
+            ],
+            "coarse_removed": [
+                [float(x), float(y), float(r)]
+                for y, x, r in zip(
+                    gone_r.tolist(),
+                    gone_c.tolist(),
+                    np.sqrt(start.r2[gone].astype(float)).tolist(),
+                    strict=True,
+                )
+            ],
+        }
+
+    def to_dict(
+        self, curve: bool = True, frame: PixelFrame = IDENTITY, sequence: bool = False
+    ) -> dict[str, Any]:
         nodes, branches = self.skeleton_table()
 
         def mapped(pts: list[list[float]]) -> list[list[float]]:
             return [[*frame.point(x, y), frame.distance(r)] for x, y, r in pts]
 
-        for n in nodes:
-            n["x"], n["y"] = frame.point(n["x"], n["y"])
-            n["radius"] = frame.distance(n["radius"])
-            n["points"] = mapped(n["points"])
-        for b in branches:
-            b["length"] = frame.distance(b["length"])
-            b["points"] = mapped(b["points"])
-            b["off_path"] = mapped(b["off_path"])
+        def map_graph(nodes: list[dict[str, Any]], branches: list[dict[str, Any]]) -> None:
+            for n in nodes:
+                n["x"], n["y"] = frame.point(n["x"], n["y"])
+                n["radius"] = frame.distance(n["radius"])
+                n["points"] = mapped(n["points"])
+            for b in branches:
+                b["length"] = frame.distance(b["length"])
+                b["points"] = mapped(b["points"])
+                b["off_path"] = mapped(b["off_path"])
+
+        map_graph(nodes, branches)
         ma = self.medial_axis
         seq = self.sequence
         doc: dict[str, Any] = {
@@ -220,7 +235,92 @@ class ComponentResult:
                     zip(seq.length, seq.ar, seq.lr, seq.objective, strict=True)
                 )
             ]
+        if sequence:
+            table = self.sequence_table()
+            map_graph(table["nodes"], table["branches"])
+            table["uncovered"] = [list(frame.point(x, y)) for x, y in table["uncovered"]]
+            table["coarse_removed"] = mapped(table["coarse_removed"])
+            # how to get back to the raster's pixels (the error is painted on them)
+            table["frame"] = {
+                "x0": frame.x0,
+                "y0": frame.y0,
+                "pixel_size": frame.pixel_size,
+                "flip_y": frame.flip_y,
+            }
+            doc["sequence"] = table
         return doc
+
+
+def _graph_table(
+    sk: Skeleton, margins: Margins | None
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]], dict[int, int], dict[int, int]]:
+    """Nodes and branches of a skeleton's graph in image pixel coordinates, with the
+    document id of each live graph branch and junction."""
+    g, r2 = sk.graph, sk.r2
+    rows, cols = sk.image_coordinates(g.rows, g.cols)
+    xs = cols.astype(float).tolist()
+    ys = rows.astype(float).tolist()
+    rs = np.sqrt(r2.astype(float)).tolist()
+
+    def xyr(p: int) -> list[float]:
+        return [xs[p], ys[p], rs[p]]
+
+    nodes: list[dict[str, Any]] = []
+    junction_node: dict[int, int] = {}
+    for j, junc in enumerate(g.junctions):
+        if not junc.alive:
+            continue
+        pts = sorted(junc.points, key=lambda p: (-r2[p], g.rows[p], g.cols[p]))
+        x, y, r = xyr(pts[0])
+        junction_node[j] = len(nodes)
+        nodes.append(
+            {
+                "id": len(nodes),
+                "x": x,
+                "y": y,
+                "radius": r,
+                "kind": "junction",
+                "points": [xyr(p) for p in sorted(junc.points)],
+            }
+        )
+
+    def new_node(p: int, kind: str) -> int:
+        x, y, r = xyr(p)
+        nodes.append({"id": len(nodes), "x": x, "y": y, "radius": r, "kind": kind, "points": []})
+        return len(nodes) - 1
+
+    branches: list[dict[str, Any]] = []
+    branch_id: dict[int, int] = {}
+    for b, br in enumerate(g.branches):
+        if not br.alive:
+            continue
+        path = br.path()
+        if br.loop:
+            src = dst = new_node(path[0], "loop")
+        else:
+            ends = []
+            for e, p in ((0, path[0]), (1, path[-1])):
+                if br.node[e] is not None:
+                    ends.append(junction_node[br.node[e]])
+                elif e == 1 and len(path) == 1 and br.node[0] is None:
+                    ends.append(ends[0])  # a single point: one node
+                else:
+                    ends.append(new_node(p, "endpoint"))
+            src, dst = ends
+        branches.append(
+            {
+                "id": len(branches),
+                "source": src,
+                "target": dst,
+                "length": float(br.length),
+                "points": [xyr(p) for p in path],
+                "off_path": [xyr(p) for p in sorted(br.side)],
+                "margin": None if margins is None else margins.margin.get(b),
+                "removed_at": None if margins is None else margins.removed_at.get(b),
+            }
+        )
+        branch_id[b] = len(branches) - 1
+    return nodes, branches, branch_id, junction_node
 
 
 def branch_line(skeleton: dict[str, Any], branch: dict[str, Any]) -> list[list[float]]:
@@ -275,7 +375,11 @@ class PruneResult:
         return tuple(np.concatenate(a) for a in zip(*parts, strict=True))  # type: ignore[return-value]
 
     def to_dict(
-        self, curve: bool = True, overlay: bool = False, frame: PixelFrame = IDENTITY
+        self,
+        curve: bool = True,
+        overlay: bool = False,
+        frame: PixelFrame = IDENTITY,
+        sequence: bool = False,
     ) -> dict[str, Any]:
         """The output document of SPEC §3 (plain JSON types).
 
@@ -294,7 +398,9 @@ class PruneResult:
             "beta": float(self.beta),
             "coarse": self.coarse,
             "foreground": self.foreground.to_dict(),
-            "components": [c.to_dict(curve=curve, frame=frame) for c in self.components],
+            "components": [
+                c.to_dict(curve=curve, frame=frame, sequence=sequence) for c in self.components
+            ],
         }
         if overlay:
             doc["overlay_png"] = base64.b64encode(self.overlay_png()).decode("ascii")

@@ -3,8 +3,9 @@
 ``python -m benchmarks match`` prunes every kimia216 shape (default options), builds each
 skeleton's path table once (:func:`skelprune.describe`) and matches all 204 × 203 / 2
 pairs, in one process and split over 2 worker processes; it prints the seconds of each
-stage and the median time of one pair. ``--write`` also runs the whole retrieval
-evaluation and rewrites ``docs/retrieval.md`` (as ``skelprune eval`` does).
+stage and the median time of one pair. ``python -m benchmarks.bench_match --write`` also
+runs the whole retrieval evaluation and rewrites ``docs/retrieval.md`` (as ``skelprune
+eval`` does).
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from skelprune.matching import _match
 from .common import DATA, table
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
-COMMAND = "python -m benchmarks match --write"
+COMMAND = "python -m benchmarks.bench_match --write"
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -6,7 +6,7 @@ distance (the query itself left out); column ``k`` of a table counts the queries
 Skeletons come from each pruning variant and from the ``skeletonize`` + cut baseline.
 Under perturbation, each query is perturbed and matched against the clean database.
 ``docs/retrieval.md`` is written by :func:`retrieval_markdown` (``skelprune eval``, or on its
-own ``python -m benchmarks match --write``).
+own ``python -m benchmarks.bench_match --write``).
 """
 
 from __future__ import annotations

@@ -381,13 +381,33 @@ def match(a: PruneResult | np.ndarray | SkeletonDescriptor,
     return Match(distance=distance, pairs=pairs, mirrored=mirrored, a=da, b=db)
 
 
+def _rows(args: tuple[Sequence[SkeletonDescriptor], Sequence[SkeletonDescriptor]]
+          ) -> np.ndarray:
+    queries, database = args
+    return np.array([[_match(q, d)[0] for d in database] for q in queries]).reshape(
+        len(queries), len(database))
+
+
 def distance_matrix(descriptors: Sequence[SkeletonDescriptor],
-                    queries: Sequence[SkeletonDescriptor] | None = None) -> np.ndarray:
+                    queries: Sequence[SkeletonDescriptor] | None = None,
+                    workers: int = 1) -> np.ndarray:
     """Distances of every query (default: every descriptor) to every descriptor.
 
-    Without ``queries`` the matrix is symmetric with a zero diagonal and each pair is
-    computed once.
+    Without ``queries`` the matrix is symmetric with a zero diagonal and, in one process,
+    each pair is computed once. With ``workers > 1`` the rows are split over that many
+    processes (each pair then computed in both orders, which gives the same value).
     """
+    if workers > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        qs = list(descriptors if queries is None else queries)
+        parts = [p for p in np.array_split(np.arange(len(qs)), 4 * workers) if p.size]
+        with ProcessPoolExecutor(workers) as pool:
+            rows = list(pool.map(_rows, [([qs[i] for i in p], descriptors) for p in parts]))
+        out = np.vstack(rows) if rows else np.zeros((0, len(descriptors)))
+        if queries is None:
+            np.fill_diagonal(out, 0.0)
+        return out
     if queries is None:
         n = len(descriptors)
         out = np.zeros((n, n))
@@ -395,4 +415,4 @@ def distance_matrix(descriptors: Sequence[SkeletonDescriptor],
             for j in range(i + 1, n):
                 out[i, j] = out[j, i] = _match(descriptors[i], descriptors[j])[0]
         return out
-    return np.array([[_match(q, d)[0] for d in descriptors] for q in queries])
+    return _rows((queries, descriptors))

@@ -151,6 +151,7 @@ def hits_at_rank(dist: np.ndarray, classes: Sequence[str], top: int,
     Ties are broken by database order (stable sort); ``inf`` ranks last.
     """
     cls = np.asarray(classes)
+    top = min(top, dist.shape[1] - int(exclude_self))
     d = dist.copy()
     if exclude_self:
         np.fill_diagonal(d, np.inf)
@@ -212,8 +213,9 @@ def _ordinal(k: int) -> str:
 
 
 def _table(rows: dict[str, np.ndarray], top: int, n: int) -> str:
+    top = min(top, *(len(h) for h in rows.values())) if rows else top
     header = ["skeletons", *(_ordinal(k) for k in range(1, top + 1)), f"sum (of {n * top})"]
-    body = [[name, *(str(int(x)) for x in hits), str(int(hits.sum()))]
+    body = [[name, *(str(int(x)) for x in hits[:top]), str(int(hits[:top].sum()))]
             for name, hits in rows.items()]
     return markdown_table(header, body)
 

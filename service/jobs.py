@@ -64,7 +64,7 @@ def warmup() -> None:
 
     The shape has a hole (the loop code paths) and a noisy boundary whose spurs the
     coarse stage removes (its code paths); ``coarse=None`` and ``method="dce"`` run
-    too, so that no job of any option meets a function still to be loaded.
+    too, and a match, so that no job of any option meets a function still to be loaded.
     """
     import skelprune
     from skelprune.evaluation.perturb import boundary_noise
@@ -78,6 +78,7 @@ def warmup() -> None:
         res.to_dict()
     res.to_geojson()
     res.overlay_png()
+    skelprune.match(res, res).to_dict()  # the matching kernels of POST /v1/match
 
 
 def _mask(job: Job) -> tuple[np.ndarray, PixelFrame | None, Foreground]:

@@ -38,6 +38,7 @@ from .output.document import PruneResult, branch_line
 
 __all__ = [
     "LENGTH_WEIGHT",
+    "MAX_ENDPOINTS",
     "SAMPLES",
     "Match",
     "SkeletonDescriptor",
@@ -52,10 +53,14 @@ __all__ = [
 SAMPLES = 50
 #: Weight of the length term of the path distance, ``α`` of [16].
 LENGTH_WEIGHT = 40.0
+#: Most endpoints a matched skeleton may have: the time of a match grows as ``K³N³``
+#: with the endpoint counts (22 and 22: about 0.13 s; 40 and 40: several seconds).
+MAX_ENDPOINTS = 40
 
 
 class UnmatchableShapeError(SkelpruneError):
-    """The skeleton has fewer than two endpoints, so it has no endpoint-to-endpoint path."""
+    """The skeleton has fewer than two endpoints (so no endpoint-to-endpoint path), or
+    more than :data:`MAX_ENDPOINTS`."""
 
 
 @dataclass(frozen=True)
@@ -159,7 +164,7 @@ def describe_skeleton(skeleton: dict[str, Any], mask: np.ndarray, mean_radius: f
     Raises
     ------
     UnmatchableShapeError
-        When the skeleton has fewer than two endpoints.
+        When the skeleton has fewer than two endpoints or more than :data:`MAX_ENDPOINTS`.
     """
     nodes = skeleton["nodes"]
     ends = [n["id"] for n in nodes if n["kind"] == "endpoint"]
@@ -168,6 +173,11 @@ def describe_skeleton(skeleton: dict[str, Any], mask: np.ndarray, mean_radius: f
             f"the skeleton has {len(ends)} endpoint{'s' * (len(ends) != 1)}: path "
             "similarity matching needs at least two (a shape whose skeleton is a single "
             "point or only cycles cannot be matched this way)")
+    if len(ends) > MAX_ENDPOINTS:
+        raise UnmatchableShapeError(
+            f"the skeleton has {len(ends)} endpoints, more than the {MAX_ENDPOINTS} path "
+            "similarity matching takes (its time grows as the sixth power of the endpoint "
+            "count); prune with the default options or with min_margin")
     # the node graph: one edge per branch (the shortest of parallel ones), no loops
     best: dict[tuple[int, int], tuple[float, np.ndarray]] = {}
     for br in skeleton["branches"]:
@@ -225,7 +235,8 @@ def describe(shape: PruneResult | np.ndarray | SkeletonDescriptor) -> SkeletonDe
     Raises
     ------
     UnmatchableShapeError
-        When that skeleton has fewer than two endpoints.
+        When that skeleton has fewer than two endpoints or more than
+        :data:`MAX_ENDPOINTS`.
     EmptyMaskError
         For a mask with no foreground pixel.
     """
@@ -366,7 +377,7 @@ def match(a: PruneResult | np.ndarray | SkeletonDescriptor,
     Raises
     ------
     UnmatchableShapeError
-        When a skeleton has fewer than two endpoints.
+        When a skeleton has fewer than two endpoints or more than :data:`MAX_ENDPOINTS`.
 
     Examples
     --------

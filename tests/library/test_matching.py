@@ -139,3 +139,16 @@ def test_skeleton_without_two_endpoints_is_refused():
     cv2.circle(ring.view(np.uint8), (30, 30), 12, 0, -1)
     with pytest.raises(skelprune.UnmatchableShapeError, match="endpoint"):
         skelprune.match(ring, kimia("bird-2"))
+
+
+def test_skeleton_with_too_many_endpoints_is_refused():
+    # a comb: one long bar with many teeth, each tooth an endpoint of the skeleton
+    m = np.zeros((60, 20 + 8 * 45), bool)
+    m[40:52, 5:-5] = True
+    for k in range(45):
+        m[8:40, 10 + 8 * k:14 + 8 * k] = True
+    res = skelprune.prune(m, coarse=None)
+    ends = len(res.to_dict()["components"][0]["skeleton"]["endpoints"])
+    assert ends > skelprune.matching.MAX_ENDPOINTS
+    with pytest.raises(skelprune.UnmatchableShapeError, match="more than"):
+        skelprune.match(res, res)

@@ -3,6 +3,8 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
+# numba's cache is keyed on each source file's time stamp: compile again when one changes
+KERNELS := $(VENV)/.compiled
 
 .PHONY: setup run test lint bench eval openapi clean
 
@@ -12,23 +14,29 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[service,test,bench]'
 	touch $(STAMP)
 
-setup: $(STAMP)
+# Compile the numba kernels ahead (loaded in under a second afterwards), not on the
+# first request or in every worker.
+$(KERNELS): $(STAMP) $(shell find skelprune -name "*.py") service/jobs.py
+	$(BIN)/python -m service.compile
+	touch $(KERNELS)
 
-run: $(STAMP)
+setup: $(KERNELS)
+
+run: $(KERNELS)
 	$(BIN)/python -m service
 
-test: lint
+test: lint $(KERNELS)
 	$(BIN)/python -m pytest -q
 
 # ruff for the Python, shellcheck for the shell scripts CI runs
 lint: $(STAMP)
-	$(BIN)/ruff check skelprune service tests benchmarks
+	$(BIN)/ruff check skelprune service tests testkit benchmarks
 	$(BIN)/shellcheck scripts/*.sh .ci/run
 
-bench: $(STAMP)
+bench: $(KERNELS)
 	$(BIN)/python -m benchmarks
 
-eval: $(STAMP)
+eval: $(KERNELS)
 	$(BIN)/skelprune eval --out docs
 
 openapi: $(STAMP)

@@ -25,7 +25,7 @@ from service.match_job import (
     MatchPolygons,
     run_match_job,
 )
-from service.pool import PoolClosedError, QueueFullError, WorkerPool
+from service.pool import PoolClosedError, PoolStartingError, QueueFullError, WorkerPool
 from service.schemas import (
     POLYGON_ONLY,
     Health,
@@ -398,6 +398,12 @@ async def healthz() -> Health:
 )
 async def readyz(request: Request) -> Readiness:
     pool: WorkerPool = request.app.state.pool
+    if pool.starting and not pool.closed:
+        raise PoolStartingError(
+            f"the worker pool is warming up ({pool.warm} of {pool.size} workers ready)")
+    failure = request.app.state.pool_failure
+    if failure is not None:
+        raise PoolClosedError(f"the worker pool failed to start: {failure}")
     if not pool.started or pool.closed:
         raise PoolClosedError("the worker pool is not running")
     if not pool.ready:

@@ -66,15 +66,22 @@ def main(argv: list[str] | None = None) -> None:
     n = len(descs)
     ends = [d.n_endpoints for d in ok]
     hits = hits_at_rank(one, classes, 11)
-    print(table(["stage", "seconds"], [
-        [f"prune + path tables, {n} shapes, 1 process", t_desc],
-        [f"all pairs ({n}²), 1 process", t_one],
-        [f"all pairs ({n}²), {args.workers} processes", t_two],
-        ["ratio 1 / 2 processes", t_one / t_two],
-        [f"one pair, median ms ({len(per_pair)} timed)", 1000 * float(np.median(per_pair))],
-    ]))
-    print(f"\nendpoints per skeleton: median {np.median(ends):g}, max {max(ends)}; "
-          f"hits at ranks 1..11 (default pruning): {' '.join(map(str, hits))}")
+    print(
+        table(
+            ["stage", "seconds"],
+            [
+                [f"prune + path tables, {n} shapes, 1 process", t_desc],
+                [f"all pairs ({n}²), 1 process", t_one],
+                [f"all pairs ({n}²), {args.workers} processes", t_two],
+                ["ratio 1 / 2 processes", t_one / t_two],
+                [f"one pair, median ms ({len(per_pair)} timed)", 1000 * float(np.median(per_pair))],
+            ],
+        )
+    )
+    print(
+        f"\nendpoints per skeleton: median {np.median(ends):g}, max {max(ends)}; "
+        f"hits at ranks 1..11 (default pruning): {' '.join(map(str, hits))}"
+    )
     if args.write:
         sets = {name: load_dataset(DATA / name) for name in ("kimia216", "kimia99")}
         run = run_retrieval(sets, workers=args.workers)

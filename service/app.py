@@ -58,8 +58,10 @@ class BodyLimitMiddleware:
         declared = dict(scope["headers"]).get(b"content-length")
         message = f"request body exceeds the limit of {self.limit} bytes"
         if declared is not None and declared.isdigit() and int(declared) > self.limit:
-            response = problem(BodyTooLargeError(f"{message} (Content-Length: {int(declared)})"),
-                               instance=scope.get("path"))
+            response = problem(
+                BodyTooLargeError(f"{message} (Content-Length: {int(declared)})"),
+                instance=scope.get("path"),
+            )
             await response(scope, receive, send)
             return
         received = 0
@@ -89,20 +91,31 @@ def _metrics(registry: CollectorRegistry, pool: WorkerPool) -> Metrics:
     buckets = (0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1, 2, 5, 10, 30, 60)
     m = Metrics(
         registry=registry,
-        prune_seconds=Histogram("skelprune_prune_seconds", "Time in skelprune.prune per job.",
-                                buckets=buckets, registry=registry),
-        job_seconds=Histogram("skelprune_job_seconds",
-                              "Worker round trip per job: decode, prune, serialise, transfer.",
-                              buckets=buckets, registry=registry),
+        prune_seconds=Histogram(
+            "skelprune_prune_seconds",
+            "Time in skelprune.prune per job.",
+            buckets=buckets,
+            registry=registry,
+        ),
+        job_seconds=Histogram(
+            "skelprune_job_seconds",
+            "Worker round trip per job: decode, prune, serialise, transfer.",
+            buckets=buckets,
+            registry=registry,
+        ),
     )
-    Gauge("skelprune_queue_depth", "Jobs waiting for a free worker.",
-          registry=registry).set_function(lambda: pool.waiting)
-    Gauge("skelprune_workers_busy", "Workers running a job.",
-          registry=registry).set_function(lambda: pool.busy)
-    Gauge("skelprune_workers", "Worker processes alive.",
-          registry=registry).set_function(pool.alive)
-    Gauge("skelprune_worker_restarts", "Workers replaced after a timeout or crash.",
-          registry=registry).set_function(lambda: pool.restarts)
+    Gauge(
+        "skelprune_queue_depth", "Jobs waiting for a free worker.", registry=registry
+    ).set_function(lambda: pool.waiting)
+    Gauge("skelprune_workers_busy", "Workers running a job.", registry=registry).set_function(
+        lambda: pool.busy
+    )
+    Gauge("skelprune_workers", "Worker processes alive.", registry=registry).set_function(
+        pool.alive
+    )
+    Gauge(
+        "skelprune_worker_restarts", "Workers replaced after a timeout or crash.", registry=registry
+    ).set_function(lambda: pool.restarts)
     pool.on_job_done = m.job_seconds.observe
     return m
 
@@ -125,7 +138,9 @@ def _openapi(app: FastAPI) -> Callable[[], dict[str, Any]]:
     def build() -> dict[str, Any]:
         if app.openapi_schema is None:
             schema = get_openapi(
-                title=app.title, version=app.version, description=app.description,
+                title=app.title,
+                version=app.version,
+                description=app.description,
                 routes=app.routes,
             )
             _simplify_query_params(schema)
@@ -136,8 +151,10 @@ def _openapi(app: FastAPI) -> Callable[[], dict[str, Any]]:
                     ok[media]["example"] = content["example"]
             components = schema.setdefault("components", {}).setdefault("schemas", {})
             _, defs = models_json_schema(
-                [(m, "validation") for m in (Problem, PruneDocument, SkeletonGeoJSON, MatchDocument,
-                                            MatchPolygons)],
+                [
+                    (m, "validation")
+                    for m in (Problem, PruneDocument, SkeletonGeoJSON, MatchDocument, MatchPolygons)
+                ],
                 ref_template=REF_TEMPLATE,
             )
             components.update(defs.get("$defs", {}))
@@ -146,10 +163,17 @@ def _openapi(app: FastAPI) -> Callable[[], dict[str, Any]]:
             components["PolygonRequest"] = {"title": "PolygonRequest", **request}
             # SKELPRUNE_API_KEY, when set: either header will do; {} = no key configured.
             schema["components"]["securitySchemes"] = {
-                "bearer": {"type": "http", "scheme": "bearer",
-                           "description": "`Authorization: Bearer <SKELPRUNE_API_KEY>`"},
-                "apiKey": {"type": "apiKey", "in": "header", "name": "X-API-Key",
-                           "description": "`X-API-Key: <SKELPRUNE_API_KEY>`"},
+                "bearer": {
+                    "type": "http",
+                    "scheme": "bearer",
+                    "description": "`Authorization: Bearer <SKELPRUNE_API_KEY>`",
+                },
+                "apiKey": {
+                    "type": "apiKey",
+                    "in": "header",
+                    "name": "X-API-Key",
+                    "description": "`X-API-Key: <SKELPRUNE_API_KEY>`",
+                },
             }
             for path, operations in schema["paths"].items():
                 if path not in OPEN_PATHS:
@@ -184,9 +208,12 @@ def create_app(
     """
     settings = settings or Settings()
     pool = WorkerPool(
-        settings.workers, queue_size=settings.queue_size, job_timeout=settings.job_timeout,
+        settings.workers,
+        queue_size=settings.queue_size,
+        job_timeout=settings.job_timeout,
         initializer=warmup if settings.warmup else None,
-        startup_timeout=settings.startup_timeout, context=settings.mp_context,
+        startup_timeout=settings.startup_timeout,
+        context=settings.mp_context,
         preload=("skelprune", "service.jobs"),
     )
 
@@ -204,10 +231,13 @@ def create_app(
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         if settings.warmup:
-            log.info("starting %d workers: the first one warms up alone, then the others "
-                     "(a cold numba cache compiles the kernels first, half a minute to a "
-                     "minute on one core; `make setup` and the image build compile them "
-                     "ahead)", pool.size)
+            log.info(
+                "starting %d workers: the first one warms up alone, then the others "
+                "(a cold numba cache compiles the kernels first, half a minute to a "
+                "minute on one core; `make setup` and the image build compile them "
+                "ahead)",
+                pool.size,
+            )
         warming = None
         if warm_in_background:
             warming = asyncio.create_task(start_in_background())
@@ -241,10 +271,17 @@ def create_app(
         app.add_middleware(ApiKeyMiddleware, key=settings.api_key.get_secret_value())
     if settings.cors_origins:  # outside the key check: preflights carry no credentials
         app.add_middleware(
-            CORSMiddleware, allow_origins=settings.cors_origins, allow_credentials=False,
+            CORSMiddleware,
+            allow_origins=settings.cors_origins,
+            allow_credentials=False,
             allow_methods=["GET", "POST"],
-            allow_headers=["Authorization", "X-API-Key", "Content-Type", "Accept",
-                           REQUEST_ID_HEADER],
+            allow_headers=[
+                "Authorization",
+                "X-API-Key",
+                "Content-Type",
+                "Accept",
+                REQUEST_ID_HEADER,
+            ],
             expose_headers=[REQUEST_ID_HEADER, "Retry-After", "WWW-Authenticate"],
             max_age=600,
         )

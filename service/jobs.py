@@ -103,8 +103,10 @@ def warmup() -> str:
     loaded, compiled = kernel_counts()
     took = f"{time.perf_counter() - t0:.1f} s"
     if compiled:
-        return (f"compiled {compiled} numba kernels ({loaded} loaded from the cache) "
-                f"in {took}; they are cached now")
+        return (
+            f"compiled {compiled} numba kernels ({loaded} loaded from the cache) "
+            f"in {took}; they are cached now"
+        )
     return f"{loaded} numba kernels loaded from the cache in {took}"
 
 
@@ -113,8 +115,9 @@ def _mask(job: Job) -> tuple[np.ndarray, PixelFrame | None, Foreground]:
         # read_shape also opens files by path: never let anything but bytes through.
         if not isinstance(job.png, bytes | bytearray | memoryview):
             raise InvalidImageError("PNG input must be bytes, not a file name")
-        mask, taken = read_shape(bytes(job.png), foreground=job.foreground,
-                                 max_pixels=job.max_pixels)
+        mask, taken = read_shape(
+            bytes(job.png), foreground=job.foreground, max_pixels=job.max_pixels
+        )
         return mask, None, taken
     assert job.geojson is not None
     mask, frame = polygon_mask(job.geojson, max_pixels=job.max_pixels, **job.raster)

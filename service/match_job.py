@@ -13,8 +13,15 @@ from service.examples import SQUARE_POLYGON
 from service.jobs import Job, _mask
 from service.schemas import GeoJSONInput
 
-__all__ = ["MATCH_DESCRIPTION", "MATCH_REQUEST_BODY", "MATCH_RESPONSES", "MatchDocument",
-           "MatchJob", "MatchPolygons", "run_match_job"]
+__all__ = [
+    "MATCH_DESCRIPTION",
+    "MATCH_REQUEST_BODY",
+    "MATCH_RESPONSES",
+    "MatchDocument",
+    "MatchJob",
+    "MatchPolygons",
+    "run_match_job",
+]
 
 
 class MatchPolygons(BaseModel):
@@ -27,10 +34,12 @@ class MatchPolygons(BaseModel):
 
 class MatchedEndpoint(BaseModel):
     model_config = ConfigDict(extra="forbid")
-    component: int = Field(description="Component of the shape whose skeleton is matched "
-                                       "(the largest).")
-    node: int = Field(description="Node id in that component's skeleton, as `POST "
-                                  "/v1/prune` numbers them.")
+    component: int = Field(
+        description="Component of the shape whose skeleton is matched (the largest)."
+    )
+    node: int = Field(
+        description="Node id in that component's skeleton, as `POST /v1/prune` numbers them."
+    )
     x: float
     y: float
 
@@ -46,10 +55,13 @@ class MatchDocument(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
     distance: float = Field(ge=0, description="0 for the same skeleton; symmetric.")
-    mirrored: bool = Field(description="The correspondence runs along b's boundary in the "
-                                       "opposite sense (as for a mirror image).")
-    endpoints: list[int] = Field(min_length=2, max_length=2,
-                                 description="Endpoint counts of a and b.")
+    mirrored: bool = Field(
+        description="The correspondence runs along b's boundary in the "
+        "opposite sense (as for a mirror image)."
+    )
+    endpoints: list[int] = Field(
+        min_length=2, max_length=2, description="Endpoint counts of a and b."
+    )
     correspondence: list[MatchedPair]
 
 
@@ -123,16 +135,25 @@ MATCH_REQUEST_BODY: dict[str, Any] = {
 }
 
 MATCH_EXAMPLE = {
-    "distance": 0.0, "mirrored": False, "endpoints": [4, 4],
+    "distance": 0.0,
+    "mirrored": False,
+    "endpoints": [4, 4],
     "correspondence": [
-        {"a": {"component": 0, "node": 2, "x": 1.0, "y": 1.0},
-         "b": {"component": 0, "node": 2, "x": 1.0, "y": 1.0}},
+        {
+            "a": {"component": 0, "node": 2, "x": 1.0, "y": 1.0},
+            "b": {"component": 0, "node": 2, "x": 1.0, "y": 1.0},
+        },
     ],
 }
 
 MATCH_RESPONSES: dict[int | str, dict[str, Any]] = {
-    200: {"description": "The distance and the endpoint correspondence.",
-          "content": {"application/json": {
-              "schema": {"$ref": "#/components/schemas/MatchDocument"},
-              "example": MATCH_EXAMPLE}}},
+    200: {
+        "description": "The distance and the endpoint correspondence.",
+        "content": {
+            "application/json": {
+                "schema": {"$ref": "#/components/schemas/MatchDocument"},
+                "example": MATCH_EXAMPLE,
+            }
+        },
+    },
 }

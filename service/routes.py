@@ -86,8 +86,15 @@ def negotiate(accept: str | None) -> Output:
         main = candidate.split("/")[0]
         best, best_rank = 0.0, -1
         for media, q in ranges:
-            rank = 2 if media == candidate else 1 if media == f"{main}/*" else 0 if media == "*/*" \
+            rank = (
+                2
+                if media == candidate
+                else 1
+                if media == f"{main}/*"
+                else 0
+                if media == "*/*"
                 else -1
+            )
             if rank > best_rank:
                 best, best_rank = q, rank
         return best if best_rank >= 0 else 0.0
@@ -111,9 +118,7 @@ async def job_function() -> Callable[[Job], Any]:
 
 
 def _validation(errors: list[dict[str, Any]], prefix: tuple[str, ...]) -> RequestValidationError:
-    return RequestValidationError(
-        [{**e, "loc": (*prefix, *e.get("loc", ()))} for e in errors]
-    )
+    return RequestValidationError([{**e, "loc": (*prefix, *e.get("loc", ()))} for e in errors])
 
 
 def parse_query(params: QueryParams) -> PruneQuery:
@@ -191,12 +196,18 @@ async def _png_from_multipart(request: Request) -> bytes:
         if misplaced:
             raise InvalidOptionError(
                 f"option(s) {', '.join(misplaced)} sent as multipart fields; options go in "
-                "the query string")
+                "the query string"
+            )
         if not isinstance(upload, UploadFile):
-            raise RequestValidationError([{
-                "loc": ("body", "file"), "type": "missing",
-                "msg": "multipart field 'file' with the PNG is required",
-            }])
+            raise RequestValidationError(
+                [
+                    {
+                        "loc": ("body", "file"),
+                        "type": "missing",
+                        "msg": "multipart field 'file' with the PNG is required",
+                    }
+                ]
+            )
         return await upload.read()
 
 
@@ -224,8 +235,10 @@ Compute the pruned skeleton of a shape.
     response_class=Response,
     responses=examples.PRUNE_RESPONSES,
     # the query options are parsed in the handler (parse_query): documented from the model
-    openapi_extra={"requestBody": examples.PRUNE_REQUEST_BODY,
-                   "parameters": query_parameters(PruneQuery)},
+    openapi_extra={
+        "requestBody": examples.PRUNE_REQUEST_BODY,
+        "parameters": query_parameters(PruneQuery),
+    },
     tags=["prune"],
 )
 async def prune(
@@ -273,9 +286,15 @@ async def prune(
             given.setdefault("longest_side", settings.polygon_longest_side)
         raster = {**RasterOptions(**given).kwargs(), "max_vertices": settings.max_vertices}
     job = Job(
-        output=output, png=png, geojson=geojson, prune_options=prune_options.kwargs(),
-        raster=raster, curve=output_options.curve, overlay=output_options.overlay,
-        max_pixels=settings.max_pixels, foreground=read_options.foreground,
+        output=output,
+        png=png,
+        geojson=geojson,
+        prune_options=prune_options.kwargs(),
+        raster=raster,
+        curve=output_options.curve,
+        overlay=output_options.overlay,
+        max_pixels=settings.max_pixels,
+        foreground=read_options.foreground,
     )
     result = await pool.run(fn, job)
     request.app.state.metrics.prune_seconds.observe(result.prune_seconds)
@@ -294,12 +313,20 @@ async def _pngs_from_multipart(request: Request) -> tuple[bytes, bytes]:
         if misplaced:
             raise InvalidOptionError(
                 f"option(s) {', '.join(misplaced)} sent as multipart fields; options go in "
-                "the query string")
+                "the query string"
+            )
         missing = [k for k in ("a", "b") if not isinstance(form.get(k), UploadFile)]
         if missing:
-            raise RequestValidationError([{
-                "loc": ("body", k), "type": "missing",
-                "msg": f"multipart field {k!r} with a PNG is required"} for k in missing])
+            raise RequestValidationError(
+                [
+                    {
+                        "loc": ("body", k),
+                        "type": "missing",
+                        "msg": f"multipart field {k!r} with a PNG is required",
+                    }
+                    for k in missing
+                ]
+            )
         a, b = form.get("a"), form.get("b")
         assert isinstance(a, UploadFile) and isinstance(b, UploadFile)
         return await a.read(), await b.read()
@@ -310,8 +337,10 @@ def _parse_pair(body: bytes) -> tuple[dict[str, Any], dict[str, Any]]:
         parsed = MatchPolygons.model_validate_json(body)
     except ValidationError as exc:
         raise _validation(exc.errors(include_url=False), ("body",)) from None
-    return (parsed.a.model_dump(mode="json", exclude_none=True),
-            parsed.b.model_dump(mode="json", exclude_none=True))
+    return (
+        parsed.a.model_dump(mode="json", exclude_none=True),
+        parsed.b.model_dump(mode="json", exclude_none=True),
+    )
 
 
 @router.post(
@@ -319,11 +348,18 @@ def _parse_pair(body: bytes) -> tuple[dict[str, Any], dict[str, Any]]:
     summary="Match the skeletons of two shapes (path similarity)",
     description=MATCH_DESCRIPTION,
     response_class=Response,
-    responses={**{k: v for k, v in examples.PRUNE_RESPONSES.items() if k not in (200, 406)},
-               **MATCH_RESPONSES},
-    openapi_extra={"requestBody": MATCH_REQUEST_BODY,
-                   "parameters": [p for p in query_parameters(PruneQuery)
-                                  if p["name"] not in {f.name for f in fields(OutputOptions)}]},
+    responses={
+        **{k: v for k, v in examples.PRUNE_RESPONSES.items() if k not in (200, 406)},
+        **MATCH_RESPONSES,
+    },
+    openapi_extra={
+        "requestBody": MATCH_REQUEST_BODY,
+        "parameters": [
+            p
+            for p in query_parameters(PruneQuery)
+            if p["name"] not in {f.name for f in fields(OutputOptions)}
+        ],
+    },
     tags=["match"],
 )
 async def match(
@@ -347,8 +383,11 @@ async def match(
         for png in pngs:
             check_png_size(png, settings.max_pixels)
     elif ctype in JSON_TYPES:
-        shapes = await asyncio.to_thread(_parse_pair, body) if len(body) > BIG_JSON \
+        shapes = (
+            await asyncio.to_thread(_parse_pair, body)
+            if len(body) > BIG_JSON
             else _parse_pair(body)
+        )
     else:
         raise UnsupportedMediaTypeError(
             f"Content-Type {ctype or 'none'!r} is not supported; send multipart/form-data "
@@ -366,10 +405,22 @@ async def match(
         if "pixel_size" not in given:
             given.setdefault("longest_side", settings.polygon_longest_side)
         raster = {**RasterOptions(**given).kwargs(), "max_vertices": settings.max_vertices}
-    inputs = [Job(output="json", png=p, max_pixels=settings.max_pixels,
-                  foreground=read_options.foreground) for p in pngs] if pngs is not None \
-        else [Job(output="json", geojson=g, raster=raster, max_pixels=settings.max_pixels)
-              for g in shapes or ()]
+    inputs = (
+        [
+            Job(
+                output="json",
+                png=p,
+                max_pixels=settings.max_pixels,
+                foreground=read_options.foreground,
+            )
+            for p in pngs
+        ]
+        if pngs is not None
+        else [
+            Job(output="json", geojson=g, raster=raster, max_pixels=settings.max_pixels)
+            for g in shapes or ()
+        ]
+    )
     job = MatchJob(a=inputs[0], b=inputs[1], prune_options=prune_options.kwargs())
     result = await pool.run(fn, job)
     request.app.state.metrics.prune_seconds.observe(result.prune_seconds)
@@ -377,7 +428,10 @@ async def match(
 
 
 @router.get(
-    "/healthz", response_model=Health, summary="Liveness: the process answers", tags=["ops"],
+    "/healthz",
+    response_model=Health,
+    summary="Liveness: the process answers",
+    tags=["ops"],
     responses={200: {"content": {"application/json": {"example": {"status": "ok"}}}}},
 )
 async def healthz() -> Health:
@@ -389,10 +443,22 @@ async def healthz() -> Health:
     response_model=Readiness,
     summary="Readiness: worker pool up and the queue not full",
     responses={
-        200: {"content": {"application/json": {"example": {
-            "status": "ready", "workers": 4, "busy": 1, "queued": 0, "queue_size": 16}}}},
-        503: examples.problem_response(503, "queue-full", "Service busy",
-                                       "the queue is full (16 jobs waiting)", "/readyz"),
+        200: {
+            "content": {
+                "application/json": {
+                    "example": {
+                        "status": "ready",
+                        "workers": 4,
+                        "busy": 1,
+                        "queued": 0,
+                        "queue_size": 16,
+                    }
+                }
+            }
+        },
+        503: examples.problem_response(
+            503, "queue-full", "Service busy", "the queue is full (16 jobs waiting)", "/readyz"
+        ),
     },
     tags=["ops"],
 )
@@ -400,7 +466,8 @@ async def readyz(request: Request) -> Readiness:
     pool: WorkerPool = request.app.state.pool
     if pool.starting and not pool.closed:
         raise PoolStartingError(
-            f"the worker pool is warming up ({pool.warm} of {pool.size} workers ready)")
+            f"the worker pool is warming up ({pool.warm} of {pool.size} workers ready)"
+        )
     failure = request.app.state.pool_failure
     if failure is not None:
         raise PoolClosedError(f"the worker pool failed to start: {failure}")
@@ -409,7 +476,10 @@ async def readyz(request: Request) -> Readiness:
     if not pool.ready:
         raise QueueFullError(f"the queue is full ({pool.waiting} jobs waiting)")
     return Readiness(
-        status="ready", workers=pool.alive(), busy=pool.busy, queued=pool.waiting,
+        status="ready",
+        workers=pool.alive(),
+        busy=pool.busy,
+        queued=pool.waiting,
         queue_size=pool.queue_size,
     )
 
@@ -418,12 +488,18 @@ async def readyz(request: Request) -> Readiness:
     "/metrics",
     summary="Prometheus metrics",
     response_class=Response,
-    responses={200: {"description": "Prometheus text exposition format.",
-                     "content": {"text/plain": {"schema": {"type": "string"},
-                                                "example": examples.METRICS_EXAMPLE}}},
-               401: examples.UNAUTHORIZED},
+    responses={
+        200: {
+            "description": "Prometheus text exposition format.",
+            "content": {
+                "text/plain": {"schema": {"type": "string"}, "example": examples.METRICS_EXAMPLE}
+            },
+        },
+        401: examples.UNAUTHORIZED,
+    },
     tags=["ops"],
 )
 async def metrics(request: Request) -> Response:
-    return Response(generate_latest(request.app.state.metrics.registry),
-                    media_type=CONTENT_TYPE_LATEST)
+    return Response(
+        generate_latest(request.app.state.metrics.registry), media_type=CONTENT_TYPE_LATEST
+    )

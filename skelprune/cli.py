@@ -41,8 +41,9 @@ from .options import (
 if TYPE_CHECKING:
     from .output.document import PruneResult
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="Parameter-free Bayesian skeleton pruning.")
+app = typer.Typer(
+    add_completion=False, no_args_is_help=True, help="Parameter-free Bayesian skeleton pruning."
+)
 
 
 def _prune(path: str, read: ReadOptions, options: PruneOptions) -> PruneResult:
@@ -55,8 +56,7 @@ def _prune(path: str, read: ReadOptions, options: PruneOptions) -> PruneResult:
     return res
 
 
-def _prune_file(path: str, read: ReadOptions, options: PruneOptions,
-                curve: bool) -> dict[str, Any]:
+def _prune_file(path: str, read: ReadOptions, options: PruneOptions, curve: bool) -> dict[str, Any]:
     try:
         return {"file": path, "result": _prune(path, read, options).to_dict(curve=curve)}
     except (SkelpruneError, OSError) as exc:
@@ -70,8 +70,7 @@ def _expand(paths: list[Path]) -> list[Path]:
     return files
 
 
-HELP = {name: text for name, _, text, _ in option_fields(PruneOptions, OutputOptions,
-                                                          ReadOptions)}
+HELP = {name: text for name, _, text, _ in option_fields(PruneOptions, OutputOptions, ReadOptions)}
 # the choices as typer shows them (it lists an Enum's values in --help)
 Method = enum.Enum("Method", {name: name for name in METHODS}, type=str)
 Coarse = enum.Enum("Coarse", {name: name for name in COARSE}, type=str)
@@ -86,17 +85,24 @@ def prune_command(
     coarse: Annotated[Coarse, typer.Option(help=HELP["coarse"])] = Coarse("dce"),
     dce_threshold: Annotated[float | None, typer.Option(help=HELP["dce_threshold"])] = None,
     min_margin: Annotated[float | None, typer.Option(help=HELP["min_margin"])] = None,
-    foreground: Annotated[Rule, typer.Option(help=HELP["foreground"])
-                          ] = Rule(ReadOptions.foreground),
-    overlay: Annotated[Path | None, typer.Option(help="Write the overlay PNG here "
-                                                 "(one input file only).")] = None,
+    foreground: Annotated[Rule, typer.Option(help=HELP["foreground"])] = Rule(
+        ReadOptions.foreground
+    ),
+    overlay: Annotated[
+        Path | None, typer.Option(help="Write the overlay PNG here (one input file only).")
+    ] = None,
     curve: Annotated[bool, typer.Option(help=HELP["curve"])] = OutputOptions.curve,
     workers: Annotated[int, typer.Option(help="Worker processes for several files.")] = 0,
 ) -> None:
     """Prune the skeleton of each shape and print the result as JSON."""
     try:  # checked once, before any file is read
-        options = PruneOptions(beta=beta, method=method.value, coarse=coarse.value,
-                               dce_threshold=dce_threshold, min_margin=min_margin)
+        options = PruneOptions(
+            beta=beta,
+            method=method.value,
+            coarse=coarse.value,
+            dce_threshold=dce_threshold,
+            min_margin=min_margin,
+        )
         read = ReadOptions(foreground=foreground.value)
     except SkelpruneError as exc:
         typer.echo(f"error: {exc}", err=True)
@@ -125,8 +131,9 @@ def prune_command(
     failed = 0
     with ProcessPoolExecutor(max_workers=n) as pool:
         k = len(inputs)
-        jobs = pool.map(_prune_file, [str(p) for p in inputs], [read] * k, [options] * k,
-                        [curve] * k)
+        jobs = pool.map(
+            _prune_file, [str(p) for p in inputs], [read] * k, [options] * k, [curve] * k
+        )
         for line in tqdm(jobs, total=len(inputs), file=sys.stderr, unit="shape"):
             failed += "error" in line
             sys.stdout.write(json.dumps(line) + "\n")
@@ -143,13 +150,25 @@ def _describe_file(path: str, read: ReadOptions, options: PruneOptions) -> Any:
         return f"{type(exc).__name__}: {exc}"
 
 
-def _options_or_exit(beta: float, method: Any, coarse: Any, dce_threshold: float | None,
-                     min_margin: float | None, foreground: Any
-                     ) -> tuple[PruneOptions, ReadOptions]:
+def _options_or_exit(
+    beta: float,
+    method: Any,
+    coarse: Any,
+    dce_threshold: float | None,
+    min_margin: float | None,
+    foreground: Any,
+) -> tuple[PruneOptions, ReadOptions]:
     try:
-        return (PruneOptions(beta=beta, method=method.value, coarse=coarse.value,
-                             dce_threshold=dce_threshold, min_margin=min_margin),
-                ReadOptions(foreground=foreground.value))
+        return (
+            PruneOptions(
+                beta=beta,
+                method=method.value,
+                coarse=coarse.value,
+                dce_threshold=dce_threshold,
+                min_margin=min_margin,
+            ),
+            ReadOptions(foreground=foreground.value),
+        )
     except SkelpruneError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None
@@ -164,15 +183,15 @@ def match_command(
     coarse: Annotated[Coarse, typer.Option(help=HELP["coarse"])] = Coarse("dce"),
     dce_threshold: Annotated[float | None, typer.Option(help=HELP["dce_threshold"])] = None,
     min_margin: Annotated[float | None, typer.Option(help=HELP["min_margin"])] = None,
-    foreground: Annotated[Rule, typer.Option(help=HELP["foreground"])
-                          ] = Rule(ReadOptions.foreground),
+    foreground: Annotated[Rule, typer.Option(help=HELP["foreground"])] = Rule(
+        ReadOptions.foreground
+    ),
 ) -> None:
     """Match the skeletons of two shapes (path similarity) and print distance and
     endpoint correspondence as JSON."""
     from .matching import match
 
-    options, read = _options_or_exit(beta, method, coarse, dce_threshold, min_margin,
-                                     foreground)
+    options, read = _options_or_exit(beta, method, coarse, dce_threshold, min_margin, foreground)
     try:
         res = match(_prune(str(a), read, options), _prune(str(b), read, options))
     except (SkelpruneError, OSError) as exc:
@@ -191,8 +210,9 @@ def retrieve_command(
     coarse: Annotated[Coarse, typer.Option(help=HELP["coarse"])] = Coarse("dce"),
     dce_threshold: Annotated[float | None, typer.Option(help=HELP["dce_threshold"])] = None,
     min_margin: Annotated[float | None, typer.Option(help=HELP["min_margin"])] = None,
-    foreground: Annotated[Rule, typer.Option(help=HELP["foreground"])
-                          ] = Rule(ReadOptions.foreground),
+    foreground: Annotated[Rule, typer.Option(help=HELP["foreground"])] = Rule(
+        ReadOptions.foreground
+    ),
     workers: Annotated[int, typer.Option(help="Worker processes (0: one a core).")] = 0,
 ) -> None:
     """Match every shape with every other and print, per shape, its closest ones as JSON
@@ -201,8 +221,7 @@ def retrieve_command(
 
     from .matching import distance_matrix
 
-    options, read = _options_or_exit(beta, method, coarse, dce_threshold, min_margin,
-                                     foreground)
+    options, read = _options_or_exit(beta, method, coarse, dce_threshold, min_margin, foreground)
     inputs = _expand(folder)
     if not inputs:
         typer.echo("error: no PNG file given", err=True)
@@ -210,9 +229,14 @@ def retrieve_command(
     n = workers or os.cpu_count() or 1
     k = len(inputs)
     with ProcessPoolExecutor(max_workers=n) as pool:
-        described = list(tqdm(pool.map(_describe_file, [str(p) for p in inputs], [read] * k,
-                                       [options] * k),
-                              total=k, file=sys.stderr, unit="shape"))
+        described = list(
+            tqdm(
+                pool.map(_describe_file, [str(p) for p in inputs], [read] * k, [options] * k),
+                total=k,
+                file=sys.stderr,
+                unit="shape",
+            )
+        )
     good = [i for i, d in enumerate(described) if not isinstance(d, str)]
     dist = distance_matrix([described[i] for i in good], workers=n)
     np.fill_diagonal(dist, np.inf)
@@ -224,32 +248,46 @@ def retrieve_command(
             sys.stdout.write(json.dumps({"file": str(path), "error": described[i]}) + "\n")
             continue
         d = dist[row[i]]
-        order = np.argsort(d, kind="stable")[:min(top, len(good) - 1)]
-        sys.stdout.write(json.dumps({"file": str(path), "top": [
-            {"file": str(inputs[good[j]]), "distance": float(d[j])} for j in order]}) + "\n")
+        order = np.argsort(d, kind="stable")[: min(top, len(good) - 1)]
+        sys.stdout.write(
+            json.dumps(
+                {
+                    "file": str(path),
+                    "top": [{"file": str(inputs[good[j]]), "distance": float(d[j])} for j in order],
+                }
+            )
+            + "\n"
+        )
     if failed:
         raise typer.Exit(1)
 
 
 @app.command("eval")
 def eval_command(
-    out: Annotated[Path, typer.Option(help="Folder for evaluation.md, stability.md "
-                                      "and figures/.")] = Path("docs"),
-    data: Annotated[Path | None, typer.Option(help="Folder with kimia216/ and kimia99/ "
-                                              "(default: $SKELPRUNE_DATA or "
-                                              "../shared/data).")] = None,
+    out: Annotated[
+        Path, typer.Option(help="Folder for evaluation.md, stability.md and figures/.")
+    ] = Path("docs"),
+    data: Annotated[
+        Path | None,
+        typer.Option(
+            help="Folder with kimia216/ and kimia99/ (default: $SKELPRUNE_DATA or ../shared/data)."
+        ),
+    ] = None,
     workers: Annotated[int, typer.Option(help="Processes of the stability run.")] = 2,
-    limit: Annotated[int | None, typer.Option(hidden=True,
-                                              help="First N shapes a dataset.")] = None,
-    rect_seeds: Annotated[int, typer.Option(hidden=True,
-                                            help="Noisy rectangles a noise kind.")] = 10,
+    limit: Annotated[
+        int | None, typer.Option(hidden=True, help="First N shapes a dataset.")
+    ] = None,
+    rect_seeds: Annotated[
+        int, typer.Option(hidden=True, help="Noisy rectangles a noise kind.")
+    ] = 10,
 ) -> None:
     """Regenerate the evaluation report and figures (needs the bench extra: matplotlib)."""
     from .evaluation.run import run_evaluation
 
     try:
-        written = run_evaluation(out, data=data, limit=limit, workers=workers,
-                                 rect_seeds=rect_seeds)
+        written = run_evaluation(
+            out, data=data, limit=limit, workers=workers, rect_seeds=rect_seeds
+        )
     except (FileNotFoundError, ImportError) as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(1) from None

@@ -116,8 +116,9 @@ class Match:
     a: SkeletonDescriptor
     b: SkeletonDescriptor
 
-    def to_dict(self, frame_a: PixelFrame = IDENTITY,
-                frame_b: PixelFrame = IDENTITY) -> dict[str, Any]:
+    def to_dict(
+        self, frame_a: PixelFrame = IDENTITY, frame_b: PixelFrame = IDENTITY
+    ) -> dict[str, Any]:
         """Plain JSON types: the distance and, per pair, both endpoints' node ids and
         positions (mapped by each shape's frame: polygon input gets its own units)."""
 
@@ -129,18 +130,21 @@ class Match:
             "distance": float(self.distance),
             "mirrored": self.mirrored,
             "endpoints": [self.a.n_endpoints, self.b.n_endpoints],
-            "correspondence": [{"a": end(self.a, i, frame_a), "b": end(self.b, j, frame_b)}
-                               for i, j in self.pairs],
+            "correspondence": [
+                {"a": end(self.a, i, frame_a), "b": end(self.b, j, frame_b)} for i, j in self.pairs
+            ],
         }
 
 
 # -- describing a skeleton ------------------------------------------------------------
 
+
 def _boundary_order(mask: np.ndarray, positions: np.ndarray) -> np.ndarray:
     """Order of endpoints along the outer boundary of the mask's largest shape (each
     endpoint placed at its nearest boundary pixel; ties by position)."""
-    contours, _ = cv2.findContours(np.ascontiguousarray(mask, np.uint8), cv2.RETR_EXTERNAL,
-                                   cv2.CHAIN_APPROX_NONE)
+    contours, _ = cv2.findContours(
+        np.ascontiguousarray(mask, np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE
+    )
     ring = max(contours, key=len)[:, 0, :].astype(float)  # (n, 2) x, y
     d2 = ((positions[:, None, :] - ring[None, :, :]) ** 2).sum(-1)
     at = d2.argmin(1)
@@ -156,8 +160,13 @@ def _sample(line: np.ndarray, samples: int) -> tuple[np.ndarray, float]:
     return np.interp(np.linspace(0.0, length, samples), s, line[:, 2]), length
 
 
-def describe_skeleton(skeleton: dict[str, Any], mask: np.ndarray, mean_radius: float,
-                      component: int = 0, samples: int = SAMPLES) -> SkeletonDescriptor:
+def describe_skeleton(
+    skeleton: dict[str, Any],
+    mask: np.ndarray,
+    mean_radius: float,
+    component: int = 0,
+    samples: int = SAMPLES,
+) -> SkeletonDescriptor:
     """The path table of a document's skeleton (``{"nodes", "branches", "length"}``, in
     pixel coordinates) and the mask it came from.
 
@@ -172,12 +181,14 @@ def describe_skeleton(skeleton: dict[str, Any], mask: np.ndarray, mean_radius: f
         raise UnmatchableShapeError(
             f"the skeleton has {len(ends)} endpoint{'s' * (len(ends) != 1)}: path "
             "similarity matching needs at least two (a shape whose skeleton is a single "
-            "point or only cycles cannot be matched this way)")
+            "point or only cycles cannot be matched this way)"
+        )
     if len(ends) > MAX_ENDPOINTS:
         raise UnmatchableShapeError(
             f"the skeleton has {len(ends)} endpoints, more than the {MAX_ENDPOINTS} path "
             "similarity matching takes (its time grows as the sixth power of the endpoint "
-            "count); prune with the default options or with min_margin")
+            "count); prune with the default options or with min_margin"
+        )
     # the node graph: one edge per branch (the shortest of parallel ones), no loops
     best: dict[tuple[int, int], tuple[float, np.ndarray]] = {}
     for br in skeleton["branches"]:
@@ -223,9 +234,12 @@ def describe_skeleton(skeleton: dict[str, Any], mask: np.ndarray, mean_radius: f
             lengths[i, j] = lengths[j, i] = length
     total = float(skeleton["length"])
     return SkeletonDescriptor(
-        node_ids=np.array(ends, np.int64), positions=positions,
+        node_ids=np.array(ends, np.int64),
+        positions=positions,
         radii=radii / mean_radius if mean_radius > 0 else radii,
-        lengths=lengths / total if total > 0 else lengths, component=component)
+        lengths=lengths / total if total > 0 else lengths,
+        component=component,
+    )
 
 
 def describe(shape: PruneResult | np.ndarray | SkeletonDescriptor) -> SkeletonDescriptor:
@@ -249,8 +263,7 @@ def describe(shape: PruneResult | np.ndarray | SkeletonDescriptor) -> SkeletonDe
     _rows, _cols, r2 = comp.points()
     mean_radius = float(np.sqrt(r2.astype(float)).mean())
     # the component alone, so that the boundary is its own
-    rows, cols = comp.image_coordinates(comp.skeleton.graph.rows[:1],
-                                        comp.skeleton.graph.cols[:1])
+    rows, cols = comp.image_coordinates(comp.skeleton.graph.rows[:1], comp.skeleton.graph.cols[:1])
     own = _component_mask(result.mask, int(rows[0]), int(cols[0]))
     return describe_skeleton(skeleton, own, mean_radius, component=ci)
 
@@ -262,6 +275,7 @@ def _component_mask(mask: np.ndarray, row: int, col: int) -> np.ndarray:
 
 
 # -- comparing ------------------------------------------------------------------------
+
 
 @njit(cache=True)
 def _path_cost(ra: np.ndarray, la: float, rb: np.ndarray, lb: float, weight: float) -> float:
@@ -276,16 +290,20 @@ def _path_cost(ra: np.ndarray, la: float, rb: np.ndarray, lb: float, weight: flo
     return s
 
 
-def path_distance(ra: np.ndarray, la: float, rb: np.ndarray, lb: float,
-                  weight: float = LENGTH_WEIGHT) -> float:
+def path_distance(
+    ra: np.ndarray, la: float, rb: np.ndarray, lb: float, weight: float = LENGTH_WEIGHT
+) -> float:
     """Dissimilarity of two sampled paths (normalised radii ``r``, lengths ``l``):
     ``Σ_t (r_t − r'_t)² / (r_t + r'_t) + α (l − l')² / (l + l')``.
 
     >>> path_distance(np.ones(3), 0.5, np.ones(3), 0.5)
     0.0
     """
-    return float(_path_cost(np.asarray(ra, float), float(la), np.asarray(rb, float),
-                            float(lb), float(weight)))
+    return float(
+        _path_cost(
+            np.asarray(ra, float), float(la), np.asarray(rb, float), float(lb), float(weight)
+        )
+    )
 
 
 @njit(cache=True)
@@ -319,8 +337,9 @@ def _osb(cost: np.ndarray) -> float:
 
 
 @njit(cache=True)
-def _endpoint_costs(ra: np.ndarray, la: np.ndarray, rb: np.ndarray, lb: np.ndarray,
-                    weight: float, reverse: bool) -> np.ndarray:
+def _endpoint_costs(
+    ra: np.ndarray, la: np.ndarray, rb: np.ndarray, lb: np.ndarray, weight: float, reverse: bool
+) -> np.ndarray:
     """``c[i, j]``: OSB of the paths leaving endpoint ``i`` of a (to the others, in
     boundary order from ``i``) against those leaving ``j`` of b (in b's order, or its
     reverse)."""
@@ -347,8 +366,9 @@ def _assign(cost: np.ndarray) -> tuple[float, list[tuple[int, int]]]:
     return total, [(int(i), int(j)) for i, j in zip(rows, cols, strict=True)]
 
 
-def _match(a: SkeletonDescriptor, b: SkeletonDescriptor
-           ) -> tuple[float, list[tuple[int, int]], bool]:
+def _match(
+    a: SkeletonDescriptor, b: SkeletonDescriptor
+) -> tuple[float, list[tuple[int, int]], bool]:
     best: tuple[float, list[tuple[int, int]], bool] | None = None
     for reverse in (False, True):
         cost = _endpoint_costs(a.radii, a.lengths, b.radii, b.lengths, LENGTH_WEIGHT, reverse)
@@ -359,8 +379,10 @@ def _match(a: SkeletonDescriptor, b: SkeletonDescriptor
     return best
 
 
-def match(a: PruneResult | np.ndarray | SkeletonDescriptor,
-          b: PruneResult | np.ndarray | SkeletonDescriptor) -> Match:
+def match(
+    a: PruneResult | np.ndarray | SkeletonDescriptor,
+    b: PruneResult | np.ndarray | SkeletonDescriptor,
+) -> Match:
     """Path similarity of two skeletons: their distance and endpoint correspondence.
 
     Parameters
@@ -392,16 +414,18 @@ def match(a: PruneResult | np.ndarray | SkeletonDescriptor,
     return Match(distance=distance, pairs=pairs, mirrored=mirrored, a=da, b=db)
 
 
-def _rows(args: tuple[Sequence[SkeletonDescriptor], Sequence[SkeletonDescriptor]]
-          ) -> np.ndarray:
+def _rows(args: tuple[Sequence[SkeletonDescriptor], Sequence[SkeletonDescriptor]]) -> np.ndarray:
     queries, database = args
     return np.array([[_match(q, d)[0] for d in database] for q in queries]).reshape(
-        len(queries), len(database))
+        len(queries), len(database)
+    )
 
 
-def distance_matrix(descriptors: Sequence[SkeletonDescriptor],
-                    queries: Sequence[SkeletonDescriptor] | None = None,
-                    workers: int = 1) -> np.ndarray:
+def distance_matrix(
+    descriptors: Sequence[SkeletonDescriptor],
+    queries: Sequence[SkeletonDescriptor] | None = None,
+    workers: int = 1,
+) -> np.ndarray:
     """Distances of every query (default: every descriptor) to every descriptor.
 
     Without ``queries`` the matrix is symmetric with a zero diagonal and, in one process,

@@ -74,8 +74,7 @@ def class_of(name: str) -> str:
     return name.rsplit("-", 1)[0]
 
 
-def baseline_descriptor(mask: np.ndarray, min_length: float = BASELINE_CUT
-                        ) -> SkeletonDescriptor:
+def baseline_descriptor(mask: np.ndarray, min_length: float = BASELINE_CUT) -> SkeletonDescriptor:
     """Path table of the ``skeletonize`` + cut skeleton (largest component)."""
     from scipy import ndimage
     from skimage.morphology import skeletonize
@@ -91,18 +90,25 @@ def baseline_descriptor(mask: np.ndarray, min_length: float = BASELINE_CUT
     r2 = r2img[graph.rows, graph.cols].astype(np.int64)
     sk = Skeleton(padded, graph.rows, graph.cols, r2, graph, origin=(-1, -1))
     # the document's node and branch table, as for a pruned skeleton
-    comp = ComponentResult(skeleton=sk, medial_axis=None, sequence=None,  # type: ignore[arg-type]
-                           chosen_step=0, ma_rer=0.0)
+    comp = ComponentResult(
+        skeleton=sk,
+        medial_axis=None,
+        sequence=None,  # type: ignore[arg-type]
+        chosen_step=0,
+        ma_rer=0.0,
+    )
     nodes, branches = comp.skeleton_table()
     keep = graph.alive_points()
     na, nd = graph.length_counts()
     length = float(na + np.sqrt(2.0) * nd)
-    return describe_skeleton({"nodes": nodes, "branches": branches, "length": length}, own,
-                             float(np.sqrt(r2[keep].astype(float)).mean()))
+    return describe_skeleton(
+        {"nodes": nodes, "branches": branches, "length": length},
+        own,
+        float(np.sqrt(r2[keep].astype(float)).mean()),
+    )
 
 
-def _descriptor(args: tuple[np.ndarray, dict[str, object] | None]
-                ) -> SkeletonDescriptor | None:
+def _descriptor(args: tuple[np.ndarray, dict[str, object] | None]) -> SkeletonDescriptor | None:
     mask, options = args
     try:
         if options is None:
@@ -112,8 +118,9 @@ def _descriptor(args: tuple[np.ndarray, dict[str, object] | None]
         return None
 
 
-def _rows(args: tuple[list[SkeletonDescriptor | None], list[SkeletonDescriptor | None]]
-          ) -> np.ndarray:
+def _rows(
+    args: tuple[list[SkeletonDescriptor | None], list[SkeletonDescriptor | None]],
+) -> np.ndarray:
     queries, base = args
     out = np.full((len(queries), len(base)), np.inf)
     for i, q in enumerate(queries):
@@ -125,15 +132,21 @@ def _rows(args: tuple[list[SkeletonDescriptor | None], list[SkeletonDescriptor |
     return out
 
 
-def descriptors(masks: Sequence[np.ndarray], options: dict[str, object] | None,
-                pool: ProcessPoolExecutor | None = None) -> list[SkeletonDescriptor | None]:
+def descriptors(
+    masks: Sequence[np.ndarray],
+    options: dict[str, object] | None,
+    pool: ProcessPoolExecutor | None = None,
+) -> list[SkeletonDescriptor | None]:
     """One descriptor per mask (``None`` where the skeleton has < 2 endpoints)."""
     jobs = [(m, options) for m in masks]
     return list(pool.map(_descriptor, jobs, chunksize=8) if pool else map(_descriptor, jobs))
 
 
-def all_pairs(descs: Sequence[SkeletonDescriptor | None], pool: ProcessPoolExecutor | None = None,
-              queries: Sequence[SkeletonDescriptor | None] | None = None) -> np.ndarray:
+def all_pairs(
+    descs: Sequence[SkeletonDescriptor | None],
+    pool: ProcessPoolExecutor | None = None,
+    queries: Sequence[SkeletonDescriptor | None] | None = None,
+) -> np.ndarray:
     """Distance of every query (default: every descriptor) to every descriptor; ``inf``
     where either has no descriptor. Rows are split over the pool's workers."""
     qs = list(descs if queries is None else queries)
@@ -144,8 +157,9 @@ def all_pairs(descs: Sequence[SkeletonDescriptor | None], pool: ProcessPoolExecu
     return np.vstack(list(pool.map(_rows, jobs)))
 
 
-def hits_at_rank(dist: np.ndarray, classes: Sequence[str], top: int,
-                 exclude_self: bool = True) -> np.ndarray:
+def hits_at_rank(
+    dist: np.ndarray, classes: Sequence[str], top: int, exclude_self: bool = True
+) -> np.ndarray:
     """``hits[k]``: queries whose ``k+1``-th closest database shape is of their class.
 
     Ties are broken by database order (stable sort); ``inf`` ranks last.
@@ -170,10 +184,13 @@ class RetrievalRun:
     seconds: dict[str, float] = field(default_factory=dict)
 
 
-def run_retrieval(sets: dict[str, list[tuple[str, np.ndarray]]], workers: int = 2,
-                  variants: Sequence[str] = tuple(RETRIEVAL_VARIANTS),
-                  perturbations: Sequence[str] = tuple(PERTURBATIONS),
-                  seed: int = 0) -> RetrievalRun:
+def run_retrieval(
+    sets: dict[str, list[tuple[str, np.ndarray]]],
+    workers: int = 2,
+    variants: Sequence[str] = tuple(RETRIEVAL_VARIANTS),
+    perturbations: Sequence[str] = tuple(PERTURBATIONS),
+    seed: int = 0,
+) -> RetrievalRun:
     """Retrieval tables for every dataset: each variant on clean shapes, and the default
     variant with perturbed queries against the clean database."""
     run = RetrievalRun()
@@ -215,8 +232,10 @@ def _ordinal(k: int) -> str:
 def _table(rows: dict[str, np.ndarray], top: int, n: int) -> str:
     top = min(top, *(len(h) for h in rows.values())) if rows else top
     header = ["skeletons", *(_ordinal(k) for k in range(1, top + 1)), f"sum (of {n * top})"]
-    body = [[name, *(str(int(x)) for x in hits[:top]), str(int(hits[:top].sum()))]
-            for name, hits in rows.items()]
+    body = [
+        [name, *(str(int(x)) for x in hits[:top]), str(int(hits[:top].sum()))]
+        for name, hits in rows.items()
+    ]
     return markdown_table(header, body)
 
 
@@ -252,21 +271,38 @@ def retrieval_markdown(run: RetrievalRun, command: str) -> str:
     ]
     for ds, n in run.counts.items():
         top = TOP[ds]
-        out += [f"## {ds} ({n} shapes), top {top}", "",
-                _table({v: h for (d, v), h in run.clean.items() if d == ds}, top, n), ""]
+        out += [
+            f"## {ds} ({n} shapes), top {top}",
+            "",
+            _table({v: h for (d, v), h in run.clean.items() if d == ds}, top, n),
+            "",
+        ]
         un = {v: c for (d, v), c in run.unmatchable.items() if d == ds and c}
         if un:
-            out += ["Unmatchable skeletons: " + ", ".join(f"{v}: {c}" for v, c in un.items()),
-                    ""]
+            out += ["Unmatchable skeletons: " + ", ".join(f"{v}: {c}" for v, c in un.items()), ""]
         pert = {p: h for (d, p), h in run.perturbed.items() if d == ds}
         if pert:
-            out += [f"### {ds}: perturbed queries, clean database (default pruning)", "",
-                    "Each query is perturbed (boundary noise N(0,1) with a fixed seed per "
-                    "shape, a 30° turn, ×0.5, ×2) and ranked against the clean shapes; its "
-                    "own clean copy is left out.", "",
-                    _table({"clean": run.clean[(ds, "default")], **pert}
-                           if (ds, "default") in run.clean else pert, top, n), ""]
+            out += [
+                f"### {ds}: perturbed queries, clean database (default pruning)",
+                "",
+                "Each query is perturbed (boundary noise N(0,1) with a fixed seed per "
+                "shape, a 30° turn, ×0.5, ×2) and ranked against the clean shapes; its "
+                "own clean copy is left out.",
+                "",
+                _table(
+                    {"clean": run.clean[(ds, "default")], **pert}
+                    if (ds, "default") in run.clean
+                    else pert,
+                    top,
+                    n,
+                ),
+                "",
+            ]
     out += ["## What the literature reports", "", LITERATURE]
-    out += ["## Time", "", markdown_table(["run", "seconds"],
-                                    [[k, f"{s:.1f}"] for k, s in run.seconds.items()]), ""]
+    out += [
+        "## Time",
+        "",
+        markdown_table(["run", "seconds"], [[k, f"{s:.1f}"] for k, s in run.seconds.items()]),
+        "",
+    ]
     return "\n".join(out)

@@ -74,8 +74,9 @@ class ComponentResult:
     def area(self) -> int:
         return self.skeleton.area
 
-    def image_coordinates(self, rows: np.ndarray,
-                          cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def image_coordinates(
+        self, rows: np.ndarray, cols: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Rows and columns of graph points in the image frame."""
         return self.skeleton.image_coordinates(rows, cols)
 
@@ -121,13 +122,22 @@ class ComponentResult:
             pts = sorted(junc.points, key=lambda p: (-r2[p], g.rows[p], g.cols[p]))
             x, y, r = xyr(pts[0])
             junction_node[j] = len(nodes)
-            nodes.append({"id": len(nodes), "x": x, "y": y, "radius": r, "kind": "junction",
-                          "points": [xyr(p) for p in sorted(junc.points)]})
+            nodes.append(
+                {
+                    "id": len(nodes),
+                    "x": x,
+                    "y": y,
+                    "radius": r,
+                    "kind": "junction",
+                    "points": [xyr(p) for p in sorted(junc.points)],
+                }
+            )
 
         def new_node(p: int, kind: str) -> int:
             x, y, r = xyr(p)
-            nodes.append({"id": len(nodes), "x": x, "y": y, "radius": r, "kind": kind,
-                          "points": []})
+            nodes.append(
+                {"id": len(nodes), "x": x, "y": y, "radius": r, "kind": kind, "points": []}
+            )
             return len(nodes) - 1
 
         branches: list[dict[str, Any]] = []
@@ -147,12 +157,18 @@ class ComponentResult:
                     else:
                         ends.append(new_node(p, "endpoint"))
                 src, dst = ends
-            branches.append({"id": len(branches), "source": src, "target": dst,
-                             "length": float(br.length),
-                             "points": [xyr(p) for p in path],
-                             "off_path": [xyr(p) for p in sorted(br.side)],
-                             "margin": self.margins.margin.get(b),
-                             "removed_at": self.margins.removed_at.get(b)})
+            branches.append(
+                {
+                    "id": len(branches),
+                    "source": src,
+                    "target": dst,
+                    "length": float(br.length),
+                    "points": [xyr(p) for p in path],
+                    "off_path": [xyr(p) for p in sorted(br.side)],
+                    "margin": self.margins.margin.get(b),
+                    "removed_at": self.margins.removed_at.get(b),
+                }
+            )
         return nodes, branches
 
     def to_dict(self, curve: bool = True, frame: PixelFrame = IDENTITY) -> dict[str, Any]:
@@ -193,10 +209,16 @@ class ComponentResult:
         }
         if curve:
             doc["curve"] = [
-                {"step": i, "length": frame.distance(float(L)), "ar": float(a),
-                 "lr": float(lr), "objective": float(o)}
+                {
+                    "step": i,
+                    "length": frame.distance(float(L)),
+                    "ar": float(a),
+                    "lr": float(lr),
+                    "objective": float(o),
+                }
                 for i, (L, a, lr, o) in enumerate(
-                    zip(seq.length, seq.ar, seq.lr, seq.objective, strict=True))
+                    zip(seq.length, seq.ar, seq.lr, seq.objective, strict=True)
+                )
             ]
         return doc
 
@@ -252,8 +274,9 @@ class PruneResult:
             return e, e, e
         return tuple(np.concatenate(a) for a in zip(*parts, strict=True))  # type: ignore[return-value]
 
-    def to_dict(self, curve: bool = True, overlay: bool = False,
-                frame: PixelFrame = IDENTITY) -> dict[str, Any]:
+    def to_dict(
+        self, curve: bool = True, overlay: bool = False, frame: PixelFrame = IDENTITY
+    ) -> dict[str, Any]:
         """The output document of SPEC §3 (plain JSON types).
 
         Examples
@@ -265,8 +288,11 @@ class PruneResult:
         (40, 4)
         """
         doc: dict[str, Any] = {
-            "width": self.width, "height": self.height, "method": self.method,
-            "beta": float(self.beta), "coarse": self.coarse,
+            "width": self.width,
+            "height": self.height,
+            "method": self.method,
+            "beta": float(self.beta),
+            "coarse": self.coarse,
             "foreground": self.foreground.to_dict(),
             "components": [c.to_dict(curve=curve, frame=frame) for c in self.components],
         }
@@ -281,22 +307,39 @@ class PruneResult:
             sk = comp["skeleton"]
             for br in sk["branches"]:
                 line = branch_line(sk, br)
-                features.append({
-                    "type": "Feature",
-                    "geometry": {"type": "LineString",
-                                 "coordinates": [[x, y] for x, y, _ in line]},
-                    "properties": {"component": ci, "kind": "branch", "id": br["id"],
-                                   "source": br["source"], "target": br["target"],
-                                   "length": br["length"], "radii": [r for *_, r in line],
-                                   "margin": br["margin"], "removed_at": br["removed_at"]},
-                })
+                features.append(
+                    {
+                        "type": "Feature",
+                        "geometry": {
+                            "type": "LineString",
+                            "coordinates": [[x, y] for x, y, _ in line],
+                        },
+                        "properties": {
+                            "component": ci,
+                            "kind": "branch",
+                            "id": br["id"],
+                            "source": br["source"],
+                            "target": br["target"],
+                            "length": br["length"],
+                            "radii": [r for *_, r in line],
+                            "margin": br["margin"],
+                            "removed_at": br["removed_at"],
+                        },
+                    }
+                )
             for nd in sk["nodes"]:
-                features.append({
-                    "type": "Feature",
-                    "geometry": {"type": "Point", "coordinates": [nd["x"], nd["y"]]},
-                    "properties": {"component": ci, "kind": nd["kind"], "id": nd["id"],
-                                   "radius": nd["radius"]},
-                })
+                features.append(
+                    {
+                        "type": "Feature",
+                        "geometry": {"type": "Point", "coordinates": [nd["x"], nd["y"]]},
+                        "properties": {
+                            "component": ci,
+                            "kind": nd["kind"],
+                            "id": nd["id"],
+                            "radius": nd["radius"],
+                        },
+                    }
+                )
         return {"type": "FeatureCollection", "features": features}
 
     def to_networkx(self, frame: PixelFrame = IDENTITY) -> Any:
@@ -318,18 +361,27 @@ class PruneResult:
         try:
             import networkx as nx
         except ImportError:  # an optional dependency: say how to get it
-            raise ImportError("to_networkx needs networkx: pip install 'skelprune[graph]'") \
-                from None
+            raise ImportError(
+                "to_networkx needs networkx: pip install 'skelprune[graph]'"
+            ) from None
         g = nx.MultiGraph()
         for ci, comp in enumerate(self.to_dict(curve=False, frame=frame)["components"]):
             sk = comp["skeleton"]
             for nd in sk["nodes"]:
-                g.add_node((ci, nd["id"]), component=ci,
-                           **{k: v for k, v in nd.items() if k != "id"})
+                g.add_node(
+                    (ci, nd["id"]), component=ci, **{k: v for k, v in nd.items() if k != "id"}
+                )
             for br in sk["branches"]:
-                g.add_edge((ci, br["source"]), (ci, br["target"]), key=br["id"], component=ci,
-                           length=br["length"], points=br["points"], off_path=br["off_path"],
-                           line=branch_line(sk, br))
+                g.add_edge(
+                    (ci, br["source"]),
+                    (ci, br["target"]),
+                    key=br["id"],
+                    component=ci,
+                    length=br["length"],
+                    points=br["points"],
+                    off_path=br["off_path"],
+                    line=branch_line(sk, br),
+                )
         return g
 
     def render_overlay(self) -> np.ndarray:
@@ -348,9 +400,14 @@ class PruneResult:
             for n in comp.skeleton_table()[0]:
                 if n["kind"] in marks:
                     marks[n["kind"]].append((int(n["y"]), int(n["x"])))
-        return render_overlay(self.mask, rows, cols, r2,
-                              np.array(marks["endpoint"], int).reshape(-1, 2),
-                              np.array(marks["junction"], int).reshape(-1, 2))
+        return render_overlay(
+            self.mask,
+            rows,
+            cols,
+            r2,
+            np.array(marks["endpoint"], int).reshape(-1, 2),
+            np.array(marks["junction"], int).reshape(-1, 2),
+        )
 
     def overlay_png(self) -> bytes:
         return encode_png(self.render_overlay())

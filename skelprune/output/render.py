@@ -14,8 +14,8 @@ __all__ = ["COLOURS", "encode_png", "render_overlay"]
 
 COLOURS = {
     "background": (255, 255, 255),
-    "shape": (150, 210, 150),       # reconstructed part of the shape
-    "error": (220, 40, 40),         # shape pixels the skeleton does not reconstruct
+    "shape": (150, 210, 150),  # reconstructed part of the shape
+    "error": (220, 40, 40),  # shape pixels the skeleton does not reconstruct
     "skeleton": (20, 20, 20),
     "endpoint": (30, 90, 230),
     "junction": (230, 150, 0),

@@ -19,10 +19,7 @@ from testkit import DATA
 
 def test_hits_at_rank_counts_same_class_at_each_rank():
     classes = ["a", "a", "b", "b"]
-    dist = np.array([[0, 1, 2, 3],
-                     [1, 0, 0.5, 4],
-                     [2, 0.5, 0, 1],
-                     [3, 4, 1, 0]], float)
+    dist = np.array([[0, 1, 2, 3], [1, 0, 0.5, 4], [2, 0.5, 0, 1], [3, 4, 1, 0]], float)
     # ranks (self left out): 0 -> 1(a) 2(b); 1 -> 2(b) 0(a); 2 -> 1(a) 3(b); 3 -> 2(b) 0(a)
     assert hits_at_rank(dist, classes, 2).tolist() == [2, 2]
     assert hits_at_rank(dist, classes, 5).tolist() == [2, 2, 0]
@@ -37,8 +34,11 @@ def test_baseline_descriptor_matches_itself():
 
 def test_small_run_writes_every_table():
     shapes = load_dataset(DATA / "kimia216")
-    picked = [s for s in shapes if s[0] in {"hammer-1", "hammer-2", "hammer-3", "bone-1",
-                                             "bone-2", "bone-3"}]
+    picked = [
+        s
+        for s in shapes
+        if s[0] in {"hammer-1", "hammer-2", "hammer-3", "bone-1", "bone-2", "bone-3"}
+    ]
     run = run_retrieval({"kimia216": picked}, workers=1)
     for v in RETRIEVAL_VARIANTS:
         hits = run.clean[("kimia216", v)]

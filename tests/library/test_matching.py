@@ -17,17 +17,27 @@ def kimia(name: str) -> np.ndarray:
     return np.asarray(Image.open(DATA / "kimia216" / f"{name}.png")) != 0
 
 
-def figure(arms: list[tuple[float, float, float]], degrees: float = 0.0,
-           size: int = 200) -> np.ndarray:
+def figure(
+    arms: list[tuple[float, float, float]], degrees: float = 0.0, size: int = 200
+) -> np.ndarray:
     """Elliptic arms (length, width, angle) from the centre, turned by ``degrees``: the
     same figure at any angle, up to pixels (rounded ends: one endpoint an arm)."""
     m = np.zeros((size, size), np.uint8)
     for length, width, angle in arms:
         t = np.deg2rad(angle + degrees)
         centre = (size / 2 + length / 2 * np.cos(t), size / 2 - length / 2 * np.sin(t))
-        cv2.ellipse(m, (round(centre[0] * 16), round(centre[1] * 16)),
-                    (round(length / 2 * 16), round(width / 2 * 16)),
-                    -float(np.rad2deg(t)), 0, 360, 1, -1, cv2.LINE_8, 4)
+        cv2.ellipse(
+            m,
+            (round(centre[0] * 16), round(centre[1] * 16)),
+            (round(length / 2 * 16), round(width / 2 * 16)),
+            -float(np.rad2deg(t)),
+            0,
+            360,
+            1,
+            -1,
+            cv2.LINE_8,
+            4,
+        )
     return m.astype(bool)
 
 
@@ -76,11 +86,16 @@ def test_turned_by_30_degrees_is_close():
     assert d_turn < 0.1 * d_other
     # on dataset shapes (their skeletons change a little when turned) still nearer
     # than a shape of another class
-    for name, other_name in (("hammer-1", "bird-2"), ("bone-1", "children-1"),
-                             ("bird-2", "hammer-1")):
+    for name, other_name in (
+        ("hammer-1", "bird-2"),
+        ("bone-1", "children-1"),
+        ("bird-2", "hammer-1"),
+    ):
         m = kimia(name)
-        assert skelprune.match(m, rotate(m, 30.0)).distance < \
-            skelprune.match(m, kimia(other_name)).distance
+        assert (
+            skelprune.match(m, rotate(m, 30.0)).distance
+            < skelprune.match(m, kimia(other_name)).distance
+        )
 
 
 def test_scale_invariance():
@@ -93,7 +108,7 @@ def test_symmetric():
     names = ["bird-2", "hammer-1", "fork-1", "camel-12", "heart-1"]
     descs = [describe(kimia(n)) for n in names]
     for i, a in enumerate(descs):
-        for b in descs[i + 1:]:
+        for b in descs[i + 1 :]:
             ab, ba = skelprune.match(a, b), skelprune.match(b, a)
             assert ab.distance == pytest.approx(ba.distance, rel=1e-12, abs=1e-12)
             assert ab.distance > 0
@@ -103,12 +118,15 @@ def test_symmetric():
     assert mat[0, 1] == pytest.approx(skelprune.match(descs[0], descs[1]).distance)
 
 
-@pytest.mark.parametrize(("query", "same", "other"), [
-    ("hammer-1", "hammer-2", "bird-2"),
-    ("fork-1", "fork-2", "heart-1"),
-    ("elephant-1", "elephant-2", "fork-1"),
-    ("bone-1", "bone-2", "children-1"),
-])
+@pytest.mark.parametrize(
+    ("query", "same", "other"),
+    [
+        ("hammer-1", "hammer-2", "bird-2"),
+        ("fork-1", "fork-2", "heart-1"),
+        ("elephant-1", "elephant-2", "fork-1"),
+        ("bone-1", "bone-2", "children-1"),
+    ],
+)
 def test_same_class_is_closer_than_another_class(query, same, other):
     q = describe(kimia(query))
     assert skelprune.match(q, kimia(same)).distance < skelprune.match(q, kimia(other)).distance
@@ -146,7 +164,7 @@ def test_skeleton_with_too_many_endpoints_is_refused():
     m = np.zeros((60, 20 + 8 * 45), bool)
     m[40:52, 5:-5] = True
     for k in range(45):
-        m[8:40, 10 + 8 * k:14 + 8 * k] = True
+        m[8:40, 10 + 8 * k : 14 + 8 * k] = True
     res = skelprune.prune(m, coarse=None)
     ends = len(res.to_dict()["components"][0]["skeleton"]["endpoints"])
     assert ends > skelprune.matching.MAX_ENDPOINTS

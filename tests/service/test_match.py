@@ -14,8 +14,10 @@ from testkit import DATA
 HAMMER = (DATA / "kimia216" / "hammer-1.png").read_bytes()
 BIRD = (DATA / "kimia216" / "bird-2.png").read_bytes()
 # an L: two arms of different lengths, in polygon units
-L_SHAPE = {"type": "Polygon", "coordinates": [[[0, 0], [100, 0], [100, 20], [20, 20],
-                                               [20, 60], [0, 60], [0, 0]]]}
+L_SHAPE = {
+    "type": "Polygon",
+    "coordinates": [[[0, 0], [100, 0], [100, 20], [20, 20], [20, 60], [0, 60], [0, 0]]],
+}
 
 
 def png(mask: np.ndarray) -> bytes:
@@ -25,8 +27,11 @@ def png(mask: np.ndarray) -> bytes:
 
 
 def post_pngs(client: TestClient, a: bytes, b: bytes, **params):
-    return client.post("/v1/match", params=params,
-                       files={"a": ("a.png", a, "image/png"), "b": ("b.png", b, "image/png")})
+    return client.post(
+        "/v1/match",
+        params=params,
+        files={"a": ("a.png", a, "image/png"), "b": ("b.png", b, "image/png")},
+    )
 
 
 def test_same_png_is_distance_zero_with_identity(client: TestClient) -> None:
@@ -44,7 +49,8 @@ def test_answer_agrees_with_the_library_and_the_prune_document(client: TestClien
     lib = skelprune.match(skelprune.io.read_mask(HAMMER), skelprune.io.read_mask(BIRD))
     assert doc["distance"] == lib.distance > 0
     nodes = client.post("/v1/prune", files={"file": ("a.png", HAMMER, "image/png")}).json()[
-        "components"][0]["skeleton"]["nodes"]
+        "components"
+    ][0]["skeleton"]["nodes"]
     for pair in doc["correspondence"]:
         node = nodes[pair["a"]["node"]]
         assert node["kind"] == "endpoint"
@@ -61,8 +67,10 @@ def test_mirrored_png_matches_mirrored(client: TestClient) -> None:
 
 
 def test_polygons_in_their_own_units(client: TestClient) -> None:
-    moved = {"type": "Polygon", "coordinates": [[[x + 1000, y + 500] for x, y in
-                                                 L_SHAPE["coordinates"][0]]]}
+    moved = {
+        "type": "Polygon",
+        "coordinates": [[[x + 1000, y + 500] for x, y in L_SHAPE["coordinates"][0]]],
+    }
     resp = client.post("/v1/match", json={"a": L_SHAPE, "b": moved})
     assert resp.status_code == 200, resp.text
     doc = resp.json()
@@ -75,8 +83,10 @@ def test_polygons_in_their_own_units(client: TestClient) -> None:
 
 def test_options_apply_to_both(client: TestClient) -> None:
     doc = post_pngs(client, HAMMER, BIRD, method="dce").json()
-    lib = skelprune.match(skelprune.prune(skelprune.io.read_mask(HAMMER), method="dce"),
-                          skelprune.prune(skelprune.io.read_mask(BIRD), method="dce"))
+    lib = skelprune.match(
+        skelprune.prune(skelprune.io.read_mask(HAMMER), method="dce"),
+        skelprune.prune(skelprune.io.read_mask(BIRD), method="dce"),
+    )
     assert doc["distance"] == lib.distance
 
 
@@ -89,8 +99,11 @@ def problem(resp, status: int, slug: str) -> dict:
 
 
 def test_errors(client: TestClient) -> None:
-    problem(client.post("/v1/match", files={"a": ("a.png", HAMMER, "image/png")}),
-            422, "validation-error")
+    problem(
+        client.post("/v1/match", files={"a": ("a.png", HAMMER, "image/png")}),
+        422,
+        "validation-error",
+    )
     problem(post_pngs(client, HAMMER, b"not a png"), 400, "invalid-image")
     problem(post_pngs(client, HAMMER, png(np.zeros((20, 20), bool))), 422, "empty-mask")
     ring = np.zeros((60, 60), np.uint8)
@@ -101,10 +114,19 @@ def test_errors(client: TestClient) -> None:
     assert "endpoint" in body["detail"]
     problem(post_pngs(client, HAMMER, BIRD, beta=-1), 422, "validation-error")
     problem(post_pngs(client, HAMMER, BIRD, overlay="true"), 422, "invalid-option")
-    problem(client.post("/v1/match", content=HAMMER, headers={"content-type": "image/png"}),
-            415, "unsupported-media-type")
+    problem(
+        client.post("/v1/match", content=HAMMER, headers={"content-type": "image/png"}),
+        415,
+        "unsupported-media-type",
+    )
     problem(client.post("/v1/match", json={"a": L_SHAPE}), 422, "validation-error")
-    problem(client.post("/v1/match", json={"a": L_SHAPE, "b": L_SHAPE, "beta": 3}),
-            422, "validation-error")
-    problem(client.post("/v1/match", json={"a": L_SHAPE, "b": L_SHAPE},
-                        params={"foreground": "zero"}), 422, "invalid-option")
+    problem(
+        client.post("/v1/match", json={"a": L_SHAPE, "b": L_SHAPE, "beta": 3}),
+        422,
+        "validation-error",
+    )
+    problem(
+        client.post("/v1/match", json={"a": L_SHAPE, "b": L_SHAPE}, params={"foreground": "zero"}),
+        422,
+        "invalid-option",
+    )

@@ -28,9 +28,11 @@ run: $(KERNELS)
 test: lint $(KERNELS)
 	$(BIN)/python -m pytest -q
 
-# ruff for the Python, shellcheck for the shell scripts CI runs
+# ruff (lint and format) for the Python, shellcheck for the shell scripts CI runs
+PY_SOURCES := skelprune service tests testkit benchmarks
 lint: $(STAMP)
-	$(BIN)/ruff check skelprune service tests testkit benchmarks
+	$(BIN)/ruff check $(PY_SOURCES)
+	$(BIN)/ruff format --check $(PY_SOURCES)
 	$(BIN)/shellcheck scripts/*.sh .ci/run
 
 bench: $(KERNELS)

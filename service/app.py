@@ -21,6 +21,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 from service import __version__, examples
 from service.errors import BodyTooLargeError, install_error_handlers, problem
 from service.jobs import warmup
+from service.match_job import MatchDocument, MatchPolygons
 from service.page import router as page_router
 from service.pool import WorkerPool
 from service.routes import router
@@ -151,7 +152,10 @@ def _openapi(app: FastAPI) -> Callable[[], dict[str, Any]]:
                     ok[media]["example"] = content["example"]
             components = schema.setdefault("components", {}).setdefault("schemas", {})
             _, defs = models_json_schema(
-                [(m, "validation") for m in (Problem, PruneDocument, SkeletonGeoJSON)],
+                [
+                    (m, "validation")
+                    for m in (Problem, PruneDocument, SkeletonGeoJSON, MatchDocument, MatchPolygons)
+                ],
                 ref_template=REF_TEMPLATE,
             )
             components.update(defs.get("$defs", {}))

@@ -36,6 +36,7 @@ from skelprune.errors import (
     InvalidPolygonError,
     SkelpruneError,
 )
+from skelprune.matching import UnmatchableShapeError
 
 __all__ = [
     "PROBLEMS",
@@ -91,6 +92,7 @@ PROBLEMS: dict[type[BaseException], Problem] = {
     EmptyMaskError: Problem(422, "empty-mask", "Empty mask"),
     InvalidPolygonError: Problem(422, "invalid-polygon", "Invalid polygon"),
     InvalidOptionError: Problem(422, "invalid-option", "Invalid option"),
+    UnmatchableShapeError: Problem(422, "unmatchable-shape", "Shape cannot be matched"),
     SkelpruneError: Problem(422, "invalid-input", "Invalid input"),
     BodyTooLargeError: Problem(413, "body-too-large", "Request body too large"),
     UnsupportedMediaTypeError: Problem(415, "unsupported-media-type", "Unsupported media type"),

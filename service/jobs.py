@@ -80,7 +80,7 @@ def warmup() -> str:
 
     The shape has a hole (the loop code paths) and a noisy boundary whose spurs the
     coarse stage removes (its code paths); ``coarse=None`` and ``method="dce"`` run
-    too, so that no job of any option meets a function still to be loaded.
+    too, and a match, so that no job of any option meets a function still to be loaded.
 
     Returns
     -------
@@ -100,6 +100,7 @@ def warmup() -> str:
         res.to_dict()
     res.to_geojson()
     res.overlay_png()
+    skelprune.match(res, res).to_dict()  # the matching kernels of POST /v1/match
     loaded, compiled = kernel_counts()
     took = f"{time.perf_counter() - t0:.1f} s"
     if compiled:

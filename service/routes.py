@@ -1,4 +1,5 @@
-"""HTTP endpoints: ``POST /v1/prune``, ``/healthz``, ``/readyz``, ``/metrics``."""
+"""HTTP endpoints: ``POST /v1/prune``, ``POST /v1/match``, ``/healthz``, ``/readyz``,
+``/metrics``."""
 
 from __future__ import annotations
 
@@ -16,6 +17,14 @@ from starlette.datastructures import QueryParams, UploadFile
 from service import examples
 from service.errors import NotAcceptableError, UnsupportedMediaTypeError
 from service.jobs import Job, Output, run_job
+from service.match_job import (
+    MATCH_DESCRIPTION,
+    MATCH_REQUEST_BODY,
+    MATCH_RESPONSES,
+    MatchJob,
+    MatchPolygons,
+    run_match_job,
+)
 from service.pool import PoolClosedError, PoolStartingError, QueueFullError, WorkerPool
 from service.schemas import (
     POLYGON_ONLY,
@@ -31,7 +40,7 @@ from skelprune.errors import InvalidOptionError
 from skelprune.io.png import check_png_size
 from skelprune.options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
 
-__all__ = ["job_function", "negotiate", "parse_query", "router"]
+__all__ = ["job_function", "match_function", "negotiate", "parse_query", "router"]
 
 router = APIRouter()
 
@@ -292,6 +301,131 @@ async def prune(
     request.app.state.metrics.prune_seconds.observe(result.prune_seconds)
     # The same URL answers in three formats: caches must key on Accept.
     return Response(result.body, media_type=result.media_type, headers={"Vary": "Accept"})
+
+
+async def match_function() -> Callable[[MatchJob], Any]:
+    """The worker-side function of ``/v1/match`` (a dependency, as :func:`job_function`)."""
+    return run_match_job
+
+
+async def _pngs_from_multipart(request: Request) -> tuple[bytes, bytes]:
+    async with request.form(max_files=2, max_fields=16) as form:
+        misplaced = sorted(k for k in form if k in QUERY_OPTIONS)
+        if misplaced:
+            raise InvalidOptionError(
+                f"option(s) {', '.join(misplaced)} sent as multipart fields; options go in "
+                "the query string"
+            )
+        missing = [k for k in ("a", "b") if not isinstance(form.get(k), UploadFile)]
+        if missing:
+            raise RequestValidationError(
+                [
+                    {
+                        "loc": ("body", k),
+                        "type": "missing",
+                        "msg": f"multipart field {k!r} with a PNG is required",
+                    }
+                    for k in missing
+                ]
+            )
+        a, b = form.get("a"), form.get("b")
+        assert isinstance(a, UploadFile) and isinstance(b, UploadFile)
+        return await a.read(), await b.read()
+
+
+def _parse_pair(body: bytes) -> tuple[dict[str, Any], dict[str, Any]]:
+    try:
+        parsed = MatchPolygons.model_validate_json(body)
+    except ValidationError as exc:
+        raise _validation(exc.errors(include_url=False), ("body",)) from None
+    return (
+        parsed.a.model_dump(mode="json", exclude_none=True),
+        parsed.b.model_dump(mode="json", exclude_none=True),
+    )
+
+
+@router.post(
+    "/v1/match",
+    summary="Match the skeletons of two shapes (path similarity)",
+    description=MATCH_DESCRIPTION,
+    response_class=Response,
+    responses={
+        **{k: v for k, v in examples.PRUNE_RESPONSES.items() if k not in (200, 406)},
+        **MATCH_RESPONSES,
+    },
+    openapi_extra={
+        "requestBody": MATCH_REQUEST_BODY,
+        "parameters": [
+            p
+            for p in query_parameters(PruneQuery)
+            if p["name"] not in {f.name for f in fields(OutputOptions)}
+        ],
+    },
+    tags=["match"],
+)
+async def match(
+    request: Request,
+    fn: Annotated[Callable[[MatchJob], Any], Depends(match_function)],
+) -> Response:
+    query = parse_query(request.query_params)
+    settings: Settings = request.app.state.settings
+    pool: WorkerPool = request.app.state.pool
+    ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    encoding = request.headers.get("content-encoding", "").strip().lower()
+    if encoding not in ("", "identity"):
+        raise UnsupportedMediaTypeError(
+            f"Content-Encoding {encoding!r} is not supported; send the body uncompressed"
+        )
+    body = await request.body()  # size-limited by BodyLimitMiddleware
+    pngs: tuple[bytes, bytes] | None = None
+    shapes: tuple[dict[str, Any], dict[str, Any]] | None = None
+    if ctype == "multipart/form-data":
+        pngs = await _pngs_from_multipart(request)
+        for png in pngs:
+            check_png_size(png, settings.max_pixels)
+    elif ctype in JSON_TYPES:
+        shapes = (
+            await asyncio.to_thread(_parse_pair, body)
+            if len(body) > BIG_JSON
+            else _parse_pair(body)
+        )
+    else:
+        raise UnsupportedMediaTypeError(
+            f"Content-Type {ctype or 'none'!r} is not supported; send multipart/form-data "
+            "(fields 'a' and 'b') or application/json ({\"a\": GeoJSON, \"b\": GeoJSON})"
+        )
+    opts = _options(query, None, polygon=shapes is not None)
+    unused = [k for k in _group(opts, OutputOptions)]
+    if unused:
+        raise InvalidOptionError(f"option(s) {', '.join(unused)} do not apply to /v1/match")
+    prune_options = PruneOptions(**_group(opts, PruneOptions))
+    read_options = ReadOptions(**_group(opts, ReadOptions))
+    raster: dict[str, Any] = {}
+    if shapes is not None:
+        given = _group(opts, RasterOptions)
+        if "pixel_size" not in given:
+            given.setdefault("longest_side", settings.polygon_longest_side)
+        raster = {**RasterOptions(**given).kwargs(), "max_vertices": settings.max_vertices}
+    inputs = (
+        [
+            Job(
+                output="json",
+                png=p,
+                max_pixels=settings.max_pixels,
+                foreground=read_options.foreground,
+            )
+            for p in pngs
+        ]
+        if pngs is not None
+        else [
+            Job(output="json", geojson=g, raster=raster, max_pixels=settings.max_pixels)
+            for g in shapes or ()
+        ]
+    )
+    job = MatchJob(a=inputs[0], b=inputs[1], prune_options=prune_options.kwargs())
+    result = await pool.run(fn, job)
+    request.app.state.metrics.prune_seconds.observe(result.prune_seconds)
+    return Response(result.body, media_type=result.media_type)
 
 
 @router.get(

@@ -21,6 +21,7 @@ from .errors import (
 )
 from .graph import BranchGraph
 from .io.frame import PixelFrame
+from .matching import Match, SkeletonDescriptor, UnmatchableShapeError, describe, match
 from .medial_axis import MedialAxis, medial_axis, squared_distance
 from .output.document import ComponentResult, PruneResult
 from .reconstruction import reconstruction, reconstruction_error
@@ -36,11 +37,16 @@ __all__ = [
     "InvalidImageError",
     "InvalidOptionError",
     "InvalidPolygonError",
+    "Match",
     "MedialAxis",
     "PixelFrame",
     "PruneResult",
+    "SkeletonDescriptor",
     "SkelpruneError",
+    "UnmatchableShapeError",
     "components",
+    "describe",
+    "match",
     "medial_axis",
     "prune",
     "reconstruction",

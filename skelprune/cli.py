@@ -1,8 +1,13 @@
-"""Command line: ``skelprune prune FILE.png [--beta B] [--overlay OUT.png]``, ``skelprune eval``.
+"""Command line: ``skelprune prune FILE.png [--beta B] [--overlay OUT.png]``, ``skelprune
+match A.png B.png``, ``skelprune retrieve FOLDER``, ``skelprune eval``.
 
 One file prints the output document (SPEC §3) as JSON. Several files, or a folder,
 are pruned in a pool of worker processes with a progress bar on stderr and print one
 JSON line per file: ``{"file": ..., "result": {...}}`` or ``{"file": ..., "error": ...}``.
+
+``skelprune match A.png B.png`` prints the path similarity of two shapes' skeletons
+(:func:`skelprune.match`); ``skelprune retrieve FOLDER [--top K]`` matches every shape with
+every other and prints one JSON line per shape with its ``K`` closest.
 
 ``skelprune eval --out docs`` regenerates the evaluation report, ``stability.md`` and the
 figures from the benchmark data (``skelprune.evaluation``; needs the ``bench`` extra).
@@ -18,6 +23,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
+import numpy as np
 import typer
 from typer.exceptions import TyperException
 
@@ -142,6 +148,127 @@ def prune_command(
         for line in tqdm(jobs, total=len(inputs), file=sys.stderr, unit="shape"):
             failed += "error" in line
             sys.stdout.write(json.dumps(line) + "\n")
+    if failed:
+        raise typer.Exit(1)
+
+
+def _describe_file(path: str, read: ReadOptions, options: PruneOptions) -> Any:
+    from .matching import describe
+
+    try:
+        return describe(_prune(path, read, options))
+    except (SkelpruneError, OSError) as exc:
+        return f"{type(exc).__name__}: {exc}"
+
+
+def _options_or_exit(
+    beta: float,
+    method: Any,
+    coarse: Any,
+    dce_threshold: float | None,
+    min_margin: float | None,
+    foreground: Any,
+) -> tuple[PruneOptions, ReadOptions]:
+    try:
+        return (
+            PruneOptions(
+                beta=beta,
+                method=method.value,
+                coarse=coarse.value,
+                dce_threshold=dce_threshold,
+                min_margin=min_margin,
+            ),
+            ReadOptions(foreground=foreground.value),
+        )
+    except SkelpruneError as exc:
+        typer.echo(f"error: {exc}", err=True)
+        raise typer.Exit(2) from None
+
+
+@app.command("match")
+def match_command(
+    a: Annotated[Path, typer.Argument(help="PNG mask a.")],
+    b: Annotated[Path, typer.Argument(help="PNG mask b.")],
+    beta: Annotated[float, typer.Option(help=HELP["beta"])] = PruneOptions.beta,
+    method: Annotated[Method, typer.Option(help=HELP["method"])] = Method(PruneOptions.method),
+    coarse: Annotated[Coarse, typer.Option(help=HELP["coarse"])] = Coarse("dce"),
+    dce_threshold: Annotated[float | None, typer.Option(help=HELP["dce_threshold"])] = None,
+    min_margin: Annotated[float | None, typer.Option(help=HELP["min_margin"])] = None,
+    foreground: Annotated[Rule, typer.Option(help=HELP["foreground"])] = Rule(
+        ReadOptions.foreground
+    ),
+) -> None:
+    """Match the skeletons of two shapes (path similarity) and print distance and
+    endpoint correspondence as JSON."""
+    from .matching import match
+
+    options, read = _options_or_exit(beta, method, coarse, dce_threshold, min_margin, foreground)
+    try:
+        res = match(_prune(str(a), read, options), _prune(str(b), read, options))
+    except (SkelpruneError, OSError) as exc:
+        typer.echo(f"error: {exc}", err=True)
+        raise typer.Exit(1) from None
+    json.dump(res.to_dict(), sys.stdout)
+    sys.stdout.write("\n")
+
+
+@app.command("retrieve")
+def retrieve_command(
+    folder: Annotated[list[Path], typer.Argument(help="Folders of PNG masks, or PNG files.")],
+    top: Annotated[int, typer.Option(min=1, help="Closest shapes listed per shape.")] = 10,
+    beta: Annotated[float, typer.Option(help=HELP["beta"])] = PruneOptions.beta,
+    method: Annotated[Method, typer.Option(help=HELP["method"])] = Method(PruneOptions.method),
+    coarse: Annotated[Coarse, typer.Option(help=HELP["coarse"])] = Coarse("dce"),
+    dce_threshold: Annotated[float | None, typer.Option(help=HELP["dce_threshold"])] = None,
+    min_margin: Annotated[float | None, typer.Option(help=HELP["min_margin"])] = None,
+    foreground: Annotated[Rule, typer.Option(help=HELP["foreground"])] = Rule(
+        ReadOptions.foreground
+    ),
+    workers: Annotated[int, typer.Option(help="Worker processes (0: one a core).")] = 0,
+) -> None:
+    """Match every shape with every other and print, per shape, its closest ones as JSON
+    lines: {"file", "top": [{"file", "distance"}, ...]} (or {"file", "error"})."""
+    from tqdm import tqdm
+
+    from .matching import distance_matrix
+
+    options, read = _options_or_exit(beta, method, coarse, dce_threshold, min_margin, foreground)
+    inputs = _expand(folder)
+    if not inputs:
+        typer.echo("error: no PNG file given", err=True)
+        raise typer.Exit(2)
+    n = workers or os.cpu_count() or 1
+    k = len(inputs)
+    with ProcessPoolExecutor(max_workers=n) as pool:
+        described = list(
+            tqdm(
+                pool.map(_describe_file, [str(p) for p in inputs], [read] * k, [options] * k),
+                total=k,
+                file=sys.stderr,
+                unit="shape",
+            )
+        )
+    good = [i for i, d in enumerate(described) if not isinstance(d, str)]
+    dist = distance_matrix([described[i] for i in good], workers=n)
+    np.fill_diagonal(dist, np.inf)
+    failed = 0
+    row = {i: r for r, i in enumerate(good)}
+    for i, path in enumerate(inputs):
+        if i not in row:
+            failed += 1
+            sys.stdout.write(json.dumps({"file": str(path), "error": described[i]}) + "\n")
+            continue
+        d = dist[row[i]]
+        order = np.argsort(d, kind="stable")[: min(top, len(good) - 1)]
+        sys.stdout.write(
+            json.dumps(
+                {
+                    "file": str(path),
+                    "top": [{"file": str(inputs[good[j]]), "distance": float(d[j])} for j in order],
+                }
+            )
+            + "\n"
+        )
     if failed:
         raise typer.Exit(1)
 

@@ -12,6 +12,8 @@ Writes ``evaluation.md``, ``stability.md`` and ``figures/*.png`` into one folder
 7. The baseline users would otherwise pick, in the same tables.
 8. Skeleton pixels against the SkelNetOn ground truth (precision, recall, F1 at 0-3 px)
    and a figure of the largest misses, when ``data/skelneton-dev`` is there.
+9. Table 3: retrieval by path similarity matching (``retrieval.md``,
+   :mod:`skelprune.evaluation.retrieval`).
 
 Numbers 1–3 come from one :func:`skelprune.evaluation.stability.run_stability` run (the same
 computation as ``benchmarks/bench_stability.py``). matplotlib is needed only here.
@@ -316,6 +318,12 @@ def _markdown(
             f"![methods]({figs['methods']})",
             "",
             *([groundtruth, ""] if groundtruth else []),
+            "## Table 3: retrieval",
+            "",
+            "Shape retrieval by path similarity skeleton matching on kimia216 (top 11) and "
+            "kimia99 (top 10), every method, and with perturbed queries: "
+            "[retrieval.md](retrieval.md).",
+            "",
             "## Fig. 3: the pruning curve",
             "",
             "α·AR, LR and λ over the removal steps of the default method; the chosen skeleton "
@@ -375,7 +383,8 @@ def run_evaluation(
     Returns
     -------
     dict
-        ``{"evaluation": path, "stability": path, "margin": path, <figure key>: path, ...}``.
+        ``{"evaluation": path, "stability": path, "margin": path, "retrieval": path,
+        <figure key>: path, ...}``.
     """
     data = default_data_dir() if data is None else Path(data)
     out = Path(out)
@@ -418,10 +427,15 @@ def run_evaluation(
 
     margins = run_margins(sets, seed=seed, workers=workers, progress=progress)
     (out / "margin.md").write_text(margin_markdown(margins, command))
+    from .retrieval import retrieval_markdown, run_retrieval
+
+    retrieval = run_retrieval(sets, workers=workers, seed=seed)
+    (out / "retrieval.md").write_text(retrieval_markdown(retrieval, command))
     written = {
         "evaluation": out / "evaluation.md",
         "stability": out / "stability.md",
         "margin": out / "margin.md",
+        "retrieval": out / "retrieval.md",
     }
     written.update({k: out / v for k, v in figs.items()})
     return written

@@ -1,0 +1,159 @@
+"""``POST /v1/match``: the request model, the job a worker runs, and the answer's schema."""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from service.examples import SQUARE_POLYGON
+from service.jobs import Job, _mask
+from service.schemas import GeoJSONInput
+
+__all__ = [
+    "MATCH_DESCRIPTION",
+    "MATCH_REQUEST_BODY",
+    "MATCH_RESPONSES",
+    "MatchDocument",
+    "MatchJob",
+    "MatchPolygons",
+    "run_match_job",
+]
+
+
+class MatchPolygons(BaseModel):
+    """Two GeoJSON shapes to match (options go in the query)."""
+
+    model_config = ConfigDict(strict=True, extra="forbid")
+    a: GeoJSONInput
+    b: GeoJSONInput
+
+
+class MatchedEndpoint(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    component: int = Field(
+        description="Component of the shape whose skeleton is matched (the largest)."
+    )
+    node: int = Field(
+        description="Node id in that component's skeleton, as `POST /v1/prune` numbers them."
+    )
+    x: float
+    y: float
+
+
+class MatchedPair(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    a: MatchedEndpoint
+    b: MatchedEndpoint
+
+
+class MatchDocument(BaseModel):
+    """Path similarity of two skeletons (see docs/matching.md)."""
+
+    model_config = ConfigDict(extra="forbid")
+    distance: float = Field(ge=0, description="0 for the same skeleton; symmetric.")
+    mirrored: bool = Field(
+        description="The correspondence runs along b's boundary in the "
+        "opposite sense (as for a mirror image)."
+    )
+    endpoints: list[int] = Field(
+        min_length=2, max_length=2, description="Endpoint counts of a and b."
+    )
+    correspondence: list[MatchedPair]
+
+
+@dataclass(frozen=True)
+class MatchJob:
+    """Two shapes to prune and match, as sent to a worker (picklable)."""
+
+    a: Job
+    b: Job
+    prune_options: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class MatchResult:
+    body: bytes
+    media_type: str
+    prune_seconds: float
+
+
+def run_match_job(job: MatchJob) -> MatchResult:
+    """Decode both inputs, prune them and answer the match as JSON."""
+    import skelprune
+
+    (ma, frame_a, _), (mb, frame_b, _) = _mask(job.a), _mask(job.b)
+    t0 = time.perf_counter()
+    ra = skelprune.prune(ma, **job.prune_options)
+    rb = skelprune.prune(mb, **job.prune_options)
+    elapsed = time.perf_counter() - t0
+    res = skelprune.match(ra, rb)
+    frames = {k: f for k, f in (("frame_a", frame_a), ("frame_b", frame_b)) if f is not None}
+    body = json.dumps(res.to_dict(**frames), separators=(",", ":"), allow_nan=False).encode()
+    return MatchResult(body=body, media_type="application/json", prune_seconds=elapsed)
+
+
+MATCH_DESCRIPTION = """
+Match the skeletons of two shapes by path similarity (Bai & Latecki 2008): the distance
+(0 for the same skeleton, symmetric, unchanged by turning, mirroring and scaling up to
+what pixels change) and which endpoint of `a` corresponds to which of `b`.
+
+**Input** (by `Content-Type`):
+- `multipart/form-data`: two PNG masks in the fields `a` and `b`;
+- `application/json`: `{"a": <GeoJSON>, "b": <GeoJSON>}`, each a `Polygon`,
+  `MultiPolygon`, `Feature` or `FeatureCollection`; positions in the answer are in each
+  polygon's own frame.
+
+Pruning options (`beta`, `method`, `coarse`, …) go in the query and apply to both
+shapes; so do `foreground` (PNG) and the raster options (polygons). Each shape's largest
+component is matched. A skeleton with fewer than two endpoints (a ring, a disk reduced
+to a point) cannot be matched: 422 `unmatchable-shape`.
+"""
+
+MATCH_REQUEST_BODY: dict[str, Any] = {
+    "required": True,
+    "content": {
+        "multipart/form-data": {
+            "schema": {
+                "type": "object",
+                "required": ["a", "b"],
+                "properties": {
+                    "a": {"type": "string", "format": "binary", "description": "PNG mask a."},
+                    "b": {"type": "string", "format": "binary", "description": "PNG mask b."},
+                },
+            },
+            "encoding": {"a": {"contentType": "image/png"}, "b": {"contentType": "image/png"}},
+        },
+        "application/json": {
+            "schema": {"$ref": "#/components/schemas/MatchPolygons"},
+            "example": {"a": SQUARE_POLYGON, "b": SQUARE_POLYGON},
+        },
+    },
+}
+
+MATCH_EXAMPLE = {
+    "distance": 0.0,
+    "mirrored": False,
+    "endpoints": [4, 4],
+    "correspondence": [
+        {
+            "a": {"component": 0, "node": 2, "x": 1.0, "y": 1.0},
+            "b": {"component": 0, "node": 2, "x": 1.0, "y": 1.0},
+        },
+    ],
+}
+
+MATCH_RESPONSES: dict[int | str, dict[str, Any]] = {
+    200: {
+        "description": "The distance and the endpoint correspondence.",
+        "content": {
+            "application/json": {
+                "schema": {"$ref": "#/components/schemas/MatchDocument"},
+                "example": MATCH_EXAMPLE,
+            }
+        },
+    },
+}

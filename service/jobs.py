@@ -13,7 +13,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from skelprune.errors import InvalidImageError
+from skelprune.errors import InvalidImageError, SkelpruneError
 from skelprune.io import read_shape
 from skelprune.io.foreground import POLYGON_FOREGROUND, Foreground
 from skelprune.io.frame import PixelFrame
@@ -113,5 +113,10 @@ def run_job(job: Job) -> JobResult:
 
 
 def _dumps(doc: Any) -> bytes:
-    # allow_nan=False: a NaN would be invalid JSON; better a loud failure than a bad body.
-    return json.dumps(doc, separators=(",", ":"), allow_nan=False).encode()
+    # allow_nan=False: a NaN would be invalid JSON. The input checks keep every number
+    # finite; should one still overflow, the caller hears why (422), not "internal error".
+    try:
+        return json.dumps(doc, separators=(",", ":"), allow_nan=False).encode()
+    except ValueError:
+        raise SkelpruneError("the answer would hold a number JSON cannot write (an "
+                                "overflow); scale the input coordinates down") from None

@@ -10,10 +10,11 @@ import sys
 from types import FrameType
 
 import uvicorn
+from pydantic import ValidationError
 
 from service.logs import logging_config
 from service.numba_seed import seed_numba_cache
-from service.settings import Settings
+from service.settings import Settings, settings_error
 
 
 def _exit_cleanly(signum: int, frame: FrameType | None) -> None:
@@ -23,7 +24,11 @@ def _exit_cleanly(signum: int, frame: FrameType | None) -> None:
 def main() -> None:
     """Read the settings from the environment and run uvicorn (one process; the
     pruning work is spread over the app's own worker pool)."""
-    settings = Settings()
+    try:
+        settings = Settings()
+    except ValidationError as exc:  # one line naming the variable, not a traceback
+        print(f"error: {settings_error(exc)}", file=sys.stderr)
+        sys.exit(2)
     logging.config.dictConfig(logging_config(settings.log_level))  # uvicorn sets it again
     cache = os.environ.get("NUMBA_CACHE_DIR")
     if settings.numba_cache_seed and cache:

@@ -55,6 +55,10 @@ DOCUMENT_EXAMPLE: dict[str, Any] = {
 
 GEOJSON_EXAMPLE: dict[str, Any] = {
     "type": "FeatureCollection",
+    "properties": {"width": 64, "height": 48, "method": "bayesian", "beta": 9.0,
+                   "coarse": "dce", "components": [
+                       {"component": 0, "area": 1200, "alpha": 9.48, "rer": 0.0042,
+                        "ss": 1.79, "objective": 1.83}]},
     "features": [
         {"type": "Feature",
          "geometry": {"type": "LineString",
@@ -62,9 +66,10 @@ GEOJSON_EXAMPLE: dict[str, Any] = {
                                       [10.0, 10.0], [9.0, 9.0], [8.0, 8.0], [7.0, 7.0]]},
          "properties": {"component": 0, "kind": "branch", "id": 0, "source": 0, "target": 1,
                         "length": 9.9, "radii": [10.0, 9.0, 8.0, 7.0, 6.0, 5.0, 4.0, 3.0],
-                        "margin": 0.046, "removed_at": 1}},
+                        "margin": 0.046, "removed_at": 1, "rer": 0.0042, "ss": 1.79}},
         {"type": "Feature", "geometry": {"type": "Point", "coordinates": [7.0, 7.0]},
-         "properties": {"component": 0, "kind": "endpoint", "id": 1, "radius": 3.0}},
+         "properties": {"component": 0, "kind": "endpoint", "id": 1, "radius": 3.0,
+                        "rer": 0.0042, "ss": 1.79}},
     ],
 }
 
@@ -111,6 +116,16 @@ UNAUTHORIZED["headers"] = {"WWW-Authenticate": {
 PRUNE_RESPONSES: dict[int | str, dict[str, Any]] = {
     200: {
         "description": "The pruned skeleton, in the format chosen by `Accept`.",
+        "headers": {
+            f"X-Skelprune-{name}": {
+                "description": f"`image/png` answers only: {what}, one value a component, "
+                               "comma-separated, in the document's order.",
+                "schema": {"type": "string"}}
+            for name, what in (("Components", "the number of components (one value)"),
+                               ("RER", "each component's `rer`"),
+                               ("SS", "each component's `ss`"),
+                               ("Objective", "each component's `objective`"))
+        },
         "content": {
             "application/json": {"schema": {"$ref": REF + "PruneDocument"},
                                  "example": DOCUMENT_EXAMPLE},

@@ -50,13 +50,20 @@ class Job:
     foreground: str = "auto"
 
 
+#: Response headers of the PNG answer: one value a component, comma-separated, in the
+#: document's order (``repr`` of the float: it reads back exactly).
+PNG_HEADERS = {"X-Skelprune-RER": "rer", "X-Skelprune-SS": "ss",
+               "X-Skelprune-Objective": "objective"}
+
+
 @dataclass(frozen=True)
 class JobResult:
-    """Serialised response body and the time spent in the library."""
+    """Serialised response body, its headers and the time spent in the library."""
 
     body: bytes
     media_type: str
     prune_seconds: float
+    headers: dict[str, str] = field(default_factory=dict)
 
 
 def warmup() -> None:
@@ -103,13 +110,18 @@ def run_job(job: Job) -> JobResult:
     elapsed = time.perf_counter() - t0
     res.foreground = taken
     framing = {} if frame is None else {"frame": frame}  # None: the image's own pixel frame
+    headers: dict[str, str] = {}
     if job.output == "png":
         body = res.overlay_png()
+        headers = {name: ",".join(repr(float(getattr(c, key))) for c in res.components)
+                   for name, key in PNG_HEADERS.items()}
+        headers["X-Skelprune-Components"] = str(len(res.components))
     elif job.output == "geojson":
         body = _dumps(res.to_geojson(**framing))
     else:
         body = _dumps(res.to_dict(curve=job.curve, overlay=job.overlay, **framing))
-    return JobResult(body=body, media_type=MEDIA_TYPES[job.output], prune_seconds=elapsed)
+    return JobResult(body=body, media_type=MEDIA_TYPES[job.output], prune_seconds=elapsed,
+                     headers=headers)
 
 
 def _dumps(doc: Any) -> bytes:

@@ -15,7 +15,7 @@ from starlette.datastructures import QueryParams, UploadFile
 
 from service import examples
 from service.errors import NotAcceptableError, UnsupportedMediaTypeError
-from service.jobs import Job, Output, run_job
+from service.jobs import MEDIA_TYPES, Job, Output, run_job
 from service.pool import PoolClosedError, QueueFullError, WorkerPool
 from service.schemas import (
     POLYGON_ONLY,
@@ -45,6 +45,11 @@ JSON_TYPES = ("application/json", "application/geo+json")
 PNG_ONLY = tuple(f.name for f in fields(ReadOptions))
 BIG_JSON = 256 * 1024  # bytes of JSON above which validation moves to a thread
 QUERY_OPTIONS = frozenset(PruneQuery.model_fields)  # no aliases: field name = parameter
+#: Options of the JSON document only: refused with Accept: image/png or geo+json.
+JSON_ONLY = ("curve", "overlay")
+#: Tags of the JSON body's union: pydantic puts them in error locations, the user's body
+#: has no such level.
+BODY_TAGS = frozenset({"Polygon", "MultiPolygon", "Feature", "FeatureCollection", "job"})
 
 
 def negotiate(accept: str | None) -> Output:
@@ -133,7 +138,9 @@ def parse_query(params: QueryParams) -> PruneQuery:
         raise _validation(exc.errors(include_url=False), ("query",)) from None
 
 
-def _options(query: PruneQuery, body: PolygonJob | None, polygon: bool) -> dict[str, Any]:
+def _options(query: PruneQuery, body: Any, polygon: bool, output: Output) -> dict[str, Any]:
+    """The request's options: the query's and the body's (JSON envelope or multipart
+    fields), each given once, each where it applies."""
     opts = {k: v for k, v in query.model_dump().items() if v is not None}
     if body is not None:
         for key, value in body.model_dump(exclude={"geojson"}).items():
@@ -142,6 +149,12 @@ def _options(query: PruneQuery, body: PolygonJob | None, polygon: bool) -> dict[
             if key in opts:
                 raise InvalidOptionError(f"option {key!r} is given both in the query and the body")
             opts[key] = value
+    if output != "json":
+        misplaced = [k for k in JSON_ONLY if k in opts]
+        if misplaced:
+            raise InvalidOptionError(
+                f"option(s) {', '.join(misplaced)} only apply to the JSON document "
+                f"(Accept: application/json), not to the {MEDIA_TYPES[output]} answer")
     if not polygon:
         misplaced = [k for k in POLYGON_ONLY if k in opts]
         if misplaced:
@@ -163,32 +176,51 @@ def _group(opts: dict[str, Any], group: type) -> dict[str, Any]:
     return {f.name: opts[f.name] for f in fields(group) if f.name in opts}
 
 
+def _body_errors(errors: list[Any]) -> list[dict[str, Any]]:
+    """Validation errors located in the user's body, without pydantic's union tags."""
+    shown = []
+    for e in errors:
+        loc = tuple(p for p in e.get("loc", ()) if p not in BODY_TAGS)
+        if e.get("type") == "union_tag_invalid":
+            given = (e.get("ctx") or {}).get("tag")
+            e = {**e, "msg": f"GeoJSON type {given!r} is not accepted: send a Polygon, "
+                 "MultiPolygon, Feature or FeatureCollection, or "
+                 '{"geojson": <one of those>, <options>}'}
+        elif e.get("type") == "model_type":  # pydantic names the model class here
+            e = {**e, "msg": "Input should be a JSON object"}
+        shown.append({**e, "loc": loc})
+    return shown
+
+
 def _parse_polygon(body: bytes) -> tuple[PolygonJob | None, dict[str, Any]]:
     """Validate a JSON body: (envelope with options or None, GeoJSON as plain data)."""
     try:
         parsed = polygon_request_adapter.validate_json(body)
     except ValidationError as exc:
-        raise _validation(exc.errors(include_url=False), ("body",)) from None
+        raise _validation(_body_errors(exc.errors(include_url=False)), ("body",)) from None
     envelope = parsed if isinstance(parsed, PolygonJob) else None
     shape = parsed.geojson if envelope is not None else parsed
     return envelope, shape.model_dump(mode="json", exclude_none=True)
 
 
-async def _png_from_multipart(request: Request) -> bytes:
+async def _png_from_multipart(request: Request) -> tuple[bytes, PruneQuery]:
+    """The PNG of the field ``file`` and the options sent as the other fields."""
     async with request.form(max_files=1, max_fields=16) as form:
         upload = form.get("file")
-        # An option sent as a form field would otherwise be silently ignored.
-        misplaced = sorted(k for k in form if k in QUERY_OPTIONS)
-        if misplaced:
-            raise InvalidOptionError(
-                f"option(s) {', '.join(misplaced)} sent as multipart fields; options go in "
-                "the query string")
         if not isinstance(upload, UploadFile):
             raise RequestValidationError([{
                 "loc": ("body", "file"), "type": "missing",
                 "msg": "multipart field 'file' with the PNG is required",
             }])
-        return await upload.read()
+        # The other fields are options, read as the query's are (unknown ones refused).
+        fields = QueryParams([(k, v) for k, v in form.multi_items()
+                              if k != "file" and isinstance(v, str)])
+        try:
+            options = parse_query(fields)
+        except RequestValidationError as exc:
+            raise RequestValidationError(
+                [{**e, "loc": ("body", *e["loc"][1:])} for e in exc.errors()]) from None
+        return await upload.read(), options
 
 
 PRUNE_DESCRIPTION = """
@@ -235,9 +267,13 @@ async def prune(
         )
     body = await request.body()  # size-limited by BodyLimitMiddleware
     if ctype in ("image/png", "multipart/form-data"):
-        png = body if ctype == "image/png" else await _png_from_multipart(request)
+        envelope = None
+        if ctype == "image/png":
+            png = body
+        else:
+            png, envelope = await _png_from_multipart(request)
         check_png_size(png, settings.max_pixels)  # refused before it is queued
-        geojson, envelope = None, None
+        geojson = None
     elif ctype in JSON_TYPES:
         # A big polygon takes a while to validate: off the event loop, so that other
         # requests (health checks included) keep being served meanwhile.
@@ -252,7 +288,7 @@ async def prune(
             f"Content-Type {shown!r} is not supported; send image/png, multipart/form-data "
             "(field 'file') or application/json (GeoJSON)"
         )
-    opts = _options(query, envelope, polygon=geojson is not None)
+    opts = _options(query, envelope, polygon=geojson is not None, output=output)
     # The library's option classes check the values (the only place they are checked).
     prune_options = PruneOptions(**_group(opts, PruneOptions))
     output_options = OutputOptions(**_group(opts, OutputOptions))
@@ -271,7 +307,8 @@ async def prune(
     result = await pool.run(fn, job)
     request.app.state.metrics.prune_seconds.observe(result.prune_seconds)
     # The same URL answers in three formats: caches must key on Accept.
-    return Response(result.body, media_type=result.media_type, headers={"Vary": "Accept"})
+    return Response(result.body, media_type=result.media_type,
+                    headers={"Vary": "Accept", **result.headers})
 
 
 @router.get(

@@ -314,6 +314,8 @@ class BranchProperties(BaseModel):
     radii: list[float]
     margin: float | None
     removed_at: int | None
+    rer: float = Field(description="RER of the feature's component.")
+    ss: float = Field(description="SS of the feature's component.")
 
 
 class NodeProperties(BaseModel):
@@ -322,6 +324,8 @@ class NodeProperties(BaseModel):
     kind: Literal["endpoint", "junction", "loop"]
     id: int
     radius: float
+    rer: float = Field(description="RER of the feature's component.")
+    ss: float = Field(description="SS of the feature's component.")
 
 
 class BranchFeature(BaseModel):
@@ -338,11 +342,34 @@ class NodeFeature(BaseModel):
     properties: NodeProperties
 
 
+class ComponentSummary(BaseModel):
+    model_config = STRICT
+    component: int
+    area: int
+    alpha: float | None
+    rer: float
+    ss: float
+    objective: float
+
+
+class CollectionProperties(BaseModel):
+    """The document's options and numbers (a foreign member of the collection)."""
+
+    model_config = STRICT
+    width: int
+    height: int
+    method: Literal["bayesian", "dce"]
+    beta: float
+    coarse: Literal["dce"] | None
+    components: list[ComponentSummary]
+
+
 class SkeletonGeoJSON(BaseModel):
     """The skeleton as GeoJSON: branches as LineStrings, nodes as Points."""
 
     model_config = STRICT
     type: Literal["FeatureCollection"]
+    properties: CollectionProperties
     features: list[BranchFeature | NodeFeature]
 
 

@@ -275,10 +275,21 @@ class PruneResult:
         return doc
 
     def to_geojson(self, frame: PixelFrame = IDENTITY) -> dict[str, Any]:
-        """GeoJSON FeatureCollection: branches as LineStrings, nodes as Points."""
+        """GeoJSON FeatureCollection: branches as LineStrings, nodes as Points.
+
+        Every feature's properties carry its component's ``rer`` and ``ss``; the
+        collection's ``properties`` (a foreign member) the document's options and each
+        component's ``area``, ``alpha``, ``rer``, ``ss`` and ``objective``.
+        """
         features: list[dict[str, Any]] = []
-        for ci, comp in enumerate(self.to_dict(curve=False, frame=frame)["components"]):
+        doc = self.to_dict(curve=False, frame=frame)
+        summaries = []
+        for ci, comp in enumerate(doc["components"]):
             sk = comp["skeleton"]
+            # on every feature too: GIS tools show a feature's properties, not the collection's
+            numbers = {"rer": comp["rer"], "ss": comp["ss"]}
+            summaries.append({"component": ci, "area": comp["area"], "alpha": comp["alpha"],
+                              **numbers, "objective": comp["objective"]})
             for br in sk["branches"]:
                 line = branch_line(sk, br)
                 features.append({
@@ -288,16 +299,20 @@ class PruneResult:
                     "properties": {"component": ci, "kind": "branch", "id": br["id"],
                                    "source": br["source"], "target": br["target"],
                                    "length": br["length"], "radii": [r for *_, r in line],
-                                   "margin": br["margin"], "removed_at": br["removed_at"]},
+                                   "margin": br["margin"], "removed_at": br["removed_at"],
+                                   **numbers},
                 })
             for nd in sk["nodes"]:
                 features.append({
                     "type": "Feature",
                     "geometry": {"type": "Point", "coordinates": [nd["x"], nd["y"]]},
                     "properties": {"component": ci, "kind": nd["kind"], "id": nd["id"],
-                                   "radius": nd["radius"]},
+                                   "radius": nd["radius"], **numbers},
                 })
-        return {"type": "FeatureCollection", "features": features}
+        # A foreign member of the collection (RFC 7946 §6.1): the document's numbers.
+        properties = {k: doc[k] for k in ("width", "height", "method", "beta", "coarse")}
+        return {"type": "FeatureCollection",
+                "properties": {**properties, "components": summaries}, "features": features}
 
     def to_networkx(self, frame: PixelFrame = IDENTITY) -> Any:
         """The skeleton as a ``networkx.MultiGraph`` (needs the optional ``networkx``).

@@ -2,36 +2,41 @@
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
-STAMP  := $(VENV)/.installed
 
 .PHONY: setup run test lint bench eval openapi clean
 
-$(STAMP): pyproject.toml
+# One stamp per set of extras: `make run` installs only what serving needs, `make test`
+# and `make bench` add theirs to the same .venv (pip keeps what is already there).
+$(VENV)/.installed-%: pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[service,test,bench]'
-	touch $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[$(subst +,$(comma),$*)]'
+	touch $@
 
-setup: $(STAMP)
+comma := ,
+SERVE := $(VENV)/.installed-service
+TESTS := $(VENV)/.installed-service+test
+BENCH := $(VENV)/.installed-service+test+bench
 
-run: $(STAMP)
+setup: $(BENCH)
+
+run: $(SERVE)
 	$(BIN)/python -m service
 
 test: lint
 	$(BIN)/python -m pytest -q
 
-# ruff for the Python, shellcheck for the shell scripts CI runs
-lint: $(STAMP)
+lint: $(TESTS)
 	$(BIN)/ruff check skelprune service tests benchmarks
 	$(BIN)/shellcheck scripts/*.sh .ci/run
 
-bench: $(STAMP)
+bench: $(BENCH)
 	$(BIN)/python -m benchmarks
 
-eval: $(STAMP)
+eval: $(BENCH)
 	$(BIN)/skelprune eval --out docs
 
-openapi: $(STAMP)
+openapi: $(SERVE)
 	$(BIN)/python -m service.openapi_md > openapi.md
 
 clean:

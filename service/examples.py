@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from skelprune import ALGORITHM_VERSION, __version__
+
 __all__ = [
     "METRICS_EXAMPLE",
     "PRUNE_REQUEST_BODY",
@@ -24,6 +26,7 @@ SQUARE_POLYGON = {
 }
 
 DOCUMENT_EXAMPLE: dict[str, Any] = {
+    "version": {"library": __version__, "algorithm": ALGORITHM_VERSION},
     "width": 60, "height": 30, "method": "bayesian", "beta": 9.0, "coarse": "dce",
     "foreground": {"rule": "auto", "shape": "light", "threshold": 127.5, "border": 1.0},
     "components": [{

@@ -1,4 +1,5 @@
-"""HTTP endpoints: ``POST /v1/prune``, ``/healthz``, ``/readyz``, ``/metrics``."""
+"""HTTP endpoints: ``POST /v1/prune``, ``/healthz``, ``/readyz``, ``/metrics``,
+``/v1/version``."""
 
 from __future__ import annotations
 
@@ -23,10 +24,12 @@ from service.schemas import (
     PolygonJob,
     PruneQuery,
     Readiness,
+    Version,
     polygon_request_adapter,
     query_parameters,
 )
 from service.settings import Settings
+from skelprune import ALGORITHM_VERSION, __version__
 from skelprune.errors import InvalidOptionError
 from skelprune.io.png import check_png_size
 from skelprune.options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
@@ -313,10 +316,21 @@ async def prune(
 
 @router.get(
     "/healthz", response_model=Health, summary="Liveness: the process answers", tags=["ops"],
-    responses={200: {"content": {"application/json": {"example": {"status": "ok"}}}}},
+    responses={200: {"content": {"application/json": {"example": {
+        "status": "ok", "version": __version__, "algorithm": ALGORITHM_VERSION}}}}},
 )
 async def healthz() -> Health:
-    return Health(status="ok")
+    return Health(status="ok", version=__version__, algorithm=ALGORITHM_VERSION)
+
+
+@router.get(
+    "/v1/version", response_model=Version, summary="Versions of the service and its results",
+    responses={200: {"content": {"application/json": {"example": {
+        "service": __version__, "library": __version__, "algorithm": ALGORITHM_VERSION}}}}},
+    tags=["ops"],
+)
+async def version() -> Version:
+    return Version(service=__version__, library=__version__, algorithm=ALGORITHM_VERSION)
 
 
 @router.get(

@@ -37,6 +37,7 @@ __all__ = [
     "PruneQuery",
     "Readiness",
     "SkeletonGeoJSON",
+    "Version",
     "polygon_request_adapter",
     "query_parameters",
 ]
@@ -275,10 +276,20 @@ class ForegroundTaken(BaseModel):
         description="Share of the image border on the background side (auto, grey values).")
 
 
-class PruneDocument(BaseModel):
-    """The output document of SPEC §3."""
+class Versions(BaseModel):
+    """What made an answer."""
 
     model_config = STRICT
+    library: str = Field(description="The skelprune package version.")
+    algorithm: str = Field(description="The results' version: it changes whenever the same "
+                           "input and options may give a different skeleton or numbers.")
+
+
+class PruneDocument(BaseModel):
+    """The output document."""
+
+    model_config = STRICT
+    version: Versions
     width: int
     height: int
     method: Literal["bayesian", "dce"]
@@ -399,6 +410,17 @@ class Problem(BaseModel):
 class Health(BaseModel):
     model_config = STRICT
     status: Literal["ok"]
+    version: str = Field(description="The service version.")
+    algorithm: str = Field(description="The results' version (see GET /v1/version).")
+
+
+class Version(BaseModel):
+    model_config = STRICT
+    service: str = Field(description="The service version (the skelprune package's).")
+    library: str = Field(description="The skelprune library version.")
+    algorithm: str = Field(description="The results' version: it changes whenever the same "
+                           "input and options may give a different skeleton or numbers, "
+                           "and only then.")
 
 
 class Readiness(BaseModel):

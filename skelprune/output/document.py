@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from .._orientation import Orientation
+from .._version import ALGORITHM_VERSION, __version__
 from ..graph import BranchGraph
 from ..io.foreground import Foreground
 from ..io.frame import IDENTITY, PixelFrame
@@ -269,6 +270,7 @@ class PruneResult:
             "beta": float(self.beta), "coarse": self.coarse,
             "foreground": self.foreground.to_dict(),
             "components": [c.to_dict(curve=curve, frame=frame) for c in self.components],
+            "version": {"library": __version__, "algorithm": ALGORITHM_VERSION},
         }
         if overlay:
             doc["overlay_png"] = base64.b64encode(self.overlay_png()).decode("ascii")

@@ -336,7 +336,7 @@ def test_framework_errors_are_problems(client: TestClient) -> None:
 
 # --------------------------------------------------------------------------- ops
 def test_health_ready_metrics(client: TestClient) -> None:
-    assert client.get("/healthz").json() == {"status": "ok"}
+    assert client.get("/healthz").json()["status"] == "ok"
     ready = Readiness.model_validate(client.get("/readyz").json())
     assert ready.workers == 2 and ready.queue_size == 8 and ready.queued == 0
     post_png(client, BIRD)

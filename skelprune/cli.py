@@ -1,6 +1,8 @@
-"""Command line: ``skelprune prune FILE.png [--beta B] [--overlay OUT.png]``, ``skelprune eval``.
+"""Command line: ``skelprune prune FILE [--beta B] [--overlay OUT.png]``, ``skelprune eval``.
 
-One file prints the output document (SPEC §3) as JSON. Several files, or a folder,
+A FILE is a PNG mask or a GeoJSON polygon (``.geojson``/``.json``: a Polygon,
+MultiPolygon, Feature or FeatureCollection, rasterised as the service does it).
+One file prints the output document as JSON. Several files, or a folder,
 are pruned in a pool of worker processes with a progress bar on stderr and print one
 JSON line per file: ``{"file": ..., "result": {...}}`` or ``{"file": ..., "error": ...}``.
 
@@ -19,15 +21,17 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
+import typer.core
 from typer.exceptions import TyperException
 
-from .errors import SkelpruneError
+from .errors import InvalidPolygonError, SkelpruneError
 from .options import (
     COARSE,
     FOREGROUND_RULES,
     METHODS,
     OutputOptions,
     PruneOptions,
+    RasterOptions,
     ReadOptions,
     option_fields,
 )
@@ -39,20 +43,57 @@ app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Parameter-free Bayesian skeleton pruning.")
 
 
-def _prune(path: str, read: ReadOptions, options: PruneOptions) -> PruneResult:
-    from .api import prune
-    from .io import read_shape
+def _print_version(value: bool) -> None:
+    if value:
+        from . import __version__
 
-    mask, taken = read_shape(path, foreground=read.foreground)
+        typer.echo(__version__)
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    version: Annotated[bool, typer.Option("--version", is_eager=True, callback=_print_version,
+                                          help="Print the version and exit.")] = False,
+) -> None:
+    """Parameter-free Bayesian skeleton pruning."""
+
+
+#: File name endings read as GeoJSON polygons (any case); anything else is read as a PNG.
+GEOJSON_SUFFIXES = (".geojson", ".json")
+#: What a folder is searched for (any case).
+FOLDER_SUFFIXES = (".png", ".geojson")
+
+
+def _prune(path: str, read: ReadOptions, options: PruneOptions, raster: RasterOptions,
+           curve: bool) -> tuple[PruneResult, dict[str, Any]]:
+    """The result and its document (a polygon's in the polygon's own coordinates)."""
+    from .api import prune
+
+    framing: dict[str, Any] = {}
+    if path.lower().endswith(GEOJSON_SUFFIXES):
+        from .io.foreground import POLYGON_FOREGROUND
+        from .io.polygon import polygon_mask
+
+        try:
+            shape = json.loads(Path(path).read_bytes())
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise InvalidPolygonError(f"not a GeoJSON file: {exc}") from None
+        mask, framing["frame"] = polygon_mask(shape, **raster.kwargs())
+        taken = POLYGON_FOREGROUND
+    else:
+        from .io import read_shape
+
+        mask, taken = read_shape(path, foreground=read.foreground)
     res = prune(mask, **options.kwargs())
     res.foreground = taken
-    return res
+    return res, res.to_dict(curve=curve, **framing)
 
 
-def _prune_file(path: str, read: ReadOptions, options: PruneOptions,
+def _prune_file(path: str, read: ReadOptions, options: PruneOptions, raster: RasterOptions,
                 curve: bool) -> dict[str, Any]:
     try:
-        return {"file": path, "result": _prune(path, read, options).to_dict(curve=curve)}
+        return {"file": path, "result": _prune(path, read, options, raster, curve)[1]}
     except (SkelpruneError, OSError) as exc:
         return {"file": path, "error": f"{type(exc).__name__}: {exc}"}
 
@@ -60,21 +101,58 @@ def _prune_file(path: str, read: ReadOptions, options: PruneOptions,
 def _expand(paths: list[Path]) -> list[Path]:
     files: list[Path] = []
     for p in paths:
-        files.extend(sorted(p.glob("*.png")) if p.is_dir() else [p])
+        if p.is_dir():  # shape.PNG counts as much as shape.png
+            files.extend(sorted(f for f in p.iterdir()
+                                if f.suffix.lower() in FOLDER_SUFFIXES and f.is_file()))
+        else:
+            files.append(p)
     return files
 
 
+def _usage(message: str) -> typer.Exit:
+    """A usage error: one line on stderr, exit status 2."""
+    typer.echo(f"error: {message}", err=True)
+    return typer.Exit(2)
+
+
+class _CleanCommand(typer.core.TyperCommand):
+    """``--help`` without typer's type labels where they say nothing: none for flags and
+    for the file arguments (``<list[Path]>``), ``FILE...`` in the usage line."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        for param in self.params:
+            if isinstance(param, typer.core.TyperArgument):
+                param.display_type = lambda ctx: ""  # type: ignore[method-assign]
+                param._usage_display_name = lambda p=param: (  # type: ignore[method-assign]
+                    f"{p.metavar or p.name.upper()}...")
+            elif getattr(param, "is_flag", False):
+                param.display_type = lambda ctx: ""  # type: ignore[method-assign]
+
+    def get_help_option(self, ctx: Any) -> Any:
+        option = super().get_help_option(ctx)
+        if option is not None:
+            option.display_type = lambda ctx: ""
+        return option
+
+
 HELP = {name: text for name, _, text, _ in option_fields(PruneOptions, OutputOptions,
-                                                          ReadOptions)}
+                                                          ReadOptions, RasterOptions)}
+def _geojson_only(name: str) -> str:
+    return "GeoJSON input: " + HELP[name][0].lower() + HELP[name][1:]
+
+
 # the choices as typer shows them (it lists an Enum's values in --help)
 Method = enum.Enum("Method", {name: name for name in METHODS}, type=str)
 Coarse = enum.Enum("Coarse", {name: name for name in COARSE}, type=str)
 Rule = enum.Enum("Rule", {name: name for name in FOREGROUND_RULES}, type=str)
 
 
-@app.command("prune")
+@app.command("prune", cls=_CleanCommand)
 def prune_command(
-    files: Annotated[list[Path], typer.Argument(help="PNG masks, or folders of them.")],
+    files: Annotated[list[Path], typer.Argument(
+        metavar="FILE", help="PNG masks or GeoJSON polygons (.geojson, .json), or folders "
+        "of them (*.png, *.geojson, any case).")],
     beta: Annotated[float, typer.Option(help=HELP["beta"])] = PruneOptions.beta,
     method: Annotated[Method, typer.Option(help=HELP["method"])] = Method(PruneOptions.method),
     coarse: Annotated[Coarse, typer.Option(help=HELP["coarse"])] = Coarse("dce"),
@@ -85,34 +163,47 @@ def prune_command(
     overlay: Annotated[Path | None, typer.Option(help="Write the overlay PNG here "
                                                  "(one input file only).")] = None,
     curve: Annotated[bool, typer.Option(help=HELP["curve"])] = OutputOptions.curve,
-    workers: Annotated[int, typer.Option(help="Worker processes for several files.")] = 0,
+    pixel_size: Annotated[float | None, typer.Option(
+        help=_geojson_only("pixel_size"))] = None,
+    longest_side: Annotated[int | None, typer.Option(
+        help=_geojson_only("longest_side"))] = None,
+    repair: Annotated[bool, typer.Option(help=_geojson_only("repair"))
+                      ] = RasterOptions.repair,
+    workers: Annotated[int, typer.Option(help="Worker processes for several files, >= 0 "
+                                         "(0: one a CPU core).")] = 0,
 ) -> None:
     """Prune the skeleton of each shape and print the result as JSON."""
     try:  # checked once, before any file is read
         options = PruneOptions(beta=beta, method=method.value, coarse=coarse.value,
                                dce_threshold=dce_threshold, min_margin=min_margin)
         read = ReadOptions(foreground=foreground.value)
+        raster = RasterOptions(pixel_size=pixel_size, longest_side=longest_side, repair=repair)
     except SkelpruneError as exc:
-        typer.echo(f"error: {exc}", err=True)
-        raise typer.Exit(2) from None
+        raise _usage(str(exc)) from None
+    if workers < 0:
+        raise _usage(f"--workers must be >= 0 (0: one a CPU core), got {workers}")
+    if overlay is not None and not overlay.parent.is_dir():
+        raise _usage(f"--overlay: folder {str(overlay.parent)!r} does not exist")
     inputs = _expand(files)
     if not inputs:
-        typer.echo("error: no PNG file given", err=True)
-        raise typer.Exit(2)
+        raise _usage("no PNG or GeoJSON file given")
     if len(inputs) == 1 and not files[0].is_dir():
         try:
-            res = _prune(str(inputs[0]), read, options)
+            res, doc = _prune(str(inputs[0]), read, options, raster, curve)
         except (SkelpruneError, OSError) as exc:
             typer.echo(f"error: {inputs[0]}: {exc}", err=True)
             raise typer.Exit(1) from None
         if overlay is not None:
-            overlay.write_bytes(res.overlay_png())
-        json.dump(res.to_dict(curve=curve), sys.stdout)
+            try:
+                overlay.write_bytes(res.overlay_png())
+            except OSError as exc:
+                typer.echo(f"error: --overlay {overlay}: {exc.strerror or exc}", err=True)
+                raise typer.Exit(1) from None
+        json.dump(doc, sys.stdout)
         sys.stdout.write("\n")
         return
     if overlay is not None:
-        typer.echo("error: --overlay takes one input file", err=True)
-        raise typer.Exit(2)
+        raise _usage("--overlay takes one input file")
     from tqdm import tqdm
 
     n = workers or os.cpu_count() or 1
@@ -120,7 +211,7 @@ def prune_command(
     with ProcessPoolExecutor(max_workers=n) as pool:
         k = len(inputs)
         jobs = pool.map(_prune_file, [str(p) for p in inputs], [read] * k, [options] * k,
-                        [curve] * k)
+                        [raster] * k, [curve] * k)
         for line in tqdm(jobs, total=len(inputs), file=sys.stderr, unit="shape"):
             failed += "error" in line
             sys.stdout.write(json.dumps(line) + "\n")

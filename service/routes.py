@@ -4,20 +4,30 @@
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Callable
+import json
+import logging
+from collections.abc import AsyncIterator, Callable
 from dataclasses import fields
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Request, Response
 from fastapi.exceptions import RequestValidationError
+from fastapi.responses import StreamingResponse
 from prometheus_client import CONTENT_TYPE_LATEST, generate_latest
 from pydantic import ValidationError
 from starlette.datastructures import QueryParams, UploadFile
 
 from service import examples
-from service.errors import NotAcceptableError, UnsupportedMediaTypeError
+from service.errors import (
+    BodyTooLargeError,
+    InternalError,
+    NotAcceptableError,
+    UnsupportedMediaTypeError,
+    lookup,
+    problem,
+)
 from service.jobs import MEDIA_TYPES, Job, Output, run_job
-from service.pool import PoolClosedError, QueueFullError, WorkerPool
+from service.pool import PoolClosedError, PoolError, QueueFullError, WorkerPool
 from service.schemas import (
     POLYGON_ONLY,
     Health,
@@ -30,13 +40,14 @@ from service.schemas import (
 )
 from service.settings import Settings
 from skelprune import ALGORITHM_VERSION, __version__
-from skelprune.errors import InvalidOptionError
+from skelprune.errors import InvalidOptionError, InvalidPolygonError, SkelpruneError
 from skelprune.io.png import check_png_size
 from skelprune.options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
 
 __all__ = ["job_function", "negotiate", "parse_query", "router"]
 
 router = APIRouter()
+log = logging.getLogger("service.routes")
 
 #: Media types ``POST /v1/prune`` can answer with, in the server's order of preference.
 PRODUCES: dict[str, Output] = {
@@ -292,6 +303,17 @@ async def prune(
             "(field 'file') or application/json (GeoJSON)"
         )
     opts = _options(query, envelope, polygon=geojson is not None, output=output)
+    job = _job(opts, settings, output, png, geojson)
+    result = await pool.run(fn, job)
+    request.app.state.metrics.prune_seconds.observe(result.prune_seconds)
+    # The same URL answers in three formats: caches must key on Accept.
+    return Response(result.body, media_type=result.media_type,
+                    headers={"Vary": "Accept", **result.headers})
+
+
+def _job(opts: dict[str, Any], settings: Settings, output: Output, png: bytes | None,
+         geojson: dict[str, Any] | None) -> Job:
+    """The worker's job for one shape and the request's options."""
     # The library's option classes check the values (the only place they are checked).
     prune_options = PruneOptions(**_group(opts, PruneOptions))
     output_options = OutputOptions(**_group(opts, OutputOptions))
@@ -302,16 +324,139 @@ async def prune(
         if "pixel_size" not in given:
             given.setdefault("longest_side", settings.polygon_longest_side)
         raster = {**RasterOptions(**given).kwargs(), "max_vertices": settings.max_vertices}
-    job = Job(
+    return Job(
         output=output, png=png, geojson=geojson, prune_options=prune_options.kwargs(),
         raster=raster, curve=output_options.curve, overlay=output_options.overlay,
         max_pixels=settings.max_pixels, foreground=read_options.foreground,
     )
-    result = await pool.run(fn, job)
-    request.app.state.metrics.prune_seconds.observe(result.prune_seconds)
-    # The same URL answers in three formats: caches must key on Accept.
-    return Response(result.body, media_type=result.media_type,
-                    headers={"Vary": "Accept", **result.headers})
+
+
+#: Most shapes in one batch request (more: 413 before any is pruned).
+BATCH_MAX_ITEMS = 32
+NDJSON = "application/x-ndjson"
+
+BATCH_DESCRIPTION = f"""
+Prune several shapes in one request; the answer is NDJSON (`{NDJSON}`), one line per
+shape in input order: `{{"index": i, "result": <document>}}` or
+`{{"index": i, "problem": <problem details>}}`. One shape's failure never fails the others.
+
+**Input**: `multipart/form-data` with the PNGs in repeated fields `file` (options as other
+fields or in the query), or `application/json`: a list of GeoJSON objects (`Polygon`,
+`MultiPolygon`, `Feature`, `FeatureCollection`; options in the query). At most
+{BATCH_MAX_ITEMS} shapes; the body limit is the one of `POST /v1/prune`. The options
+apply to every shape. Shapes are pruned one after another, each a job of the same worker
+pool and queue as `POST /v1/prune`: a batch holds at most one worker at a time, so single
+requests are never starved by it; a shape that meets a full queue gets its 503 problem.
+"""
+
+
+def _item_problem(exc: Exception) -> dict[str, Any]:
+    row = lookup(exc)
+    if row is None or (row.status >= 500 and not isinstance(exc, PoolError)):
+        if row is None:
+            log.error("batch item failed: %s", type(exc).__name__)
+        exc = InternalError("the job failed with an internal error")
+    return json.loads(problem(exc).body)
+
+
+def _batch_item(index: int, item: Any, opts: dict[str, Any], settings: Settings,
+                png: bool) -> Job | dict[str, Any]:
+    """The job of one shape, or its problem line."""
+    try:
+        if png:
+            check_png_size(item, settings.max_pixels)
+            return _job(opts, settings, "json", item, None)
+        try:
+            shape = polygon_request_adapter.validate_python(item)
+        except ValidationError as exc:
+            first = _body_errors(exc.errors(include_url=False))[0]
+            where = ".".join(str(p) for p in first["loc"])
+            raise InvalidPolygonError(f"{where or 'shape'}: {first['msg']}") from None
+        if isinstance(shape, PolygonJob):
+            raise InvalidOptionError("a batch item is a GeoJSON object; options go in the "
+                                     "query")
+        return _job(opts, settings, "json", None, shape.model_dump(mode="json",
+                                                                    exclude_none=True))
+    except SkelpruneError as exc:
+        return {"index": index, "problem": _item_problem(exc)}
+
+
+@router.post(
+    "/v1/prune/batch",
+    summary="Prune several shapes; NDJSON answer in input order",
+    description=BATCH_DESCRIPTION,
+    response_class=Response,
+    responses={200: {"description": "One JSON line per shape, in input order.",
+                     "content": {NDJSON: {"schema": {"type": "string"}}}},
+               413: examples.problem_response(413, "body-too-large", "Request body too large",
+                                              f"a batch holds at most {BATCH_MAX_ITEMS} "
+                                              "shapes, got 40", "/v1/prune/batch")},
+    openapi_extra={"parameters": query_parameters(PruneQuery)},
+    tags=["prune"],
+)
+async def prune_batch(
+    request: Request,
+    fn: Annotated[Callable[[Job], Any], Depends(job_function)],
+) -> Response:
+    query = parse_query(request.query_params)
+    settings: Settings = request.app.state.settings
+    pool: WorkerPool = request.app.state.pool
+    accept = request.headers.get("accept", "")
+    if accept.strip() and not any(m in accept for m in (NDJSON, "application/json", "*/*")):
+        raise NotAcceptableError(f"cannot produce any of {accept!r}; available: {NDJSON}")
+    ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    body = await request.body()  # size-limited by BodyLimitMiddleware
+    items: list[Any]
+    form_options = None
+    if ctype == "multipart/form-data":
+        async with request.form(max_files=BATCH_MAX_ITEMS + 1, max_fields=16) as form:
+            uploads = [v for v in form.getlist("file") if isinstance(v, UploadFile)]
+            items = [await u.read() for u in uploads]
+            fields = QueryParams([(k, v) for k, v in form.multi_items()
+                                  if k != "file" and isinstance(v, str)])
+        try:
+            form_options = parse_query(fields)
+        except RequestValidationError as exc:
+            raise RequestValidationError(
+                [{**e, "loc": ("body", *e["loc"][1:])} for e in exc.errors()]) from None
+    elif ctype in JSON_TYPES:
+        try:
+            items = json.loads(body)
+        except ValueError as exc:
+            raise RequestValidationError([{"loc": ("body",), "type": "json_invalid",
+                                           "msg": f"invalid JSON: {exc}"}]) from None
+        if not isinstance(items, list):
+            raise RequestValidationError([{"loc": ("body",), "type": "list_type",
+                                           "msg": "a batch is a JSON list of GeoJSON objects"}])
+    else:
+        raise UnsupportedMediaTypeError(
+            f"Content-Type {ctype or 'none'!r} is not supported; send multipart/form-data "
+            "(fields 'file') or application/json (a list of GeoJSON objects)")
+    if not items:
+        raise InvalidOptionError("the batch is empty: send at least one shape")
+    if len(items) > BATCH_MAX_ITEMS:
+        raise BodyTooLargeError(f"a batch holds at most {BATCH_MAX_ITEMS} shapes, "
+                                f"got {len(items)}")
+    png = ctype == "multipart/form-data"
+    opts = _options(query, form_options, polygon=not png, output="json")
+    _job(opts, settings, "json", b"" if png else None, None if png else {})  # options first
+    jobs = [_batch_item(i, item, opts, settings, png) for i, item in enumerate(items)]
+
+    async def lines() -> AsyncIterator[bytes]:
+        for index, job in enumerate(jobs):
+            if isinstance(job, dict):
+                line = job
+            else:
+                try:  # one job at a time: a batch never holds more than one worker
+                    result = await pool.run(fn, job)
+                    request.app.state.metrics.prune_seconds.observe(result.prune_seconds)
+                    yield b'{"index":%d,"result":' % index + result.body + b"}\n"
+                    continue
+                except Exception as exc:  # this shape's failure, not the batch's
+                    line = {"index": index, "problem": _item_problem(exc)}
+            yield json.dumps(line, separators=(",", ":")).encode() + b"\n"
+
+    return StreamingResponse(lines(), media_type=NDJSON)
 
 
 @router.get(

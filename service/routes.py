@@ -386,12 +386,19 @@ def _batch_item(index: int, item: Any, opts: dict[str, Any], settings: Settings,
     summary="Prune several shapes; NDJSON answer in input order",
     description=BATCH_DESCRIPTION,
     response_class=Response,
-    responses={200: {"description": "One JSON line per shape, in input order.",
+    responses={**{k: v for k, v in examples.PRUNE_RESPONSES.items() if k != 200},
+               200: {"description": "One JSON line per shape, in input order.",
                      "content": {NDJSON: {"schema": {"type": "string"}}}},
                413: examples.problem_response(413, "body-too-large", "Request body too large",
                                               f"a batch holds at most {BATCH_MAX_ITEMS} "
                                               "shapes, got 40", "/v1/prune/batch")},
-    openapi_extra={"parameters": query_parameters(PruneQuery)},
+    openapi_extra={"parameters": query_parameters(PruneQuery), "requestBody": {
+        "required": True, "content": {
+            "multipart/form-data": {"schema": {"type": "object", "properties": {"file": {
+                "type": "array", "items": {"type": "string", "format": "binary"},
+                "maxItems": BATCH_MAX_ITEMS}}, "required": ["file"]}},
+            "application/json": {"schema": {"type": "array", "maxItems": BATCH_MAX_ITEMS,
+                                            "items": {"type": "object"}}}}}},
     tags=["prune"],
 )
 async def prune_batch(

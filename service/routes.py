@@ -388,7 +388,11 @@ def _batch_item(index: int, item: Any, opts: dict[str, Any], settings: Settings,
     response_class=Response,
     responses={**{k: v for k, v in examples.PRUNE_RESPONSES.items() if k != 200},
                200: {"description": "One JSON line per shape, in input order.",
-                     "content": {NDJSON: {"schema": {"type": "string"}}}},
+                     "content": {NDJSON: {"schema": {"type": "string"}, "example": (
+                         '{"index":0,"result":{"width":60,"height":30,"components":[…]}}\n'
+                         '{"index":1,"problem":{"type":"urn:skelprune:problem:invalid-image",'
+                         '"title":"Invalid image","status":400,"detail":"not a PNG file '
+                         '(bad signature)"}}\n')}}},
                413: examples.problem_response(413, "body-too-large", "Request body too large",
                                               f"a batch holds at most {BATCH_MAX_ITEMS} "
                                               "shapes, got 40", "/v1/prune/batch")},

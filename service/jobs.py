@@ -6,6 +6,7 @@ the worker returns the response body already serialised.
 
 from __future__ import annotations
 
+import base64
 import json
 import time
 from dataclasses import dataclass, field
@@ -46,6 +47,8 @@ class Job:
     raster: dict[str, Any] = field(default_factory=dict)
     curve: bool = True
     overlay: bool = False
+    overlay_scale: int | None = None  # None: the library's readable default
+    overlay_legend: bool = False
     max_pixels: int | None = None
     foreground: str = "auto"
 
@@ -112,14 +115,18 @@ def run_job(job: Job) -> JobResult:
     framing = {} if frame is None else {"frame": frame}  # None: the image's own pixel frame
     headers: dict[str, str] = {}
     if job.output == "png":
-        body = res.overlay_png()
+        body = res.overlay_png(job.overlay_scale, job.overlay_legend)
         headers = {name: ",".join(repr(float(getattr(c, key))) for c in res.components)
                    for name, key in PNG_HEADERS.items()}
         headers["X-Skelprune-Components"] = str(len(res.components))
     elif job.output == "geojson":
         body = _dumps(res.to_geojson(**framing))
     else:
-        body = _dumps(res.to_dict(curve=job.curve, overlay=job.overlay, **framing))
+        doc = res.to_dict(curve=job.curve, **framing)
+        if job.overlay:
+            png = res.overlay_png(job.overlay_scale, job.overlay_legend)
+            doc["overlay_png"] = base64.b64encode(png).decode("ascii")
+        body = _dumps(doc)
     return JobResult(body=body, media_type=MEDIA_TYPES[job.output], prune_seconds=elapsed,
                      headers=headers)
 

@@ -61,6 +61,8 @@ BIG_JSON = 256 * 1024  # bytes of JSON above which validation moves to a thread
 QUERY_OPTIONS = frozenset(PruneQuery.model_fields)  # no aliases: field name = parameter
 #: Options of the JSON document only: refused with Accept: image/png or geo+json.
 JSON_ONLY = ("curve", "overlay")
+#: Options of the overlay image: for Accept: image/png, or the JSON with overlay=true.
+OVERLAY_ONLY = ("overlay_scale", "overlay_legend")
 #: Tags of the JSON body's union: pydantic puts them in error locations, the user's body
 #: has no such level.
 BODY_TAGS = frozenset({"Polygon", "MultiPolygon", "Feature", "FeatureCollection", "job"})
@@ -169,6 +171,12 @@ def _options(query: PruneQuery, body: Any, polygon: bool, output: Output) -> dic
             raise InvalidOptionError(
                 f"option(s) {', '.join(misplaced)} only apply to the JSON document "
                 f"(Accept: application/json), not to the {MEDIA_TYPES[output]} answer")
+    if output == "geojson" or (output == "json" and not opts.get("overlay")):
+        misplaced = [k for k in OVERLAY_ONLY if k in opts]
+        if misplaced:
+            raise InvalidOptionError(
+                f"option(s) {', '.join(misplaced)} only apply to the overlay image "
+                "(Accept: image/png, or overlay=true)")
     if not polygon:
         misplaced = [k for k in POLYGON_ONLY if k in opts]
         if misplaced:
@@ -327,6 +335,7 @@ def _job(opts: dict[str, Any], settings: Settings, output: Output, png: bytes | 
     return Job(
         output=output, png=png, geojson=geojson, prune_options=prune_options.kwargs(),
         raster=raster, curve=output_options.curve, overlay=output_options.overlay,
+        overlay_scale=output_options.overlay_scale, overlay_legend=output_options.overlay_legend,
         max_pixels=settings.max_pixels, foreground=read_options.foreground,
     )
 

@@ -162,6 +162,9 @@ def prune_command(
                           ] = Rule(ReadOptions.foreground),
     overlay: Annotated[Path | None, typer.Option(help="Write the overlay PNG here "
                                                  "(one input file only).")] = None,
+    overlay_scale: Annotated[int | None, typer.Option(help=HELP["overlay_scale"])] = None,
+    overlay_legend: Annotated[bool, typer.Option(help=HELP["overlay_legend"])
+                              ] = OutputOptions.overlay_legend,
     curve: Annotated[bool, typer.Option(help=HELP["curve"])] = OutputOptions.curve,
     pixel_size: Annotated[float | None, typer.Option(
         help=_geojson_only("pixel_size"))] = None,
@@ -178,6 +181,7 @@ def prune_command(
                                dce_threshold=dce_threshold, min_margin=min_margin)
         read = ReadOptions(foreground=foreground.value)
         raster = RasterOptions(pixel_size=pixel_size, longest_side=longest_side, repair=repair)
+        shown = OutputOptions(overlay_scale=overlay_scale, overlay_legend=overlay_legend)
     except SkelpruneError as exc:
         raise _usage(str(exc)) from None
     if workers < 0:
@@ -195,7 +199,7 @@ def prune_command(
             raise typer.Exit(1) from None
         if overlay is not None:
             try:
-                overlay.write_bytes(res.overlay_png())
+                overlay.write_bytes(res.overlay_png(shown.overlay_scale, shown.overlay_legend))
             except OSError as exc:
                 typer.echo(f"error: --overlay {overlay}: {exc.strerror or exc}", err=True)
                 raise typer.Exit(1) from None

@@ -186,6 +186,13 @@ class OutputOptions:
                           _flag)
     overlay: bool = _option(False, "Add the overlay image as a base64 PNG (overlay_png).",
                             _flag)
+    overlay_scale: int | None = _option(
+        None, "Overlay image: each input pixel as N × N pixels, a whole number from 1 to "
+        "16 (default: the smallest that makes the longer side at least 512 px).",
+        _integer(1, 16),
+    )
+    overlay_legend: bool = _option(
+        False, "Overlay image: add a strip with the colour key, RER and SS.", _flag)
 
     def __post_init__(self) -> None:
         _check_fields(self)
@@ -256,7 +263,7 @@ def option_fields(*groups: type) -> list[tuple[str, Any, str, tuple[str, ...] | 
     what the CLI and the service describe their options from.
 
     >>> [name for name, *_ in option_fields(OutputOptions)]
-    ['curve', 'overlay']
+    ['curve', 'overlay', 'overlay_scale', 'overlay_legend']
     """
     return [(f.name, f.default, f.metadata["help"], f.metadata["choices"])
             for group in groups for f in fields(group)]

@@ -20,7 +20,7 @@ from ..io.frame import IDENTITY, PixelFrame
 from ..pruning.bayesian import PruningSequence
 from ..pruning.margin import Margins
 from ..skeleton import Skeleton
-from .render import encode_png, render_overlay
+from .render import auto_scale, encode_png, render_overlay
 
 __all__ = ["ComponentResult", "PruneResult", "branch_line"]
 
@@ -349,8 +349,9 @@ class PruneResult:
                            line=branch_line(sk, br))
         return g
 
-    def render_overlay(self) -> np.ndarray:
-        """RGB overlay (:func:`~skelprune.output.render.render_overlay`), the mask's size.
+    def render_overlay(self, scale: int = 1, legend: bool = False) -> np.ndarray:
+        """RGB overlay (:func:`~skelprune.output.render.render_overlay`), ``scale`` times
+        the mask's size; ``legend`` adds a strip with the colour key, RER and SS.
 
         Examples
         --------
@@ -365,9 +366,20 @@ class PruneResult:
             for n in comp.skeleton_table()[0]:
                 if n["kind"] in marks:
                     marks[n["kind"]].append((int(n["y"]), int(n["x"])))
+        text = None
+        if legend:
+            text = "   ".join(
+                (f"component {i}: " if len(self.components) > 1 else "")
+                + f"RER {100 * c.rer:.2f} %, SS {c.ss:.3f}"
+                for i, c in enumerate(self.components[:4]))
         return render_overlay(self.mask, rows, cols, r2,
                               np.array(marks["endpoint"], int).reshape(-1, 2),
-                              np.array(marks["junction"], int).reshape(-1, 2))
+                              np.array(marks["junction"], int).reshape(-1, 2),
+                              scale=scale, legend=text)
 
-    def overlay_png(self) -> bytes:
-        return encode_png(self.render_overlay())
+    def overlay_png(self, scale: int | None = None, legend: bool = False) -> bytes:
+        """The overlay as PNG bytes; ``scale`` None: the smallest integer scale that
+        makes the longer side at least 512 px (:func:`~skelprune.output.render.auto_scale`).
+        """
+        return encode_png(self.render_overlay(
+            auto_scale(self.mask.shape) if scale is None else scale, legend))

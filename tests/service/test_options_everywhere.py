@@ -115,3 +115,28 @@ def test_validation_details_name_what_the_user_sent(client: TestClient, body, fr
     assert fragment in detail, detail
     for word in forbidden:
         assert word not in resp.text, resp.text
+
+
+def test_overlay_scale_and_legend(client: TestClient) -> None:
+    def size(resp) -> tuple[int, int]:
+        assert resp.status_code == 200, resp.text
+        return Image.open(io.BytesIO(resp.content)).size
+
+    png = {**PNG, "accept": "image/png"}
+    assert size(client.post("/v1/prune", content=RECT, headers=png)) == (70 * 8, 40 * 8)
+    assert size(client.post("/v1/prune", content=RECT, headers=png,
+                            params={"overlay_scale": "2"})) == (140, 80)
+    legend = size(client.post("/v1/prune", content=RECT, headers=png,
+                              params={"overlay_scale": "2", "overlay_legend": "true"}))
+    assert legend[0] == 140 and legend[1] > 80
+    # in the JSON document's overlay too; refused where there is no overlay
+    doc = client.post("/v1/prune", content=RECT, headers=PNG,
+                      params={"overlay": "true", "overlay_scale": "3"}).json()
+    import base64
+    assert Image.open(io.BytesIO(base64.b64decode(doc["overlay_png"]))).size == (210, 120)
+    for accept, params in (("application/json", {}), ("application/geo+json", {})):
+        resp = client.post("/v1/prune", content=RECT, headers={**PNG, "accept": accept},
+                           params={**params, "overlay_scale": "2"})
+        assert resp.status_code == 422 and "only apply to the overlay" in resp.text
+    resp = client.post("/v1/prune", content=RECT, headers=png, params={"overlay_scale": "40"})
+    assert resp.status_code == 422 and "overlay_scale" in resp.json()["detail"]

@@ -169,7 +169,7 @@ def test_png_output_is_the_overlay(client: TestClient) -> None:
     resp = post_png(client, BIRD, accept="image/png")
     assert resp.status_code == 200 and resp.headers["content-type"] == "image/png"
     im = Image.open(io.BytesIO(resp.content))
-    assert im.size == (116, 103)
+    assert im.size == (116 * 5, 103 * 5)  # the default scale: longer side >= 512 px
     assert resp.content == skelprune.prune(read_mask(BIRD)).overlay_png()
 
 
@@ -195,7 +195,7 @@ def test_geojson_output(client: TestClient) -> None:
 def test_overlay_and_curve_options(client: TestClient) -> None:
     doc = post_png(client, BIRD, {"overlay": "true", "curve": "false"}).json()
     raw = base64.b64decode(doc["overlay_png"])
-    assert Image.open(io.BytesIO(raw)).size == (116, 103)
+    assert Image.open(io.BytesIO(raw)).size == (116 * 5, 103 * 5)
     assert "curve" not in doc["components"][0]
     full = post_png(client, BIRD).json()
     curve = full["components"][0]["curve"]

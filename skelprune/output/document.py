@@ -254,7 +254,7 @@ class PruneResult:
         return tuple(np.concatenate(a) for a in zip(*parts, strict=True))  # type: ignore[return-value]
 
     def to_dict(self, curve: bool = True, overlay: bool = False,
-                frame: PixelFrame = IDENTITY) -> dict[str, Any]:
+                frame: PixelFrame | None = IDENTITY) -> dict[str, Any]:
         """The output document of SPEC §3 (plain JSON types).
 
         Examples
@@ -265,6 +265,7 @@ class PruneResult:
         >>> doc["width"], len(doc["components"][0]["skeleton"]["endpoints"])
         (40, 4)
         """
+        frame = IDENTITY if frame is None else frame  # None: the image's own pixels
         doc: dict[str, Any] = {
             "width": self.width, "height": self.height, "method": self.method,
             "beta": float(self.beta), "coarse": self.coarse,
@@ -276,7 +277,7 @@ class PruneResult:
             doc["overlay_png"] = base64.b64encode(self.overlay_png()).decode("ascii")
         return doc
 
-    def to_geojson(self, frame: PixelFrame = IDENTITY) -> dict[str, Any]:
+    def to_geojson(self, frame: PixelFrame | None = IDENTITY) -> dict[str, Any]:
         """GeoJSON FeatureCollection: branches as LineStrings, nodes as Points.
 
         Every feature's properties carry its component's ``rer`` and ``ss``; the
@@ -316,7 +317,7 @@ class PruneResult:
         return {"type": "FeatureCollection",
                 "properties": {**properties, "components": summaries}, "features": features}
 
-    def to_networkx(self, frame: PixelFrame = IDENTITY) -> Any:
+    def to_networkx(self, frame: PixelFrame | None = IDENTITY) -> Any:
         """The skeleton as a ``networkx.MultiGraph`` (needs the optional ``networkx``).
 
         Nodes are ``(component, node id)`` with the document's node fields (``x``, ``y``,

@@ -254,3 +254,9 @@ def test_overlay_scale_keeps_the_mask_crisp_and_grows_the_marks():
     legend = res.render_overlay(scale=4, legend=True)
     assert legend.shape[1] == big.shape[1] and legend.shape[0] > big.shape[0]
     assert res.overlay_png()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_frame_none_is_the_image_frame():
+    res = skelprune.prune(rectangle_with_holes())
+    assert res.to_dict(frame=None) == res.to_dict()
+    assert res.to_geojson(frame=None) == res.to_geojson()

@@ -73,3 +73,46 @@ def test_a_bad_batch_is_refused_whole(client: TestClient, kwargs, status, fragme
     assert resp.status_code == status, resp.text
     assert resp.headers["content-type"] == "application/problem+json"
     assert fragment in resp.json()["detail"]
+
+
+def slow(job):
+    import time
+
+    from service.jobs import run_job
+
+    time.sleep(0.5)
+    return run_job(job)
+
+
+def test_a_batch_never_starves_single_requests() -> None:
+    """Two workers, a batch of 8 slow shapes: a single request sent meanwhile is answered
+    long before the batch ends, because the batch holds one worker at a time."""
+    import threading
+    import time
+
+    from service.app import create_app
+    from service.routes import job_function
+    from service.settings import Settings
+
+    app = create_app(Settings(workers=2, queue_size=8))
+    app.dependency_overrides[job_function] = lambda: slow
+    with TestClient(app) as client:
+        done: dict[str, float] = {}
+        t0 = time.perf_counter()
+
+        def batch() -> None:
+            items = [rect(10 + i, 5) for i in range(8)]
+            resp = client.post("/v1/prune/batch", json=items)
+            done["batch"] = time.perf_counter() - t0
+            done["lines"] = len(lines(resp))
+
+        thread = threading.Thread(target=batch)
+        thread.start()
+        time.sleep(0.7)
+        assert client.get("/readyz").json()["busy"] <= 1  # the batch holds one worker at most
+        resp = client.post("/v1/prune", json=rect(4, 2))
+        done["single"] = time.perf_counter() - t0
+        thread.join(120)
+    app.dependency_overrides.clear()
+    assert resp.status_code == 200 and done["lines"] == 8
+    assert done["single"] < done["batch"]

@@ -257,8 +257,14 @@ Compute the pruned skeleton of a shape.
   512 px) and every coordinate, radius and length in the answer is in the polygon's
   own frame and units.
 
-**Output** (by `Accept`): `application/json` (default) the document of SPEC §3,
-`image/png` the overlay image, `application/geo+json` the skeleton as GeoJSON.
+**Output** (by `Accept`): `application/json` (default) the result document
+(`PruneDocument` below: per component its RER, SS, λ and the skeleton graph, nodes with
+radii and branches as paths), `image/png` the overlay image (the numbers in the
+`X-Skelprune-*` headers), `application/geo+json` the skeleton as GeoJSON (the numbers in
+its properties).
+
+Options go in the query string, or in the body (multipart fields beside `file`; the
+JSON envelope), never both; an option where it does not apply is refused (422).
 """
 
 

@@ -1,7 +1,7 @@
 """Pydantic v2 models of everything the service reads and writes.
 
 Request bodies are validated strictly (no coercion; unknown fields refused). The
-response models describe the documents of SPEC §3 exactly (``extra="forbid"``), so the
+response models describe the output documents exactly (``extra="forbid"``), so the
 OpenAPI schema is a contract that tests and schemathesis check the answers against.
 """
 

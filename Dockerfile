@@ -69,8 +69,10 @@ COPY --from=build /opt/venv /opt/venv
 # container loads compiled code instead of compiling for a minute. numba keys the cache
 # on each source file's time stamp, which a COPY between stages may change: so it is
 # built in this stage, on the files as they are in the image.
-RUN NUMBA_CACHE_DIR=/opt/numba-cache NUMBA_NUM_THREADS=1 \
-    /opt/venv/bin/python -c "from service.jobs import warmup; warmup()"
+# NUMBA_CPU_NAME=generic (here and at run time, below): code for any x86-64 CPU, so the
+# cache is valid on whatever host the image runs (numba keys its cache on the CPU too).
+RUN NUMBA_CACHE_DIR=/opt/numba-cache NUMBA_NUM_THREADS=1 NUMBA_CPU_NAME=generic \
+    /opt/venv/bin/python -m service.compile
 
 # The worker pool gives the parallelism: one BLAS/OpenMP/numba thread per worker process.
 # numba compiles with cache=True; its cache goes to a writable place, not the read-only
@@ -85,6 +87,7 @@ ENV PATH=/opt/venv/bin:$PATH \
     MKL_NUM_THREADS=1 \
     NUMBA_NUM_THREADS=1 \
     NUMBA_CACHE_DIR=/tmp/numba-cache \
+    NUMBA_CPU_NAME=generic \
     SKELPRUNE_NUMBA_CACHE_SEED=/opt/numba-cache
 
 WORKDIR /tmp

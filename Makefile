@@ -17,23 +17,39 @@ comma := ,
 SERVE := $(VENV)/.installed-service
 TESTS := $(VENV)/.installed-service+test
 BENCH := $(VENV)/.installed-service+test+bench
+# numba's cache is keyed on each source file's time stamp: compile again when one changes
+KERNELS := $(VENV)/.compiled
 
-setup: $(BENCH)
+# Compile the numba kernels ahead (loaded in under a second afterwards), not on the
+# first request or in every worker.
+$(KERNELS): $(SERVE) $(shell find skelprune -name "*.py") service/jobs.py
+	$(BIN)/python -m service.compile
+	touch $(KERNELS)
 
-run: $(SERVE)
+setup: $(BENCH) $(KERNELS)
+
+run: $(SERVE) $(KERNELS)
 	$(BIN)/python -m service
 
-test: lint
+# the viewer page's browser test drives Debian's Chromium (installed once, with apt)
+BROWSER := /usr/bin/chromedriver
+$(BROWSER):
+	bash scripts/install-browser.sh
+
+test: lint $(KERNELS) $(BROWSER)
 	$(BIN)/python -m pytest -q
 
+# ruff (lint and format) for the Python, shellcheck for the shell scripts CI runs
+PY_SOURCES := skelprune service tests testkit benchmarks
 lint: $(TESTS)
-	$(BIN)/ruff check skelprune service tests benchmarks
+	$(BIN)/ruff check $(PY_SOURCES)
+	$(BIN)/ruff format --check $(PY_SOURCES)
 	$(BIN)/shellcheck scripts/*.sh .ci/run
 
-bench: $(BENCH)
+bench: $(BENCH) $(KERNELS)
 	$(BIN)/python -m benchmarks
 
-eval: $(BENCH)
+eval: $(BENCH) $(KERNELS)
 	$(BIN)/skelprune eval --out docs
 
 openapi: $(SERVE)

@@ -220,18 +220,23 @@ log "starting container on port $PORT"
 
 show_logs() { "${PODMAN[@]}" logs "$CONTAINER" 2>&1 | tail -n 40 >&2 || true; }
 
-# the workers load the numba kernels compiled at build time (seeded into /tmp/numba-cache)
+# the port opens at once (/healthz 200, /readyz 503 while the workers warm up); the
+# workers load the numba kernels compiled at build time (seeded into /tmp/numba-cache)
 started=$(date +%s)
 deadline=$((started + 300))
 until curl -fsS -m 2 "http://127.0.0.1:$PORT/healthz" >/dev/null 2>&1; do
     state=$("${PODMAN[@]}" inspect -f '{{.State.Status}}' "$CONTAINER" 2>/dev/null || echo gone)
     [[ $state == running ]] || { show_logs; die "container is $state before becoming healthy"; }
     (($(date +%s) < deadline)) || { show_logs; die "no /healthz within 300 s"; }
-    sleep 1
+    sleep 0.2
 done
-log "/healthz answers"
-code=$(curl -sS -m 5 -o /dev/null -w '%{http_code}' "http://127.0.0.1:$PORT/readyz") || true
-[[ $code == 200 ]] || { show_logs; die "/readyz answers $code, not 200 (pool not up?)"; }
+log "/healthz answers, $(($(date +%s) - started)) s after start"
+until code=$(curl -sS -m 5 -o "$WORK/readyz.json" -w '%{http_code}' \
+                 "http://127.0.0.1:$PORT/readyz" 2>/dev/null) && [[ $code == 200 ]]; do
+    [[ $code == 503 ]] || { show_logs; die "/readyz answers ${code:-nothing}, not 200 or 503"; }
+    (($(date +%s) < deadline)) || { show_logs; die "/readyz not 200 within 300 s"; }
+    sleep 0.2
+done
 log "/readyz answers 200, $(($(date +%s) - started)) s after start"
 # (the logs go to a variable first: grep -q would close the pipe early, and pipefail
 # would count podman's SIGPIPE as a failure)
@@ -239,6 +244,11 @@ logs=$("${PODMAN[@]}" logs "$CONTAINER" 2>&1 || true)
 [[ $logs =~ "numba cache seeded: "[1-9] ]] \
     || { show_logs; die "the server did not seed the numba cache from the image"; }
 log "numba cache seeded from the image"
+# and the workers loaded it (built for NUMBA_CPU_NAME=generic: valid on any x86-64 host)
+if [[ $logs =~ "compiled "[0-9]+" numba kernels" || ! $logs =~ "numba kernels loaded from the cache" ]]; then
+    show_logs; die "the workers compiled the kernels instead of loading the image's cache"
+fi
+log "workers loaded the image's compiled kernels"
 
 # The image's own HEALTHCHECK command must pass too (it is what docker/podman will run).
 health=$("${PODMAN[@]}" image inspect --format '{{json .HealthCheck}}' "$IMAGE" 2>/dev/null || true)

@@ -6,10 +6,11 @@ import logging
 import logging.config
 import os
 import signal
+import socket
 import sys
 from types import FrameType
+from typing import Any
 
-import uvicorn
 from pydantic import ValidationError
 
 from service.logs import logging_config
@@ -21,20 +22,51 @@ def _exit_cleanly(signum: int, frame: FrameType | None) -> None:
     sys.exit(0)
 
 
+def listen(host: str, port: int) -> socket.socket:
+    """A listening TCP socket on ``host:port`` (IPv6 when ``host`` has a colon).
+
+    Raises
+    ------
+    SystemExit
+        With a one-line message, when the address cannot be bound (e.g. in use).
+    """
+    sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind((host, port))
+        sock.listen(2048)
+    except OSError as exc:
+        sock.close()
+        raise SystemExit(f"skelprune: cannot listen on {host}:{port} "
+                         f"(SKELPRUNE_HOST, SKELPRUNE_PORT): {exc.strerror or exc}") from None
+    sock.set_inheritable(True)
+    return sock
+
+
 def main() -> None:
     """Read the settings from the environment and run uvicorn (one process; the
-    pruning work is spread over the app's own worker pool)."""
+    pruning work is spread over the app's own worker pool).
+
+    The port is bound first, before anything slow: an address in use fails at once,
+    and clients can connect while the workers warm up (``/healthz`` 200, ``/readyz``
+    503 until they are ready).
+    """
     try:
         settings = Settings()
     except ValidationError as exc:  # one line naming the variable, not a traceback
         print(f"error: {settings_error(exc)}", file=sys.stderr)
         sys.exit(2)
     logging.config.dictConfig(logging_config(settings.log_level))  # uvicorn sets it again
+    sock = listen(settings.host, settings.port)
+    host, port = sock.getsockname()[:2]
+    logging.getLogger("service").info("listening on %s:%d", host, port)
     cache = os.environ.get("NUMBA_CACHE_DIR")
     if settings.numba_cache_seed and cache:
         # before the pool starts: its workers read the cache when they warm up
         copied = seed_numba_cache(settings.numba_cache_seed, cache)
         logging.getLogger("service").info("numba cache seeded: %d files", copied)
+    import uvicorn  # only after the port is bound: a port in use fails sooner
+
     from service.app import create_app  # only now: importing it already compiles
 
     # uvicorn drains in-flight requests and closes the pool on SIGTERM/SIGINT, then
@@ -42,15 +74,24 @@ def main() -> None:
     # clean exit 0 (what `docker stop` and Kubernetes expect) instead of death by signal.
     for sig in (signal.SIGTERM, signal.SIGINT):
         signal.signal(sig, _exit_cleanly)
-    uvicorn.run(
-        create_app(settings), host=settings.host, port=settings.port,
-        log_level=settings.log_level,
+    server: Any = None  # the uvicorn.Server, once made
+
+    def stop_server() -> None:  # the pool failed to start: nothing to serve
+        if server is not None:
+            server.should_exit = True
+
+    app = create_app(settings, warm_in_background=True, on_pool_failure=stop_server)
+    server = uvicorn.Server(uvicorn.Config(
+        app, log_level=settings.log_level,
         log_config=logging_config(settings.log_level),  # JSON lines on stderr
         access_log=False,  # the service writes its own access log, with request IDs
         # http: uvicorn's default picks httptools (the service extra) and falls back to h11
         # a drain after SIGTERM is bounded: below the orchestrator's grace period
         timeout_graceful_shutdown=settings.shutdown_timeout,
-    )
+    ))
+    server.run(sockets=[sock])
+    if app.state.pool_failure is not None:
+        raise SystemExit(f"skelprune: the worker pool failed to start: {app.state.pool_failure}")
 
 
 if __name__ == "__main__":

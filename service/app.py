@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import asyncio
 import json
+import logging
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
@@ -38,6 +40,8 @@ __all__ = ["BodyLimitMiddleware", "Metrics", "create_app"]
 
 REF_TEMPLATE = "#/components/schemas/{model}"
 DOCS_ASSETS = "/docs-assets"  # Swagger UI's and ReDoc's scripts
+
+log = logging.getLogger("service")
 
 
 class BodyLimitMiddleware:
@@ -185,13 +189,25 @@ def _offline_docs(app: FastAPI) -> None:
             redoc_favicon_url=f"{DOCS_ASSETS}/favicon.png", with_google_fonts=False)
 
 
-def create_app(settings: Settings | None = None) -> FastAPI:
+def create_app(
+    settings: Settings | None = None,
+    *,
+    warm_in_background: bool = False,
+    on_pool_failure: Callable[[], None] | None = None,
+) -> FastAPI:
     """Build the FastAPI application.
 
     Parameters
     ----------
     settings : Settings, optional
         Defaults to :class:`Settings` read from the environment.
+    warm_in_background : bool
+        Serve at once and warm the worker pool meanwhile (``python -m service``):
+        ``/healthz`` answers 200 and ``/readyz`` and jobs 503 until the pool is ready.
+        Otherwise the application's startup waits for the pool.
+    on_pool_failure : callable, optional
+        Called when the pool fails to start in the background (after the error is
+        logged), e.g. to stop the server.
     """
     settings = settings or Settings()
     pool = WorkerPool(
@@ -201,13 +217,35 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         preload=("skelprune", "service.jobs"),
     )
 
+    async def start_in_background() -> None:
+        try:
+            await pool.start()
+        except Exception as exc:
+            if pool.closed:  # shut down while warming: nothing went wrong
+                return
+            app.state.pool_failure = str(exc)
+            log.error("the worker pool failed to start: %s", exc)
+            if on_pool_failure is not None:
+                on_pool_failure()
+
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        await pool.start()
+        if settings.warmup:
+            log.info("starting %d workers: the first one warms up alone, then the others "
+                     "(a cold numba cache compiles the kernels first, half a minute to a "
+                     "minute on one core; `make setup` and the image build compile them "
+                     "ahead)", pool.size)
+        warming = None
+        if warm_in_background:
+            warming = asyncio.create_task(start_in_background())
+        else:
+            await pool.start()
         try:
             yield
         finally:
             await pool.close()
+            if warming is not None:  # closing stopped its workers: it ends at once
+                await asyncio.gather(warming, return_exceptions=True)
 
     app = FastAPI(
         title="skelprune",
@@ -220,6 +258,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     registry = CollectorRegistry()
     app.state.settings = settings
     app.state.pool = pool
+    app.state.pool_failure = None  # why the pool did not start, if it did not
     app.state.metrics = _metrics(registry, pool)
     app.include_router(router)
     _offline_docs(app)

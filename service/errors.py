@@ -24,6 +24,7 @@ from service.pool import (
     JobFailedError,
     JobTimeoutError,
     PoolClosedError,
+    PoolStartingError,
     QueueFullError,
     WorkerCrashedError,
 )
@@ -96,6 +97,7 @@ PROBLEMS: dict[type[BaseException], Problem] = {
     NotAcceptableError: Problem(406, "not-acceptable", "Not acceptable"),
     UnauthorizedError: Problem(401, "unauthorized", "Unauthorized"),
     QueueFullError: Problem(503, "queue-full", "Service busy"),
+    PoolStartingError: Problem(503, "starting", "Service starting"),
     PoolClosedError: Problem(503, "unavailable", "Service unavailable"),
     JobTimeoutError: Problem(504, "job-timeout", "Job timed out"),
     WorkerCrashedError: Problem(500, "worker-crashed", "Worker crashed"),

@@ -38,6 +38,7 @@ __all__ = [
     "JobTimeoutError",
     "PoolClosedError",
     "PoolError",
+    "PoolStartingError",
     "QueueFullError",
     "WorkerCrashedError",
     "WorkerPool",
@@ -58,6 +59,10 @@ class PoolClosedError(PoolError):
     """The pool is not started or is shutting down."""
 
 
+class PoolStartingError(PoolClosedError):
+    """The pool is still warming up its workers (a 503 that will pass)."""
+
+
 class JobTimeoutError(PoolError):
     """The job ran over its time limit; its worker was killed and replaced."""
 
@@ -70,17 +75,19 @@ class JobFailedError(PoolError):
     """The job raised an unexpected exception inside the worker (a bug, not bad input)."""
 
 
-def _worker_main(conn: Connection, initializer: Callable[[], None] | None) -> None:
-    """Worker process: warm up, say ready, then run ``(fn, args)`` jobs until told to stop."""
+def _worker_main(conn: Connection, initializer: Callable[[], object] | None) -> None:
+    """Worker process: warm up, say ready (with what the initializer returned, for the
+    log), then run ``(fn, args)`` jobs until told to stop."""
     # Ctrl-C in a terminal reaches the whole process group; the parent decides when we stop.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    info = None
     try:
         if initializer is not None:
-            initializer()
+            info = initializer()
     except BaseException as exc:  # report, then exit: the parent replaces us
         conn.send(("init-failed", f"{type(exc).__name__}: {exc}"))
         return
-    conn.send(("ready", None))
+    conn.send(("ready", None if info is None else str(info)))
     while True:
         try:
             msg = conn.recv()
@@ -115,7 +122,7 @@ def _exit_reason(code: int | None) -> str:
 class _Worker:
     """One worker process and the parent's end of its pipe."""
 
-    def __init__(self, ctx: Any, initializer: Callable[[], None] | None) -> None:
+    def __init__(self, ctx: Any, initializer: Callable[[], object] | None) -> None:
         self.conn, child = ctx.Pipe(duplex=True)
         self.proc = ctx.Process(
             target=_worker_main, args=(child, initializer), daemon=True, name="skelprune-worker"
@@ -127,15 +134,18 @@ class _Worker:
         # stopping every worker may both get here; the pipe must be closed once.
         self._kill_lock = threading.Lock()
 
-    def wait_ready(self, timeout: float) -> None:
+    def wait_ready(self, timeout: float) -> str | None:
+        """Wait for the worker's warm-up; returns what its initializer reported."""
         if self.ready:
-            return
+            return None
         if not self.conn.poll(timeout):
-            raise WorkerCrashedError(f"worker did not start within {timeout:g} s")
+            raise WorkerCrashedError(
+                f"worker did not start within {timeout:g} s (SKELPRUNE_STARTUP_TIMEOUT)")
         tag, info = self._receive("worker died while starting ({reason})")
         if tag != "ready":
             raise WorkerCrashedError(f"worker failed to start: {info}")
         self.ready = True
+        return info
 
     def _receive(self, died: str) -> tuple[str, Any]:
         """The worker's next message; a closed pipe means it died: ``died`` names how."""
@@ -190,7 +200,8 @@ class WorkerPool:
     job_timeout : float
         Seconds a job may run before its worker is killed.
     initializer : callable, optional
-        Module-level function run once in every new worker (warm-up).
+        Module-level function run once in every new worker (warm-up); what it returns,
+        if not None, goes to the log when the pool starts.
     startup_timeout : float
         Seconds a new worker may take to run ``initializer``.
     context : str
@@ -207,7 +218,7 @@ class WorkerPool:
         *,
         queue_size: int,
         job_timeout: float,
-        initializer: Callable[[], None] | None = None,
+        initializer: Callable[[], object] | None = None,
         startup_timeout: float = 300.0,
         context: str = "forkserver",
         preload: Sequence[str] = (),
@@ -230,26 +241,53 @@ class WorkerPool:
         self.busy = 0
         self.restarts = 0
         self.started = False
+        self.starting = False
         self.closed = False
         self.on_restart: Callable[[str], None] | None = None
         self.on_job_done: Callable[[float], None] | None = None
 
     # -- lifecycle -----------------------------------------------------------------
     async def start(self) -> None:
-        """Start every worker and wait until all have warmed up (again, after a close)."""
+        """Start every worker and wait until all have warmed up (again, after a close).
+
+        The first worker warms up alone, then the others together: on a cold numba
+        cache the first one compiles the kernels and the others load what it cached,
+        instead of every worker compiling the same code at once on shared cores.
+        """
         self.closed = False
+        self.starting = True
         self.waiting = self.busy = 0
-        self._loop = asyncio.get_running_loop()
+        loop = self._loop = asyncio.get_running_loop()
         self._idle = asyncio.Queue()
         self._executor = ThreadPoolExecutor(self.size, thread_name_prefix="skelprune-pool")
-        workers = [self._spawn() for _ in range(self.size)]
-        await asyncio.gather(
-            *(self._loop.run_in_executor(self._executor, w.wait_ready, self.startup_timeout)
-              for w in workers)
-        )
-        for w in workers:
+        t0 = time.perf_counter()
+        try:
+            first = await self._spawn_in_thread()
+            info = await loop.run_in_executor(self._executor, first.wait_ready,
+                                              self.startup_timeout)
+            log.info("worker 1 of %d warm in %.1f s%s", self.size, time.perf_counter() - t0,
+                     f": {info}" if info else "")
+            rest = [await self._spawn_in_thread() for _ in range(self.size - 1)]
+            infos = await asyncio.gather(
+                *(loop.run_in_executor(self._executor, w.wait_ready, self.startup_timeout)
+                  for w in rest)
+            )
+            for i, info in enumerate(infos, start=2):
+                log.info("worker %d of %d warm%s", i, self.size, f": {info}" if info else "")
+        finally:
+            self.starting = False
+        if self.closed:  # closed while starting: close() has stopped the workers
+            raise PoolClosedError("the worker pool was closed while it was starting")
+        for w in (first, *rest):
             self._idle.put_nowait(w)
         self.started = True
+        log.info("worker pool ready: %d workers in %.1f s", self.size, time.perf_counter() - t0)
+
+    @property
+    def warm(self) -> int:
+        """Workers that have finished warming up (while the pool starts)."""
+        with self._lock:
+            return sum(w.ready for w in self._workers)
 
     async def close(self) -> None:
         """Stop all workers (running jobs are killed, waiting ones get PoolClosedError)."""
@@ -263,6 +301,15 @@ class WorkerPool:
         await asyncio.gather(*(asyncio.to_thread(w.stop) for w in workers))
         if self._executor is not None:
             self._executor.shutdown(wait=False, cancel_futures=True)
+
+    async def _spawn_in_thread(self) -> _Worker:
+        # in a thread: a fork server's first start imports the library, a second or more
+        assert self._loop is not None
+        worker = await self._loop.run_in_executor(self._executor, self._spawn)
+        if self.closed:  # close() ran meanwhile and did not see this one
+            worker.kill()
+            raise PoolClosedError("the worker pool was closed while it was starting")
+        return worker
 
     def _spawn(self) -> _Worker:
         worker = _Worker(self._ctx, self._initializer)
@@ -302,6 +349,9 @@ class WorkerPool:
         ``fn`` and its arguments must be picklable (module-level function).
         Domain errors (:class:`SkelpruneError`) raised by ``fn`` are re-raised here.
         """
+        if self.starting and not self.closed:
+            raise PoolStartingError(
+                f"the worker pool is warming up ({self.warm} of {self.size} workers ready)")
         if not self.started or self.closed or self._idle is None or self._loop is None:
             raise PoolClosedError("the worker pool is not running")
         if self._idle.empty() and self.waiting >= self.queue_size:

@@ -27,7 +27,13 @@ from service.errors import (
     problem,
 )
 from service.jobs import MEDIA_TYPES, Job, Output, run_job
-from service.pool import PoolClosedError, PoolError, QueueFullError, WorkerPool
+from service.pool import (
+    PoolClosedError,
+    PoolError,
+    PoolStartingError,
+    QueueFullError,
+    WorkerPool,
+)
 from service.schemas import (
     POLYGON_ONLY,
     Health,
@@ -518,6 +524,12 @@ async def version() -> Version:
 )
 async def readyz(request: Request) -> Readiness:
     pool: WorkerPool = request.app.state.pool
+    if pool.starting and not pool.closed:
+        raise PoolStartingError(
+            f"the worker pool is warming up ({pool.warm} of {pool.size} workers ready)")
+    failure = request.app.state.pool_failure
+    if failure is not None:
+        raise PoolClosedError(f"the worker pool failed to start: {failure}")
     if not pool.started or pool.closed:
         raise PoolClosedError("the worker pool is not running")
     if not pool.ready:

@@ -22,7 +22,7 @@ from numba import njit
 
 from ._digital import disk_half_width, isqrt
 
-__all__ = ["BLOCK", "DiskCounts", "coverage", "disk_loss", "disk_remove",
+__all__ = ["BLOCK", "TILE", "DiskCounts", "coverage", "disk_loss", "disk_remove",
            "drop_redundant_anchors", "last_cover"]
 
 BLOCK = 16
@@ -162,16 +162,6 @@ def disk_remove(cover, bmin, bcnt, lazy, r, c, v) -> None:
         _row_decrement(cover, bmin, bcnt, lazy, r + dy, c - w, c + w)
 
 
-@njit(cache=True)
-def true_counts(cover, lazy) -> np.ndarray:
-    """The plain count array (for tests)."""
-    out = cover.copy()
-    for y in range(cover.shape[0]):
-        for x in range(cover.shape[1]):
-            out[y, x] += lazy[y, x // BLOCK]
-    return out
-
-
 @njit(cache=True, inline="always")
 def _find(nxt, x) -> int:
     """First unpainted pixel at or after ``x`` in a row (union-find, path compression)."""
@@ -183,31 +173,131 @@ def _find(nxt, x) -> int:
     return root
 
 
+# Side of the square tiles :func:`last_cover` works in: 32 pixels, one int64 word holds
+# a tile's row as 32 bits (the other 32 stay clear, so no arithmetic ever overflows).
+TILE = 32
+_DE_BRUIJN = np.array([0, 1, 28, 2, 29, 14, 24, 3, 30, 22, 20, 15, 25, 17, 4, 8,
+                       31, 27, 13, 23, 21, 19, 16, 7, 26, 12, 18, 6, 11, 5, 10, 9],
+                      dtype=np.int64)
+
+
+@njit(cache=True, inline="always")
+def _bit_index(low) -> int:
+    """Position of the one set bit of ``low`` (a power of two below 2**32)."""
+    return _DE_BRUIJN[((low * 0x077CB531) & 0xFFFFFFFF) >> 27]
+
+
+@njit(cache=True, inline="always")
+def _top_bit(word) -> int:
+    """Position of the highest set bit of ``word`` (0 < word < 2**32)."""
+    word |= word >> 1
+    word |= word >> 2
+    word |= word >> 4
+    word |= word >> 8
+    word |= word >> 16
+    return _bit_index((word + 1) >> 1)
+
+
+@njit(cache=True, inline="always")
+def _bits(a, e) -> int:
+    """Bits ``a`` to ``e`` set (0 <= a <= e <= 31)."""
+    return ((1 << (e + 1)) - 1) ^ ((1 << a) - 1)
+
+
 @njit(cache=True, inline="always")  # called from compiled code and from tests: see coverage
-def last_cover(shape_h: int, shape_w: int, rows, cols, r2s) -> np.ndarray:
+def last_cover(inside, rows, cols, r2s) -> np.ndarray:
     """For every pixel, the largest ``k`` whose disk ``(rows[k], cols[k], r2s[k])``
     covers it, -1 where none does.
 
-    Disks are painted last to first, each onto the pixels no later disk took; a
-    union-find per row skips the painted runs, so the cost is the painted area plus
-    the disks' heights.
+    ``inside`` (bool, the grid's shape) must hold every pixel a disk covers: the shape,
+    for its own maximal disks.
+
+    Disks are painted last to first, each onto the pixels no later disk took. Most disks
+    of a large shape lie where later (larger) disks have painted everything already, so
+    the work is organised to cost the pixels painted, not the disks' size. The pixels
+    still to paint are a bitmap, one 32-bit word per row of a ``TILE`` × ``TILE`` tile,
+    and each tile keeps a 32-bit mask of its rows with a bit left. A disk walks its rows
+    of tiles (one step each); in each, a union-find skips the tiles with nothing left,
+    and in the others it looks only at the rows with a bit left, painting a row's run
+    with one mask. A disk that paints nothing then costs about one step per row of tiles
+    plus one per tile it meets that is not yet full.
     """
+    shape_h, shape_w = inside.shape
     last = np.full((shape_h, shape_w), -1, dtype=np.int32)
-    nxt = np.empty((shape_h, shape_w + 1), dtype=np.int32)
+    th, tw = (shape_h + TILE - 1) // TILE, (shape_w + TILE - 1) // TILE
+    todo = np.zeros((shape_h, tw), dtype=np.int64)  # bit i of [y, t]: pixel (y, 32 t + i)
+    busy = np.zeros((th, tw), dtype=np.int64)  # bit i of [s, t]: row 32 s + i of a tile has one
+    across = np.zeros((th, tw), dtype=np.int64)  # columns of a tile with a bit left (or more)
     for y in range(shape_h):
-        for x in range(shape_w + 1):
-            nxt[y, x] = x
+        for x in range(shape_w):
+            if inside[y, x]:
+                todo[y, x // TILE] |= 1 << (x % TILE)
+                busy[y // TILE, x // TILE] |= 1 << (y % TILE)
+                across[y // TILE, x // TILE] |= 1 << (x % TILE)
+    tnxt = np.empty((th, tw + 1), dtype=np.int32)  # next tile of the row with a bit left
+    for ty in range(th):
+        for tx in range(tw + 1):
+            tnxt[ty, tx] = tx if tx == tw or busy[ty, tx] else tx + 1
+    for ty in range(th):  # compress: every entry points at a busy tile (or the end)
+        for tx in range(tw - 1, -1, -1):
+            tnxt[ty, tx] = tnxt[ty, tnxt[ty, tx]] if tnxt[ty, tx] != tx else tx
     for k in range(rows.size - 1, -1, -1):
         r, c, v = rows[k], cols[k], r2s[k]
         h = isqrt(v - 1)
-        for dy in range(-h, h + 1):
-            w = disk_half_width(v, dy)
-            row = nxt[r + dy]
-            x = _find(row, c - w)
-            while x <= c + w:
-                last[r + dy, x] = k
-                row[x] = x + 1
-                x = _find(row, x + 1)
+        for ty in range((r - h) // TILE, (r + h) // TILE + 1):
+            y0, y1 = max(r - h, ty * TILE), min(r + h, ty * TILE + TILE - 1)
+            # the widest row of the disk within this row of tiles
+            wide = disk_half_width(v, min(max(r, y0), y1) - r)
+            trow = tnxt[ty]
+            span = _bits(y0 - ty * TILE, y1 - ty * TILE)
+            tx = _find(trow, (c - wide) // TILE)
+            while tx <= (c + wide) // TILE:
+                x0 = tx * TILE
+                ys = busy[ty, tx] & span
+                # the box of the bits left in these rows (their columns: those of the
+                # whole tile): skip the tile if the disk misses it (most tiles a disk
+                # meets have their bits elsewhere)
+                if ys:
+                    cols_left = across[ty, tx]
+                    ya = ty * TILE + _bit_index(ys & -ys)
+                    ye = ty * TILE + _top_bit(ys)
+                    xa = x0 + _bit_index(cols_left & -cols_left)
+                    xe = x0 + _top_bit(cols_left)
+                    dy = ya - r if r < ya else (r - ye if r > ye else 0)
+                    dx = xa - c if c < xa else (c - xe if c > xe else 0)
+                    if dy * dy + dx * dx >= v:
+                        ys = 0
+                painted = False
+                while ys:
+                    low = ys & -ys
+                    ys ^= low
+                    y = ty * TILE + _bit_index(low)
+                    w = disk_half_width(v, y - r)
+                    a, e = max(c - w, x0), min(c + w, x0 + TILE - 1)
+                    if a > e:
+                        continue
+                    paint = todo[y, tx] & _bits(a - x0, e - x0)
+                    if paint == 0:
+                        continue
+                    painted = True
+                    todo[y, tx] ^= paint
+                    if todo[y, tx] == 0:
+                        busy[ty, tx] ^= low
+                    while paint:
+                        bit = paint & -paint
+                        paint ^= bit
+                        last[y, x0 + _bit_index(bit)] = k
+                if painted:  # the columns box again, from the rows left
+                    cols_left = 0
+                    rest = busy[ty, tx]
+                    while rest:
+                        low = rest & -rest
+                        rest ^= low
+                        cols_left |= todo[ty * TILE + _bit_index(low), tx]
+                    across[ty, tx] = cols_left
+                if busy[ty, tx] == 0:
+                    trow[tx] = tx + 1
+                tx = _find(trow, tx + 1)
     return last
 
 
@@ -230,7 +320,7 @@ def drop_redundant_anchors(anchor, r2, rows, cols) -> None:
     r2s = np.empty(n, dtype=np.int64)
     for k in range(n):
         r2s[k] = r2[rows[k], cols[k]]
-    last = last_cover(h, w, rows, cols, r2s).ravel()
+    last = last_cover(r2 > 0, rows, cols, r2s).ravel()
     # pixels grouped by their last cover (a counting sort)
     start = np.zeros(n + 1, dtype=np.int64)
     for p in range(last.size):

@@ -217,6 +217,16 @@ def test_dockerfile_runtime_settings_are_service_settings():
     assert env.get("NUMBA_CACHE_DIR", "").startswith("/tmp/")
 
 
+def test_dockerfile_compiles_kernels_for_any_x86_64_host():
+    # numba keys its cache on the CPU: built and run with the same generic target, the
+    # image's cache is valid on every host, not only on the CPU that built it
+    assert image_env().get("NUMBA_CPU_NAME") == "generic"
+    runs = [args for k, args in runtime_stage() if k == "RUN" and "service.compile" in args]
+    assert len(runs) == 1, "the runtime stage must compile the kernels once"
+    assert "NUMBA_CPU_NAME=generic" in runs[0]
+    assert "NUMBA_CACHE_DIR=" + image_env()[env_of("numba_cache_seed")] in runs[0]
+
+
 def test_dockerfile_runs_unprivileged_in_exec_form():
     stage = runtime_stage()
     users = [args for k, args in stage if k == "USER"]

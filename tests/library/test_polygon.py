@@ -22,12 +22,11 @@ def poly(*rings: list) -> dict:
 
 
 def world_centres(mask: np.ndarray, frame) -> tuple[np.ndarray, np.ndarray]:
-    """Pixel centres in polygon units, unrounded: frame.point rounds to a thousandth of a
-    pixel for the document, which can move a centre lying on an edge off it."""
+    """Exact pixel centres in polygon coordinates (``frame.point`` rounds what it reports,
+    to a thousandth of a pixel; the rasteriser decides on the exact centres)."""
     rows, cols = np.indices(mask.shape)
     x = frame.x0 + cols.ravel() * frame.pixel_size
-    y = frame.y0 - rows.ravel() * frame.pixel_size if frame.flip_y else (
-        frame.y0 + rows.ravel() * frame.pixel_size)
+    y = frame.y0 + (-1 if frame.flip_y else 1) * rows.ravel() * frame.pixel_size
     return x, y
 
 

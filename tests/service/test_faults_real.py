@@ -26,7 +26,6 @@ from pathlib import Path
 from typing import Any
 
 import httpx
-import numpy as np
 import pytest
 
 from testkit import DATA
@@ -38,18 +37,19 @@ PNG = {"content-type": "image/png"}
 PROBLEM = "application/problem+json"
 
 
-def star(longest_side: int) -> bytes:
-    """A seven-armed star as GeoJSON; rasterised at 4096 px it prunes for about 40 s."""
-    t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
-    r = 1 + 0.3 * np.sin(7 * t)
-    ring = [[float(a), float(b)] for a, b in zip(r * np.cos(t), r * np.sin(t), strict=True)]
-    return json.dumps({"geojson": {"type": "Polygon", "coordinates": [[*ring, ring[0]]]},
-                       "longest_side": longest_side, "curve": False}).encode()
+def boxes(n: int) -> bytes:
+    """``n`` × ``n`` small rectangles as one MultiPolygon rasterised at 4000 px: as many
+    components, each pruned on its own, so the job's time is mostly per-component work
+    rather than compiled kernels."""
+    polygons = [[[[j, i], [j + 0.7, i], [j + 0.7, i + 0.5], [j, i + 0.5], [j, i]]]
+                for i in range(n) for j in range(n)]
+    return json.dumps({"geojson": {"type": "MultiPolygon", "coordinates": polygons},
+                       "longest_side": 4000, "curve": False}).encode()
 
 
-#: Long enough to outlast an 8 s time limit on any machine: 41 s here, where the same
-#: star at 2048 px now takes 4 s.
-LONG_JOB = star(4096)
+#: Long enough to outlast a 3 s time limit on any machine: 19,600 components (98,000
+#: positions, under the vertex limit) take about 20 s here.
+LONG_JOB = boxes(140)
 
 
 def process_table() -> dict[int, tuple[int, str]]:
@@ -148,9 +148,9 @@ def test_worker_killed_from_outside_mid_job(real_server: Callable[..., Any]) -> 
 
 
 def test_time_limit_and_full_queue(real_server: Callable[..., Any]) -> None:
-    # The long job prunes for about 40 s on the reference machine: a time limit of 8 s
-    # stops it whatever the machine, and leaves the 503 checks ample time.
-    with real_server(workers="1", queue_size="0", job_timeout="8",
+    # The long job runs for about 20 s on the reference machine: a time limit of 3 s
+    # stops it whatever the machine, and leaves the 503 checks (milliseconds) ample time.
+    with real_server(workers="1", queue_size="0", job_timeout="3",
                 retry_after="3") as (proc, base):
         (first_worker,) = worker_pids(proc.pid)
         long_job = Call(base, LONG_JOB, {"content-type": "application/json"})
@@ -166,7 +166,7 @@ def test_time_limit_and_full_queue(real_server: Callable[..., Any]) -> None:
         assert long_job.response is None, "the long job ended before its time limit"
 
         body = problem(long_job.result(), 504, "job-timeout")
-        assert "time limit of 8 s" in body["detail"]
+        assert "time limit of 3 s" in body["detail"]
         # The slot is free again: a fresh worker, ready, and a normal job succeeds.
         wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).status_code == 200,
                  "readiness after the timeout")
@@ -177,7 +177,7 @@ def test_time_limit_and_full_queue(real_server: Callable[..., Any]) -> None:
 
 
 def test_drain_is_bounded_by_the_shutdown_timeout(real_server: Callable[..., Any]) -> None:
-    """SIGTERM with a job that would run for minutes: after SKELPRUNE_SHUTDOWN_TIMEOUT the
+    """SIGTERM with a job that would run for many seconds: after SKELPRUNE_SHUTDOWN_TIMEOUT the
     running and the queued request both get a 503 problem, and the server exits 0."""
     with real_server(workers="1", queue_size="4", job_timeout="300",
                 shutdown_timeout="2") as (proc, base):

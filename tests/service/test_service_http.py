@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import signal
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -20,7 +21,15 @@ BIRD = (DATA / "kimia216" / "bird-10.png").read_bytes()
 def test_real_server_round_trip(real_server: Callable[..., Any]) -> None:
     with real_server(ready="/healthz", workers="1") as (proc, base):
         with httpx.Client(base_url=base, timeout=30) as client:
-            assert client.get("/readyz").json()["workers"] == 1
+            # live at once; ready once the worker has warmed up (503 "starting" till then)
+            for _ in range(600):
+                ready = client.get("/readyz")
+                if ready.status_code == 200:
+                    break
+                assert ready.status_code == 503, ready.text
+                assert ready.json()["type"] == "urn:skelprune:problem:starting", ready.text
+                time.sleep(0.1)
+            assert ready.json()["workers"] == 1
             doc = client.post("/v1/prune", content=BIRD,
                               headers={"content-type": "image/png"}).json()
             assert (doc["width"], doc["height"]) == (116, 103)

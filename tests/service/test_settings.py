@@ -61,19 +61,38 @@ def test_default_worker_count_uses_both(monkeypatch: pytest.MonkeyPatch) -> None
 
 
 def test_shutdown_timeout_reaches_uvicorn(monkeypatch: pytest.MonkeyPatch) -> None:
+    import types
+
+    import uvicorn
+
     seen: dict[str, object] = {}
-    monkeypatch.setattr(entry.uvicorn, "run", lambda app, **kw: seen.update(kw))
+
+    class FakeServer:
+        def __init__(self, config: dict[str, object]) -> None:
+            seen.update(config)
+
+        def run(self, sockets: list[object]) -> None:
+            seen["sockets"] = sockets
+
+    monkeypatch.setattr(uvicorn, "Config", lambda app, **kw: kw)
+    monkeypatch.setattr(uvicorn, "Server", FakeServer)
     import service.app
 
-    monkeypatch.setattr(service.app, "create_app", lambda settings: "app")
+    app = types.SimpleNamespace(state=types.SimpleNamespace(pool_failure=None))
+    monkeypatch.setattr(service.app, "create_app", lambda settings, **kw: app)
     monkeypatch.setattr(entry.signal, "signal", lambda *args: None)  # not in pytest itself
     monkeypatch.setenv("SKELPRUNE_SHUTDOWN_TIMEOUT", "12.5")
     monkeypatch.setenv("SKELPRUNE_LOG_LEVEL", "warning")
+    monkeypatch.setenv("SKELPRUNE_HOST", "127.0.0.1")
+    monkeypatch.setenv("SKELPRUNE_PORT", "0")
     entry.main()
     assert seen["timeout_graceful_shutdown"] == 12.5
     assert seen["access_log"] is False  # the service writes its own JSON access log
     assert seen["log_config"]["formatters"]["json"]["tracebacks"] is False
     assert Settings.model_fields["shutdown_timeout"].default == 50.0
+    (sock,) = seen["sockets"]  # bound before the app was built
+    assert sock.getsockname()[0] == "127.0.0.1"
+    sock.close()
 
 
 def _seconds(text: str) -> float:

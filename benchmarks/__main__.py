@@ -10,12 +10,17 @@ import benchmarks
 
 
 def main(argv: list[str]) -> None:
-    known = sorted(m.name[len("bench_"):] for m in pkgutil.iter_modules(benchmarks.__path__)
-                   if m.name.startswith("bench_"))
+    known = sorted(
+        m.name[len("bench_") :]
+        for m in pkgutil.iter_modules(benchmarks.__path__)
+        if m.name.startswith("bench_")
+    )
     unknown = [a for a in argv if a not in known]
     if unknown:
-        print(f"usage: python -m benchmarks [{' | '.join(known)}] ... "
-              f"(unknown: {' '.join(unknown)})", file=sys.stderr)
+        print(
+            f"usage: python -m benchmarks [{' | '.join(known)}] ... (unknown: {' '.join(unknown)})",
+            file=sys.stderr,
+        )
         sys.exit(2)
     for name in argv or known:
         print(f"\n## {name}\n", flush=True)

@@ -54,8 +54,14 @@ def _smallest(shapes: list[tuple[str, np.ndarray]]) -> None:
             p = perturb(mask)
             ok += prune(p).n_endpoints() == k0
             changed += p.sum() != mask.sum()  # a turn by 90° or a mirror: never
-        rows.append([name, len(shapes), f"{100 * changed / len(shapes):.0f} %",
-                     f"{100 * ok / len(shapes):.0f} %"])
+        rows.append(
+            [
+                name,
+                len(shapes),
+                f"{100 * changed / len(shapes):.0f} %",
+                f"{100 * ok / len(shapes):.0f} %",
+            ]
+        )
     print(table(["perturbation", "shapes", "area changed", "same endpoint count"], rows))
 
 
@@ -104,16 +110,29 @@ def main() -> None:
                 if same.any():
                     gaps.append((lam[same].min() - lam.min()) / abs(lam.min()))
         n = len(shapes)
-        rows_agree.append([kind, n, f"{100 * coarse_ok / n:.0f} %"]
-                          + [f"{100 * a / n:.0f} %" for a in ok])
-    print(table(["perturbation", "shapes", "coarse skeleton agrees", "argmin λ (shipped)"]
-                + [f"simplest within {100 * m:g} %" for m in MARGINS[1:]], rows_agree))
+        rows_agree.append(
+            [kind, n, f"{100 * coarse_ok / n:.0f} %"] + [f"{100 * a / n:.0f} %" for a in ok]
+        )
+    print(
+        table(
+            ["perturbation", "shapes", "coarse skeleton agrees", "argmin λ (shipped)"]
+            + [f"simplest within {100 * m:g} %" for m in MARGINS[1:]],
+            rows_agree,
+        )
+    )
     q = np.percentile(gaps, [25, 50, 75]) if gaps else [np.nan] * 3
     print()
-    print(table(["disagreeing cases where the clean count is in the sequence",
-                 "λ above the minimum: p25", "median", "p75"],
-                [[len(gaps), f"{100 * q[0]:.2f} %", f"{100 * q[1]:.2f} %",
-                  f"{100 * q[2]:.2f} %"]]))
+    print(
+        table(
+            [
+                "disagreeing cases where the clean count is in the sequence",
+                "λ above the minimum: p25",
+                "median",
+                "p75",
+            ],
+            [[len(gaps), f"{100 * q[0]:.2f} %", f"{100 * q[1]:.2f} %", f"{100 * q[2]:.2f} %"]],
+        )
+    )
     print()
     _smallest(shapes)
 

@@ -81,8 +81,14 @@ def _env(**extra: str) -> dict[str, str]:
 
 
 def _python(code: str, **extra: str) -> str:
-    return subprocess.run([sys.executable, "-c", code], cwd=REPO, env=_env(**extra),
-                          capture_output=True, text=True, check=True).stdout
+    return subprocess.run(
+        [sys.executable, "-c", code],
+        cwd=REPO,
+        env=_env(**extra),
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
 
 
 def _free_port() -> int:
@@ -97,22 +103,36 @@ def _server_times() -> tuple[float, float, float]:
     base = f"http://127.0.0.1:{port}"
     t0 = time.monotonic()
     proc = subprocess.Popen(
-        [sys.executable, "-m", "service"], cwd=REPO, stdout=subprocess.DEVNULL,
+        [sys.executable, "-m", "service"],
+        cwd=REPO,
+        stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
-        env=_env(SKELPRUNE_HOST="127.0.0.1", SKELPRUNE_PORT=str(port), SKELPRUNE_WORKERS="2",
-                 SKELPRUNE_LOG_LEVEL="warning"))
+        env=_env(
+            SKELPRUNE_HOST="127.0.0.1",
+            SKELPRUNE_PORT=str(port),
+            SKELPRUNE_WORKERS="2",
+            SKELPRUNE_LOG_LEVEL="warning",
+        ),
+    )
     health = ready = None
     try:
         while time.monotonic() - t0 < 600:
             try:
                 if health is None and httpx.get(f"{base}/healthz", timeout=5).status_code == 200:
                     health = time.monotonic() - t0
-                if health is not None and ready is None and \
-                        httpx.get(f"{base}/readyz", timeout=5).status_code == 200:
+                if (
+                    health is not None
+                    and ready is None
+                    and httpx.get(f"{base}/readyz", timeout=5).status_code == 200
+                ):
                     ready = time.monotonic() - t0
                 if health is not None:
-                    r = httpx.post(f"{base}/v1/prune", content=PNG, timeout=60,
-                                   headers={"Content-Type": "image/png"})
+                    r = httpx.post(
+                        f"{base}/v1/prune",
+                        content=PNG,
+                        timeout=60,
+                        headers={"Content-Type": "image/png"},
+                    )
                     if r.status_code == 200:
                         return health, ready or time.monotonic() - t0, time.monotonic() - t0
             except httpx.TransportError:
@@ -131,8 +151,12 @@ def _port_in_use() -> float:
         taken.listen()
         t0 = time.monotonic()
         proc = subprocess.run(
-            [sys.executable, "-m", "service"], cwd=REPO, capture_output=True, check=False,
-            env=_env(SKELPRUNE_HOST="127.0.0.1", SKELPRUNE_PORT=str(taken.getsockname()[1])))
+            [sys.executable, "-m", "service"],
+            cwd=REPO,
+            capture_output=True,
+            check=False,
+            env=_env(SKELPRUNE_HOST="127.0.0.1", SKELPRUNE_PORT=str(taken.getsockname()[1])),
+        )
         assert proc.returncode == 1, proc.stderr
         return time.monotonic() - t0
 
@@ -140,38 +164,72 @@ def _port_in_use() -> float:
 def main() -> None:
     rows = []
     busy = [_port_in_use() for _ in range(ROUNDS)]
-    rows.append(["`python -m service` on a port in use: exited (code 1)",
-                 f"{np.median(busy):.2f}", f"{min(busy):.2f}–{max(busy):.2f}"])
+    rows.append(
+        [
+            "`python -m service` on a port in use: exited (code 1)",
+            f"{np.median(busy):.2f}",
+            f"{min(busy):.2f}–{max(busy):.2f}",
+        ]
+    )
     server = [_server_times() for _ in range(ROUNDS)]
     for i, name in enumerate(("/healthz 200", "/readyz 200", "first POST /v1/prune 200")):
         values = [s[i] for s in server]
-        rows.append([f"`python -m service`, 2 workers: {name}", f"{np.median(values):.2f}",
-                     f"{min(values):.2f}–{max(values):.2f}"])
+        rows.append(
+            [
+                f"`python -m service`, 2 workers: {name}",
+                f"{np.median(values):.2f}",
+                f"{min(values):.2f}–{max(values):.2f}",
+            ]
+        )
     bird = str(DATA / "kimia216" / "bird-2.png")
-    fresh = [tuple(map(float, _python(FIRST_PRUNE.format(path=bird)).split()))
-             for _ in range(ROUNDS)]
+    fresh = [
+        tuple(map(float, _python(FIRST_PRUNE.format(path=bird)).split())) for _ in range(ROUNDS)
+    ]
     steps = ("imports (numpy, PIL, skelprune)", "then its first `prune()` (bird-2)")
     for i, name in enumerate(steps):
         values = [f[i] for f in fresh]
-        rows.append([f"fresh process: {name}", f"{np.median(values):.2f}",
-                     f"{min(values):.2f}–{max(values):.2f}"])
+        rows.append(
+            [
+                f"fresh process: {name}",
+                f"{np.median(values):.2f}",
+                f"{min(values):.2f}–{max(values):.2f}",
+            ]
+        )
     with tempfile.TemporaryDirectory() as generic:
         t = time.monotonic()
-        _python("from service.compile import main; main()", NUMBA_CACHE_DIR=generic,
-                NUMBA_CPU_NAME="generic")
+        _python(
+            "from service.compile import main; main()",
+            NUMBA_CACHE_DIR=generic,
+            NUMBA_CPU_NAME="generic",
+        )
         compile_s = time.monotonic() - t
-        rows.append(["empty cache: `python -m service.compile` (generic target)",
-                     f"{compile_s:.1f}", "one run"])
+        rows.append(
+            [
+                "empty cache: `python -m service.compile` (generic target)",
+                f"{compile_s:.1f}",
+                "one run",
+            ]
+        )
         print(table(["what (fresh processes)", "seconds, median", f"range of {ROUNDS}"], rows))
         host, gen = [], []
         for _ in range(ROUNDS):  # alternating, so that a slow spell hits both
             host.append(json.loads(_python(RUN_TIME)))
-            gen.append(json.loads(_python(RUN_TIME, NUMBA_CACHE_DIR=generic,
-                                          NUMBA_CPU_NAME="generic")))
+            gen.append(
+                json.loads(_python(RUN_TIME, NUMBA_CACHE_DIR=generic, NUMBA_CPU_NAME="generic"))
+            )
     h, g = np.median(host, axis=0), np.median(gen, axis=0)
     print()
-    print(table(
-        ["numba target", "kimia216 pipeline, median ms a shape", "medial axis, 2048-px disk, s"],
-        [["host CPU (`make setup`)", f"{h[0]:.2f}", f"{h[1]:.2f}"],
-         ["generic x86-64 (the image)", f"{g[0]:.2f}", f"{g[1]:.2f}"],
-         ["generic / host", f"{g[0] / h[0]:.2f}×", f"{g[1] / h[1]:.2f}×"]]))
+    print(
+        table(
+            [
+                "numba target",
+                "kimia216 pipeline, median ms a shape",
+                "medial axis, 2048-px disk, s",
+            ],
+            [
+                ["host CPU (`make setup`)", f"{h[0]:.2f}", f"{h[1]:.2f}"],
+                ["generic x86-64 (the image)", f"{g[0]:.2f}", f"{g[1]:.2f}"],
+                ["generic / host", f"{g[0] / h[0]:.2f}×", f"{g[1] / h[1]:.2f}×"],
+            ],
+        )
+    )

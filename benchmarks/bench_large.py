@@ -80,8 +80,29 @@ def main() -> None:
             proc.start()
             total, edt, axis, rss = out.get()
             proc.join()
-            rows.append([f"{size} px", name, f"{total:.2f}", f"{edt:.2f}", f"{total / edt:.1f}×",
-                         f"{100 * axis / total:.0f} %", f"{rss:.0f}"])
-    print(table(["longest side", "shape", "pipeline, s", "EDT alone, s", "ratio to EDT",
-                 "medial axis share", "peak RSS, MB"], rows))
+            rows.append(
+                [
+                    f"{size} px",
+                    name,
+                    f"{total:.2f}",
+                    f"{edt:.2f}",
+                    f"{total / edt:.1f}×",
+                    f"{100 * axis / total:.0f} %",
+                    f"{rss:.0f}",
+                ]
+            )
+    print(
+        table(
+            [
+                "longest side",
+                "shape",
+                "pipeline, s",
+                "EDT alone, s",
+                "ratio to EDT",
+                "medial axis share",
+                "peak RSS, MB",
+            ],
+            rows,
+        )
+    )
     print("\nmedian of 3 runs at 1024 and 2048 px, one run at 4096 px; one core")

@@ -73,27 +73,55 @@ def main() -> None:
     sets = {"kimia216": dataset("kimia216"), "kimia99": dataset("kimia99")}
     sets["512x512"] = [upscale(m, 512) for m in sets["kimia216"][::17]]
     for name in ("gaussian-1", "scale-2"):
-        sets[f"kimia216/2, {name}"] = [PERTURBATIONS[name].apply(m, _rng(0, i, name))
-                                       for i, m in enumerate(sets["kimia216"][::2])]
+        sets[f"kimia216/2, {name}"] = [
+            PERTURBATIONS[name].apply(m, _rng(0, i, name))
+            for i, m in enumerate(sets["kimia216"][::2])
+        ]
     full(sets["kimia216"][0])  # JIT warm-up (cached on disk after the first run)
     from_medial_axis(sets["kimia216"][0])
     rows = []
     for name, masks in sets.items():
         ours, plain, ref = _each(masks, [full, from_medial_axis, bare])
-        rows.append([name, len(masks), float(np.median(ours)), float(np.median(plain)),
-                     float(np.median(np.array(ours) / np.array(plain))),
-                     float(np.median(ref)), float(np.median(ours) / np.median(ref))])
-    print(table(["shapes", "n", "default ms (median)", "coarse=None ms (median)",
-                 "default/None (median of ratios)", "skeletonize+EDT ms (median)",
-                 "default/bare"], rows))
+        rows.append(
+            [
+                name,
+                len(masks),
+                float(np.median(ours)),
+                float(np.median(plain)),
+                float(np.median(np.array(ours) / np.array(plain))),
+                float(np.median(ref)),
+                float(np.median(ours) / np.median(ref)),
+            ]
+        )
+    print(
+        table(
+            [
+                "shapes",
+                "n",
+                "default ms (median)",
+                "coarse=None ms (median)",
+                "default/None (median of ratios)",
+                "skeletonize+EDT ms (median)",
+                "default/bare",
+            ],
+            rows,
+        )
+    )
     small = [crop for m in sets["kimia216"][::34] for crop, _ in components(m)]
     speed = []
     for crop in small:
         fast = min(_sequence_only(crop, False) for _ in range(3))
         slow = _sequence_only(crop, True)
         speed.append(slow / fast)
-    rows = [["pruning sequence, kimia216", len(small), float(np.median(speed)),
-             float(np.min(speed)), float(np.max(speed))]]
+    rows = [
+        [
+            "pruning sequence, kimia216",
+            len(small),
+            float(np.median(speed)),
+            float(np.min(speed)),
+            float(np.max(speed)),
+        ]
+    ]
     # The fast sequence is incremental, the oracle repaints every disk for every
     # candidate: the ratio grows with the shape. One larger shape each (the oracle
     # needs seconds there, minutes at 512 px).

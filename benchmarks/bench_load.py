@@ -66,9 +66,12 @@ def server(workers: int, queue_size: int) -> Iterator[Server]:
 
     No API key: the load test measures pruning.
     """
-    with tempfile.TemporaryDirectory() as tmp, running_server(
-            Path(tmp) / "server.log", workers=str(workers),
-            queue_size=str(queue_size)) as (proc, base):
+    with (
+        tempfile.TemporaryDirectory() as tmp,
+        running_server(
+            Path(tmp) / "server.log", workers=str(workers), queue_size=str(queue_size)
+        ) as (proc, base),
+    ):
         yield Server(proc, base, workers, queue_size)
         stop(proc, signal.SIGINT, 60)
 
@@ -128,19 +131,27 @@ def request_mix() -> list[Req]:
     json_h = {"content-type": "application/json"}
     ring = [[0, 0], [40, 0], [40, 20], [25, 20], [25, 35], [15, 35], [15, 20], [0, 20], [0, 0]]
     poly = json.dumps({"type": "Polygon", "coordinates": [ring]}).encode()
-    poly_small = json.dumps({"geojson": {"type": "Polygon", "coordinates": [ring]},
-                             "longest_side": 96, "curve": False}).encode()
+    poly_small = json.dumps(
+        {"geojson": {"type": "Polygon", "coordinates": [ring]}, "longest_side": 96, "curve": False}
+    ).encode()
     unclosed = json.dumps({"type": "Polygon", "coordinates": [ring[:-1]]}).encode()
     mix: list[Req] = []
     for i in range(12):
         mix.append(Req("png", 200, content=pngs[i % len(pngs)], headers=png_h))
     for i in range(3):
-        mix.append(Req("multipart", 200,
-                       files={"file": ("s.png", pngs[(i + 2) % len(pngs)], "image/png")}))
+        mix.append(
+            Req("multipart", 200, files={"file": ("s.png", pngs[(i + 2) % len(pngs)], "image/png")})
+        )
     mix.append(Req("polygon", 200, content=poly_small, headers=json_h))
     mix.append(Req("polygon-512", 200, content=poly, headers=json_h))
-    mix.append(Req("png-geojson-out", 200, content=_png(np.pad(np.ones((30, 50), bool), 4)),
-                   headers={**png_h, "accept": "application/geo+json"}))
+    mix.append(
+        Req(
+            "png-geojson-out",
+            200,
+            content=_png(np.pad(np.ones((30, 50), bool), 4)),
+            headers={**png_h, "accept": "application/geo+json"},
+        )
+    )
     mix.append(Req("bad-png", 400, content=pngs[0][:100], headers=png_h))
     mix.append(Req("bad-polygon", 422, content=unclosed, headers=json_h))
     return mix
@@ -160,8 +171,9 @@ class Tally:
 async def _one(client: httpx.AsyncClient, req: Req, tally: Tally) -> None:
     t = time.perf_counter()
     try:
-        resp = await client.post("/v1/prune", content=req.content, files=req.files,
-                                 headers=req.headers)
+        resp = await client.post(
+            "/v1/prune", content=req.content, files=req.files, headers=req.headers
+        )
     except httpx.HTTPError as exc:
         tally.errors.append(f"{req.kind}: {type(exc).__name__}: {exc}")
         return
@@ -173,8 +185,7 @@ async def _one(client: httpx.AsyncClient, req: Req, tally: Tally) -> None:
         tally.refused += 1
     elif resp.status_code != req.expect:
         tally.errors.append(f"{req.kind}: {resp.status_code} {resp.text[:200]}")
-    elif resp.status_code >= 400 and resp.headers.get("content-type") != \
-            "application/problem+json":
+    elif resp.status_code >= 400 and resp.headers.get("content-type") != "application/problem+json":
         tally.errors.append(f"{req.kind}: {resp.status_code} without problem+json")
 
 
@@ -208,8 +219,14 @@ def _ms(values: list[float], q: float) -> float:
     return 1000 * float(np.quantile(values, q))
 
 
-def run(requests: int, concurrency: int, overload: int, overload_concurrency: int,
-        queue_size: int, time_cap: float) -> str:
+def run(
+    requests: int,
+    concurrency: int,
+    overload: int,
+    overload_concurrency: int,
+    queue_size: int,
+    time_cap: float,
+) -> str:
     workers = max(1, len(os.sched_getaffinity(0)))
     mix = request_mix()
     started = time.monotonic()
@@ -229,44 +246,62 @@ def run(requests: int, concurrency: int, overload: int, overload_concurrency: in
         over = asyncio.run(drive(srv.base, burst, overload_concurrency, deadline))
         mem["after overload"] = memory(pid)
         ready = httpx.get(f"{srv.base}/readyz", timeout=10)
-        restarts = [line for line in httpx.get(f"{srv.base}/metrics", timeout=10).text
-                    .splitlines() if line.startswith("skelprune_worker_restarts ")]
+        restarts = [
+            line
+            for line in httpx.get(f"{srv.base}/metrics", timeout=10).text.splitlines()
+            if line.startswith("skelprune_worker_restarts ")
+        ]
 
-    kinds = {k: first.by_kind.get(k, []) + second.by_kind.get(k, [])
-             for k in dict.fromkeys(r.kind for r in mix)}
-    sustained = Tally(latencies=first.latencies + second.latencies, by_kind=kinds,
-                      statuses=first.statuses + second.statuses,
-                      errors=first.errors + second.errors,
-                      refused=first.refused + second.refused,
-                      skipped=first.skipped + second.skipped,
-                      elapsed=first.elapsed + second.elapsed)
+    kinds = {
+        k: first.by_kind.get(k, []) + second.by_kind.get(k, [])
+        for k in dict.fromkeys(r.kind for r in mix)
+    }
+    sustained = Tally(
+        latencies=first.latencies + second.latencies,
+        by_kind=kinds,
+        statuses=first.statuses + second.statuses,
+        errors=first.errors + second.errors,
+        refused=first.refused + second.refused,
+        skipped=first.skipped + second.skipped,
+        elapsed=first.elapsed + second.elapsed,
+    )
     total = time.monotonic() - started
-    lines.append(f"server: {workers} workers, queue {queue_size}; "
-                 f"{os.cpu_count()} CPUs, load average "
-                 + ", ".join(f"{x:.2f}" for x in os.getloadavg()))
-    lines.append(f"mix per 20 requests: 12 PNG bodies ({', '.join(SHAPES)}), 3 multipart, "
-                 "2 GeoJSON polygons, 1 PNG -> GeoJSON, 1 truncated PNG (400), "
-                 "1 unclosed ring (422)")
+    lines.append(
+        f"server: {workers} workers, queue {queue_size}; "
+        f"{os.cpu_count()} CPUs, load average " + ", ".join(f"{x:.2f}" for x in os.getloadavg())
+    )
+    lines.append(
+        f"mix per 20 requests: 12 PNG bodies ({', '.join(SHAPES)}), 3 multipart, "
+        "2 GeoJSON polygons, 1 PNG -> GeoJSON, 1 truncated PNG (400), "
+        "1 unclosed ring (422)"
+    )
     lines.append("")
-    lines.append("| phase | clients | requests | done | req/s | p50 ms | p99 ms | max ms "
-                 "| errors | 503 | skipped | statuses |")
+    lines.append(
+        "| phase | clients | requests | done | req/s | p50 ms | p99 ms | max ms "
+        "| errors | 503 | skipped | statuses |"
+    )
     lines.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
-    for name, n, conc, t in (("warm-up", len(mix) * 3, concurrency, warm),
-                             ("sustained", requests, concurrency, sustained),
-                             ("overload", overload, overload_concurrency, over)):
+    for name, n, conc, t in (
+        ("warm-up", len(mix) * 3, concurrency, warm),
+        ("sustained", requests, concurrency, sustained),
+        ("overload", overload, overload_concurrency, over),
+    ):
         done = len(t.latencies)
         rate = done / t.elapsed if t.elapsed else float("nan")
         statuses = " ".join(f"{k}×{v}" for k, v in sorted(t.statuses.items()))
-        lines.append(f"| {name} | {conc} | {n} | {done} | {rate:.1f} | "
-                     f"{_ms(t.latencies, 0.5):.1f} | {_ms(t.latencies, 0.99):.1f} | "
-                     f"{_ms(t.latencies, 1.0):.1f} | {len(t.errors)} | {t.refused} | "
-                     f"{t.skipped} | {statuses} |")
+        lines.append(
+            f"| {name} | {conc} | {n} | {done} | {rate:.1f} | "
+            f"{_ms(t.latencies, 0.5):.1f} | {_ms(t.latencies, 0.99):.1f} | "
+            f"{_ms(t.latencies, 1.0):.1f} | {len(t.errors)} | {t.refused} | "
+            f"{t.skipped} | {statuses} |"
+        )
     lines.append("")
     lines.append("| sustained, by request kind | n | p50 ms | p99 ms |")
     lines.append("|---|---|---|---|")
     for kind, values in sustained.by_kind.items():
-        lines.append(f"| {kind} | {len(values)} | {_ms(values, 0.5):.1f} | "
-                     f"{_ms(values, 0.99):.1f} |")
+        lines.append(
+            f"| {kind} | {len(values)} | {_ms(values, 0.5):.1f} | {_ms(values, 0.99):.1f} |"
+        )
     lines.append("")
     lines.append("| memory (RSS, MiB) | server process | workers + fork server |")
     lines.append("|---|---|---|")
@@ -274,13 +309,14 @@ def run(requests: int, concurrency: int, overload: int, overload_concurrency: in
         lines.append(f"| {name} | {main_mib:.1f} | {kids_mib:.1f} |")
     lines.append("")
     growth = mem["after sustained load"][0] - mem["after warm-up"][0]
-    lines.append(f"server RSS growth over the sustained load: {growth:+.1f} MiB; "
-                 f"/readyz after the run: {ready.status_code}; "
-                 f"{restarts[0] if restarts else 'skelprune_worker_restarts ?'}; "
-                 f"whole run {total:.0f} s (cap {time_cap:.0f} s)")
+    lines.append(
+        f"server RSS growth over the sustained load: {growth:+.1f} MiB; "
+        f"/readyz after the run: {ready.status_code}; "
+        f"{restarts[0] if restarts else 'skelprune_worker_restarts ?'}; "
+        f"whole run {total:.0f} s (cap {time_cap:.0f} s)"
+    )
     if sustained.refused:
-        lines.append(f"NOTE: {sustained.refused} requests refused (503) below the overload "
-                     "level")
+        lines.append(f"NOTE: {sustained.refused} requests refused (503) below the overload level")
     for tally in (warm, sustained, over):
         for err in tally.errors[:5]:
             lines.append(f"error: {err}")
@@ -294,13 +330,26 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--requests", type=int, default=3000, help="sustained-load requests")
     p.add_argument("--concurrency", type=int, default=8, help="clients during sustained load")
     p.add_argument("--overload", type=int, default=600, help="requests in the overload burst")
-    p.add_argument("--overload-concurrency", type=int, default=64,
-                   help="clients during the burst (more than workers + queue)")
+    p.add_argument(
+        "--overload-concurrency",
+        type=int,
+        default=64,
+        help="clients during the burst (more than workers + queue)",
+    )
     p.add_argument("--queue-size", type=int, default=16, help="SKELPRUNE_QUEUE_SIZE")
     p.add_argument("--time-cap", type=float, default=300.0, help="hard cap on the run, s")
     args = p.parse_args([] if argv is None else argv)
-    print(run(args.requests, args.concurrency, args.overload, args.overload_concurrency,
-              args.queue_size, args.time_cap), flush=True)
+    print(
+        run(
+            args.requests,
+            args.concurrency,
+            args.overload,
+            args.overload_concurrency,
+            args.queue_size,
+            args.time_cap,
+        ),
+        flush=True,
+    )
 
 
 if __name__ == "__main__":

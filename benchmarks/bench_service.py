@@ -58,7 +58,7 @@ def shape_png(side: int = 256) -> bytes:
     canvas = np.zeros((side, side), dtype=np.uint8)
     r0 = (side - inner.shape[0]) // 2
     c0 = (side - inner.shape[1]) // 2
-    canvas[r0:r0 + inner.shape[0], c0:c0 + inner.shape[1]] = inner * 255
+    canvas[r0 : r0 + inner.shape[0], c0 : c0 + inner.shape[1]] = inner * 255
     buf = io.BytesIO()
     Image.fromarray(canvas).save(buf, "PNG")
     return buf.getvalue()
@@ -70,8 +70,13 @@ def server(workers: int) -> Iterator[tuple[str, int]]:
 
     Stopped (SIGINT) on exit.
     """
-    with tempfile.TemporaryDirectory() as tmp, running_server(
-            Path(tmp) / "server.log", workers=str(workers), queue_size="256") as (proc, base):
+    with (
+        tempfile.TemporaryDirectory() as tmp,
+        running_server(Path(tmp) / "server.log", workers=str(workers), queue_size="256") as (
+            proc,
+            base,
+        ),
+    ):
         yield base, proc.pid
         stop(proc, signal.SIGINT, 30)
 
@@ -208,18 +213,22 @@ def main() -> None:
         ["HTTP round trip, 1 worker (ms)", med(http), ""],
         ["ratio HTTP / library (decode..json)", med(http) / med(lib_full), "≤ 1.2"],
         ["ratio HTTP / library (prune + to_dict)", med(http) / med(lib_core), ""],
-        ["server process CPU per request (ms)",
-         "n/a" if server_cpu is None else server_cpu, ""],
+        ["server process CPU per request (ms)", "n/a" if server_cpu is None else server_cpu, ""],
         ["load client CPU per request (ms)", client_ms, ""],
         ["throughput 1 worker (jobs/s, median of rounds)", med(tput1), ""],
         ["throughput 2 workers (jobs/s, median of rounds)", med(tput2), ""],
         ["ratio 2 / 1 workers (median of per-round ratios)", med(ratios), "≥ 1.8"],
-        ["bound on 2 cores shared with server and client: 2w / (w + o)",
-         2 * med(lib_full) / (med(lib_full) + overhead), ""],
+        [
+            "bound on 2 cores shared with server and client: 2w / (w + o)",
+            2 * med(lib_full) / (med(lib_full) + overhead),
+            "",
+        ],
         ["machine ceiling: 2 / 1 busy processes", ceiling, "(2 if idle)"],
     ]
     load = ", ".join(f"{x:.2f}" for x in os.getloadavg())
-    print(f"shape: {SHAPE} in 256×256, {ROUND_TRIPS} round trips, {THROUGHPUT_ROUNDS} "
-          f"alternating rounds of {THROUGHPUT_JOBS} jobs per throughput measure, "
-          f"{os.cpu_count()} CPUs, load average {load}\n")
+    print(
+        f"shape: {SHAPE} in 256×256, {ROUND_TRIPS} round trips, {THROUGHPUT_ROUNDS} "
+        f"alternating rounds of {THROUGHPUT_JOBS} jobs per throughput measure, "
+        f"{os.cpu_count()} CPUs, load average {load}\n"
+    )
     print(table(["measure", "median / value", "target"], rows))

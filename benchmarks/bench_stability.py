@@ -38,8 +38,9 @@ COMMAND = "python -m benchmarks stability"
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.bench_stability")
-    parser.add_argument("--quick", action="store_true",
-                        help="20 shapes a dataset, 3 rectangles a kind; print only")
+    parser.add_argument(
+        "--quick", action="store_true", help="20 shapes a dataset, 3 rectangles a kind; print only"
+    )
     parser.add_argument("--limit", type=int, default=None, help="shapes per dataset")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args(argv or [])

@@ -37,8 +37,10 @@ def listen(host: str, port: int) -> socket.socket:
         sock.listen(2048)
     except OSError as exc:
         sock.close()
-        raise SystemExit(f"skelprune: cannot listen on {host}:{port} "
-                         f"(SKELPRUNE_HOST, SKELPRUNE_PORT): {exc.strerror or exc}") from None
+        raise SystemExit(
+            f"skelprune: cannot listen on {host}:{port} "
+            f"(SKELPRUNE_HOST, SKELPRUNE_PORT): {exc.strerror or exc}"
+        ) from None
     sock.set_inheritable(True)
     return sock
 
@@ -81,14 +83,17 @@ def main() -> None:
             server.should_exit = True
 
     app = create_app(settings, warm_in_background=True, on_pool_failure=stop_server)
-    server = uvicorn.Server(uvicorn.Config(
-        app, log_level=settings.log_level,
-        log_config=logging_config(settings.log_level),  # JSON lines on stderr
-        access_log=False,  # the service writes its own access log, with request IDs
-        # http: uvicorn's default picks httptools (the service extra) and falls back to h11
-        # a drain after SIGTERM is bounded: below the orchestrator's grace period
-        timeout_graceful_shutdown=settings.shutdown_timeout,
-    ))
+    server = uvicorn.Server(
+        uvicorn.Config(
+            app,
+            log_level=settings.log_level,
+            log_config=logging_config(settings.log_level),  # JSON lines on stderr
+            access_log=False,  # the service writes its own access log, with request IDs
+            # http: uvicorn's default picks httptools (the service extra) and falls back to h11
+            # a drain after SIGTERM is bounded: below the orchestrator's grace period
+            timeout_graceful_shutdown=settings.shutdown_timeout,
+        )
+    )
     server.run(sockets=[sock])
     if app.state.pool_failure is not None:
         raise SystemExit(f"skelprune: the worker pool failed to start: {app.state.pool_failure}")

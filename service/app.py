@@ -62,8 +62,10 @@ class BodyLimitMiddleware:
         declared = dict(scope["headers"]).get(b"content-length")
         message = f"request body exceeds the limit of {self.limit} bytes"
         if declared is not None and declared.isdigit() and int(declared) > self.limit:
-            response = problem(BodyTooLargeError(f"{message} (Content-Length: {int(declared)})"),
-                               instance=scope.get("path"))
+            response = problem(
+                BodyTooLargeError(f"{message} (Content-Length: {int(declared)})"),
+                instance=scope.get("path"),
+            )
             await response(scope, receive, send)
             return
         received = 0
@@ -93,20 +95,31 @@ def _metrics(registry: CollectorRegistry, pool: WorkerPool) -> Metrics:
     buckets = (0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1, 2, 5, 10, 30, 60)
     m = Metrics(
         registry=registry,
-        prune_seconds=Histogram("skelprune_prune_seconds", "Time in skelprune.prune per job.",
-                                buckets=buckets, registry=registry),
-        job_seconds=Histogram("skelprune_job_seconds",
-                              "Worker round trip per job: decode, prune, serialise, transfer.",
-                              buckets=buckets, registry=registry),
+        prune_seconds=Histogram(
+            "skelprune_prune_seconds",
+            "Time in skelprune.prune per job.",
+            buckets=buckets,
+            registry=registry,
+        ),
+        job_seconds=Histogram(
+            "skelprune_job_seconds",
+            "Worker round trip per job: decode, prune, serialise, transfer.",
+            buckets=buckets,
+            registry=registry,
+        ),
     )
-    Gauge("skelprune_queue_depth", "Jobs waiting for a free worker.",
-          registry=registry).set_function(lambda: pool.waiting)
-    Gauge("skelprune_workers_busy", "Workers running a job.",
-          registry=registry).set_function(lambda: pool.busy)
-    Gauge("skelprune_workers", "Worker processes alive.",
-          registry=registry).set_function(pool.alive)
-    Gauge("skelprune_worker_restarts", "Workers replaced after a timeout or crash.",
-          registry=registry).set_function(lambda: pool.restarts)
+    Gauge(
+        "skelprune_queue_depth", "Jobs waiting for a free worker.", registry=registry
+    ).set_function(lambda: pool.waiting)
+    Gauge("skelprune_workers_busy", "Workers running a job.", registry=registry).set_function(
+        lambda: pool.busy
+    )
+    Gauge("skelprune_workers", "Worker processes alive.", registry=registry).set_function(
+        pool.alive
+    )
+    Gauge(
+        "skelprune_worker_restarts", "Workers replaced after a timeout or crash.", registry=registry
+    ).set_function(lambda: pool.restarts)
     pool.on_job_done = m.job_seconds.observe
     return m
 
@@ -129,7 +142,9 @@ def _openapi(app: FastAPI) -> Callable[[], dict[str, Any]]:
     def build() -> dict[str, Any]:
         if app.openapi_schema is None:
             schema = get_openapi(
-                title=app.title, version=app.version, description=app.description,
+                title=app.title,
+                version=app.version,
+                description=app.description,
                 routes=app.routes,
             )
             _simplify_query_params(schema)
@@ -149,10 +164,17 @@ def _openapi(app: FastAPI) -> Callable[[], dict[str, Any]]:
             components["PolygonRequest"] = {"title": "PolygonRequest", **request}
             # SKELPRUNE_API_KEY, when set: either header will do; {} = no key configured.
             schema["components"]["securitySchemes"] = {
-                "bearer": {"type": "http", "scheme": "bearer",
-                           "description": "`Authorization: Bearer <SKELPRUNE_API_KEY>`"},
-                "apiKey": {"type": "apiKey", "in": "header", "name": "X-API-Key",
-                           "description": "`X-API-Key: <SKELPRUNE_API_KEY>`"},
+                "bearer": {
+                    "type": "http",
+                    "scheme": "bearer",
+                    "description": "`Authorization: Bearer <SKELPRUNE_API_KEY>`",
+                },
+                "apiKey": {
+                    "type": "apiKey",
+                    "in": "header",
+                    "name": "X-API-Key",
+                    "description": "`X-API-Key: <SKELPRUNE_API_KEY>`",
+                },
             }
             for path, operations in schema["paths"].items():
                 if path not in OPEN_PATHS:
@@ -176,17 +198,22 @@ def _offline_docs(app: FastAPI) -> None:
     @app.get("/docs", include_in_schema=False)
     async def swagger_ui() -> HTMLResponse:
         return get_swagger_ui_html(
-            openapi_url="/openapi.json", title=f"{app.title} - Swagger UI",
+            openapi_url="/openapi.json",
+            title=f"{app.title} - Swagger UI",
             swagger_js_url=f"{DOCS_ASSETS}/swagger-ui-bundle.js",
             swagger_css_url=f"{DOCS_ASSETS}/swagger-ui.css",
-            swagger_favicon_url=f"{DOCS_ASSETS}/favicon.png")
+            swagger_favicon_url=f"{DOCS_ASSETS}/favicon.png",
+        )
 
     @app.get("/redoc", include_in_schema=False)
     async def redoc() -> HTMLResponse:
         return get_redoc_html(
-            openapi_url="/openapi.json", title=f"{app.title} - ReDoc",
+            openapi_url="/openapi.json",
+            title=f"{app.title} - ReDoc",
             redoc_js_url=f"{DOCS_ASSETS}/redoc.standalone.js",
-            redoc_favicon_url=f"{DOCS_ASSETS}/favicon.png", with_google_fonts=False)
+            redoc_favicon_url=f"{DOCS_ASSETS}/favicon.png",
+            with_google_fonts=False,
+        )
 
 
 def create_app(
@@ -211,9 +238,12 @@ def create_app(
     """
     settings = settings or Settings()
     pool = WorkerPool(
-        settings.workers, queue_size=settings.queue_size, job_timeout=settings.job_timeout,
+        settings.workers,
+        queue_size=settings.queue_size,
+        job_timeout=settings.job_timeout,
         initializer=warmup if settings.warmup else None,
-        startup_timeout=settings.startup_timeout, context=settings.mp_context,
+        startup_timeout=settings.startup_timeout,
+        context=settings.mp_context,
         preload=("skelprune", "service.jobs"),
     )
 
@@ -231,10 +261,13 @@ def create_app(
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         if settings.warmup:
-            log.info("starting %d workers: the first one warms up alone, then the others "
-                     "(a cold numba cache compiles the kernels first, half a minute to a "
-                     "minute on one core; `make setup` and the image build compile them "
-                     "ahead)", pool.size)
+            log.info(
+                "starting %d workers: the first one warms up alone, then the others "
+                "(a cold numba cache compiles the kernels first, half a minute to a "
+                "minute on one core; `make setup` and the image build compile them "
+                "ahead)",
+                pool.size,
+            )
         warming = None
         if warm_in_background:
             warming = asyncio.create_task(start_in_background())
@@ -253,7 +286,8 @@ def create_app(
         description="Pruned skeletons of 2-D shapes (Bayesian skeleton pruning, "
         "Shen, Bai, Yang & Latecki 2013). Errors are RFC 9457 problem details.",
         lifespan=lifespan,
-        docs_url=None, redoc_url=None,  # served below from installed assets, not a CDN
+        docs_url=None,
+        redoc_url=None,  # served below from installed assets, not a CDN
     )
     registry = CollectorRegistry()
     app.state.settings = settings
@@ -270,10 +304,17 @@ def create_app(
         app.add_middleware(ApiKeyMiddleware, key=settings.api_key.get_secret_value())
     if settings.cors_origins:  # outside the key check: preflights carry no credentials
         app.add_middleware(
-            CORSMiddleware, allow_origins=settings.cors_origins, allow_credentials=False,
+            CORSMiddleware,
+            allow_origins=settings.cors_origins,
+            allow_credentials=False,
             allow_methods=["GET", "POST"],
-            allow_headers=["Authorization", "X-API-Key", "Content-Type", "Accept",
-                           REQUEST_ID_HEADER],
+            allow_headers=[
+                "Authorization",
+                "X-API-Key",
+                "Content-Type",
+                "Accept",
+                REQUEST_ID_HEADER,
+            ],
             expose_headers=[REQUEST_ID_HEADER, "Retry-After", "WWW-Authenticate"],
             max_age=600,
         )

@@ -158,8 +158,15 @@ def problem(
     row = lookup(exc)
     if row is None:
         raise TypeError(f"{type(exc).__name__} has no row in PROBLEMS")
-    return problem_response(row.status, str(exc) or row.title, slug=row.slug, title=row.title,
-                            instance=instance, headers=headers, extra=extra)
+    return problem_response(
+        row.status,
+        str(exc) or row.title,
+        slug=row.slug,
+        title=row.title,
+        instance=instance,
+        headers=headers,
+        extra=extra,
+    )
 
 
 def _loc(loc: tuple[Any, ...] | list[Any]) -> str:
@@ -174,8 +181,14 @@ def install_error_handlers(app: FastAPI, *, retry_after: int) -> None:
         assert row is not None
         headers = {"Retry-After": str(retry_after)} if row.status == 503 else None
         if row.status >= 500:
-            log.warning("%s %s -> %d: %s", request.method, request.url.path, row.status, exc,
-                        extra={"request_id": request_id_var.get()})
+            log.warning(
+                "%s %s -> %d: %s",
+                request.method,
+                request.url.path,
+                row.status,
+                exc,
+                extra={"request_id": request_id_var.get()},
+            )
         return problem(exc, instance=request.url.path, headers=headers)
 
     async def http_error(request: Request, exc: Exception) -> JSONResponse:
@@ -197,27 +210,41 @@ def install_error_handlers(app: FastAPI, *, retry_after: int) -> None:
         assert isinstance(exc, RequestValidationError)
         errors = [
             # pydantic prefixes a validator's message with "Value error, ": not the user's
-            {"loc": [str(p) for p in e.get("loc", ())],
-             "msg": str(e.get("msg", "")).removeprefix("Value error, "),
-             "type": str(e.get("type", ""))}
+            {
+                "loc": [str(p) for p in e.get("loc", ())],
+                "msg": str(e.get("msg", "")).removeprefix("Value error, "),
+                "type": str(e.get("type", "")),
+            }
             for e in exc.errors()
         ]
         shown = "; ".join(f"{_loc(e['loc'])}: {e['msg']}" for e in errors[:5])
         more = f" (and {len(errors) - 5} more)" if len(errors) > 5 else ""
         row = PROBLEMS[RequestValidationError]
         return problem_response(
-            row.status, shown + more or row.title, slug=row.slug, title=row.title,
-            instance=request.url.path, extra={"errors": errors},
+            row.status,
+            shown + more or row.title,
+            slug=row.slug,
+            title=row.title,
+            instance=request.url.path,
+            extra={"errors": errors},
         )
 
     async def unexpected(request: Request, exc: Exception) -> JSONResponse:
         # Normally RequestContextMiddleware catches these first; this is the fallback.
         ref = uuid.uuid4().hex[:12]
-        log.error("unhandled error %s on %s %s: %s", ref, request.method, request.url.path,
-                  type(exc).__name__, exc_info=log.isEnabledFor(logging.DEBUG),
-                  extra={"request_id": request_id_var.get(), "reference": ref})
-        return problem(InternalError(f"internal error (reference {ref}); the server log has "
-                                     "the details"), instance=request.url.path)
+        log.error(
+            "unhandled error %s on %s %s: %s",
+            ref,
+            request.method,
+            request.url.path,
+            type(exc).__name__,
+            exc_info=log.isEnabledFor(logging.DEBUG),
+            extra={"request_id": request_id_var.get(), "reference": ref},
+        )
+        return problem(
+            InternalError(f"internal error (reference {ref}); the server log has the details"),
+            instance=request.url.path,
+        )
 
     for cls in PROBLEMS:
         if cls is not RequestValidationError:

@@ -27,52 +27,125 @@ SQUARE_POLYGON = {
 
 DOCUMENT_EXAMPLE: dict[str, Any] = {
     "version": {"library": __version__, "algorithm": ALGORITHM_VERSION},
-    "width": 60, "height": 30, "method": "bayesian", "beta": 9.0, "coarse": "dce",
+    "width": 60,
+    "height": 30,
+    "method": "bayesian",
+    "beta": 9.0,
+    "coarse": "dce",
     "foreground": {"rule": "auto", "shape": "light", "threshold": 127.5, "border": 1.0},
-    "components": [{
-        "area": 1000, "alpha": 8.64, "rer": 0.0, "ss": 1.28, "objective": 1.28,
-        "medial_axis": {"rer": 0.0, "length": 71.08, "endpoints": 4, "branches": 5},
-        "skeleton": {
-            "length": 71.08,
-            "nodes": [
-                {"id": 0, "x": 14.0, "y": 14.0, "radius": 10.0, "kind": "junction",
-                 "points": [[14.0, 14.0, 10.0], [14.0, 15.0, 10.0]]},
-                {"id": 1, "x": 7.0, "y": 7.0, "radius": 3.0, "kind": "endpoint", "points": []},
+    "components": [
+        {
+            "area": 1000,
+            "alpha": 8.64,
+            "rer": 0.0,
+            "ss": 1.28,
+            "objective": 1.28,
+            "medial_axis": {"rer": 0.0, "length": 71.08, "endpoints": 4, "branches": 5},
+            "skeleton": {
+                "length": 71.08,
+                "nodes": [
+                    {
+                        "id": 0,
+                        "x": 14.0,
+                        "y": 14.0,
+                        "radius": 10.0,
+                        "kind": "junction",
+                        "points": [[14.0, 14.0, 10.0], [14.0, 15.0, 10.0]],
+                    },
+                    {"id": 1, "x": 7.0, "y": 7.0, "radius": 3.0, "kind": "endpoint", "points": []},
+                ],
+                "branches": [
+                    {
+                        "id": 0,
+                        "source": 0,
+                        "target": 1,
+                        "length": 9.9,
+                        "points": [
+                            [13.0, 13.0, 9.0],
+                            [12.0, 12.0, 8.0],
+                            [11.0, 11.0, 7.0],
+                            [10.0, 10.0, 6.0],
+                            [9.0, 9.0, 5.0],
+                            [8.0, 8.0, 4.0],
+                            [7.0, 7.0, 3.0],
+                        ],
+                        "off_path": [],
+                        "margin": 0.046,
+                        "removed_at": 1,
+                    },
+                ],
+                "endpoints": [1],
+            },
+            "curve": [
+                {"step": 0, "length": 71.08, "ar": 0.0, "lr": 1.28, "objective": 1.28},
+                {"step": 1, "length": 62.18, "ar": 0.014, "lr": 1.19, "objective": 1.31},
             ],
-            "branches": [
-                {"id": 0, "source": 0, "target": 1, "length": 9.9,
-                 "points": [[13.0, 13.0, 9.0], [12.0, 12.0, 8.0], [11.0, 11.0, 7.0],
-                            [10.0, 10.0, 6.0], [9.0, 9.0, 5.0], [8.0, 8.0, 4.0],
-                            [7.0, 7.0, 3.0]],
-                 "off_path": [], "margin": 0.046, "removed_at": 1},
-            ],
-            "endpoints": [1],
-        },
-        "curve": [
-            {"step": 0, "length": 71.08, "ar": 0.0, "lr": 1.28, "objective": 1.28},
-            {"step": 1, "length": 62.18, "ar": 0.014, "lr": 1.19, "objective": 1.31},
-        ],
-        "chosen_step": 0,
-    }],
+            "chosen_step": 0,
+        }
+    ],
 }
 
 GEOJSON_EXAMPLE: dict[str, Any] = {
     "type": "FeatureCollection",
-    "properties": {"width": 64, "height": 48, "method": "bayesian", "beta": 9.0,
-                   "coarse": "dce", "components": [
-                       {"component": 0, "area": 1200, "alpha": 9.48, "rer": 0.0042,
-                        "ss": 1.79, "objective": 1.83}]},
+    "properties": {
+        "width": 64,
+        "height": 48,
+        "method": "bayesian",
+        "beta": 9.0,
+        "coarse": "dce",
+        "components": [
+            {
+                "component": 0,
+                "area": 1200,
+                "alpha": 9.48,
+                "rer": 0.0042,
+                "ss": 1.79,
+                "objective": 1.83,
+            }
+        ],
+    },
     "features": [
-        {"type": "Feature",
-         "geometry": {"type": "LineString",
-                      "coordinates": [[14.0, 14.0], [13.0, 13.0], [12.0, 12.0], [11.0, 11.0],
-                                      [10.0, 10.0], [9.0, 9.0], [8.0, 8.0], [7.0, 7.0]]},
-         "properties": {"component": 0, "kind": "branch", "id": 0, "source": 0, "target": 1,
-                        "length": 9.9, "radii": [10.0, 9.0, 8.0, 7.0, 6.0, 5.0, 4.0, 3.0],
-                        "margin": 0.046, "removed_at": 1, "rer": 0.0042, "ss": 1.79}},
-        {"type": "Feature", "geometry": {"type": "Point", "coordinates": [7.0, 7.0]},
-         "properties": {"component": 0, "kind": "endpoint", "id": 1, "radius": 3.0,
-                        "rer": 0.0042, "ss": 1.79}},
+        {
+            "type": "Feature",
+            "geometry": {
+                "type": "LineString",
+                "coordinates": [
+                    [14.0, 14.0],
+                    [13.0, 13.0],
+                    [12.0, 12.0],
+                    [11.0, 11.0],
+                    [10.0, 10.0],
+                    [9.0, 9.0],
+                    [8.0, 8.0],
+                    [7.0, 7.0],
+                ],
+            },
+            "properties": {
+                "component": 0,
+                "kind": "branch",
+                "id": 0,
+                "source": 0,
+                "target": 1,
+                "length": 9.9,
+                "radii": [10.0, 9.0, 8.0, 7.0, 6.0, 5.0, 4.0, 3.0],
+                "margin": 0.046,
+                "removed_at": 1,
+                "rer": 0.0042,
+                "ss": 1.79,
+            },
+        },
+        {
+            "type": "Feature",
+            "geometry": {"type": "Point", "coordinates": [7.0, 7.0]},
+            "properties": {
+                "component": 0,
+                "kind": "endpoint",
+                "id": 1,
+                "radius": 3.0,
+                "rer": 0.0042,
+                "ss": 1.79,
+            },
+        },
     ],
 }
 
@@ -89,32 +162,45 @@ def problem_response(
     """A documented problem+json response with one example."""
     example = {
         "type": f"urn:skelprune:problem:{slug}" if slug else "about:blank",
-        "title": title, "status": status, "detail": detail, "instance": instance,
+        "title": title,
+        "status": status,
+        "detail": detail,
+        "instance": instance,
     }
     response: dict[str, Any] = {
         "description": title,
-        "content": {"application/problem+json": {
-            "schema": {"$ref": REF + "Problem"}, "example": example,
-        }},
+        "content": {
+            "application/problem+json": {
+                "schema": {"$ref": REF + "Problem"},
+                "example": example,
+            }
+        },
     }
     if status == 503:
-        response["headers"] = {"Retry-After": {
-            "description": "Seconds to wait before retrying.", "schema": {"type": "integer"},
-        }}
+        response["headers"] = {
+            "Retry-After": {
+                "description": "Seconds to wait before retrying.",
+                "schema": {"type": "integer"},
+            }
+        }
     return response
 
 
 #: Only when SKELPRUNE_API_KEY is set.
 UNAUTHORIZED: dict[str, Any] = problem_response(
-    401, "unauthorized", "Unauthorized",
+    401,
+    "unauthorized",
+    "Unauthorized",
     "API key required: send 'Authorization: Bearer <key>' or 'X-API-Key: <key>'",
 )
 UNAUTHORIZED["description"] = "Unauthorized (only when the service has an API key)"
-UNAUTHORIZED["headers"] = {"WWW-Authenticate": {
-    "description": 'The challenge: `Bearer realm="skelprune"`, with '
-                   '`error="invalid_token"` for a wrong key.',
-    "schema": {"type": "string"},
-}}
+UNAUTHORIZED["headers"] = {
+    "WWW-Authenticate": {
+        "description": 'The challenge: `Bearer realm="skelprune"`, with '
+        '`error="invalid_token"` for a wrong key.',
+        "schema": {"type": "string"},
+    }
+}
 
 PRUNE_RESPONSES: dict[int | str, dict[str, Any]] = {
     200: {
@@ -122,42 +208,75 @@ PRUNE_RESPONSES: dict[int | str, dict[str, Any]] = {
         "headers": {
             f"X-Skelprune-{name}": {
                 "description": f"`image/png` answers only: {what}, one value a component, "
-                               "comma-separated, in the document's order.",
-                "schema": {"type": "string"}}
-            for name, what in (("Components", "the number of components (one value)"),
-                               ("RER", "each component's `rer`"),
-                               ("SS", "each component's `ss`"),
-                               ("Objective", "each component's `objective`"))
+                "comma-separated, in the document's order.",
+                "schema": {"type": "string"},
+            }
+            for name, what in (
+                ("Components", "the number of components (one value)"),
+                ("RER", "each component's `rer`"),
+                ("SS", "each component's `ss`"),
+                ("Objective", "each component's `objective`"),
+            )
         },
         "content": {
-            "application/json": {"schema": {"$ref": REF + "PruneDocument"},
-                                 "example": DOCUMENT_EXAMPLE},
+            "application/json": {
+                "schema": {"$ref": REF + "PruneDocument"},
+                "example": DOCUMENT_EXAMPLE,
+            },
             "image/png": {"schema": {"type": "string", "format": "binary"}},
-            "application/geo+json": {"schema": {"$ref": REF + "SkeletonGeoJSON"},
-                                     "example": GEOJSON_EXAMPLE},
+            "application/geo+json": {
+                "schema": {"$ref": REF + "SkeletonGeoJSON"},
+                "example": GEOJSON_EXAMPLE,
+            },
         },
     },
-    400: problem_response(400, "invalid-image", "Invalid image",
-                          "truncated PNG: file ends at byte 60 before the IEND chunk"),
+    400: problem_response(
+        400,
+        "invalid-image",
+        "Invalid image",
+        "truncated PNG: file ends at byte 60 before the IEND chunk",
+    ),
     401: UNAUTHORIZED,
-    406: problem_response(406, "not-acceptable", "Not acceptable",
-                          "cannot produce any of 'text/html'; available: application/json, "
-                          "image/png, application/geo+json"),
-    413: problem_response(413, "image-too-large", "Image too large",
-                          "image has 100000000 pixels (10000×10000), the limit is 16777216"),
-    415: problem_response(415, "unsupported-media-type", "Unsupported media type",
-                          "Content-Type 'text/plain' is not supported; send image/png, "
-                          "multipart/form-data (field 'file') or application/json (GeoJSON)"),
-    422: problem_response(422, "invalid-polygon", "Invalid polygon",
-                          "$.coordinates[0]: ring is not closed, first position [0.0, 0.0] "
-                          "differs from last [0.0, 20.0]"),
-    500: problem_response(500, "worker-crashed", "Worker crashed",
-                          "the worker process died while running this job (killed by signal "
-                          "SIGKILL); it has been replaced"),
-    503: problem_response(503, "queue-full", "Service busy",
-                          "all 4 workers are busy and 16 jobs are already waiting"),
-    504: problem_response(504, "job-timeout", "Job timed out",
-                          "job exceeded the time limit of 30 s and was stopped"),
+    406: problem_response(
+        406,
+        "not-acceptable",
+        "Not acceptable",
+        "cannot produce any of 'text/html'; available: application/json, "
+        "image/png, application/geo+json",
+    ),
+    413: problem_response(
+        413,
+        "image-too-large",
+        "Image too large",
+        "image has 100000000 pixels (10000×10000), the limit is 16777216",
+    ),
+    415: problem_response(
+        415,
+        "unsupported-media-type",
+        "Unsupported media type",
+        "Content-Type 'text/plain' is not supported; send image/png, "
+        "multipart/form-data (field 'file') or application/json (GeoJSON)",
+    ),
+    422: problem_response(
+        422,
+        "invalid-polygon",
+        "Invalid polygon",
+        "$.coordinates[0]: ring is not closed, first position [0.0, 0.0] "
+        "differs from last [0.0, 20.0]",
+    ),
+    500: problem_response(
+        500,
+        "worker-crashed",
+        "Worker crashed",
+        "the worker process died while running this job (killed by signal "
+        "SIGKILL); it has been replaced",
+    ),
+    503: problem_response(
+        503, "queue-full", "Service busy", "all 4 workers are busy and 16 jobs are already waiting"
+    ),
+    504: problem_response(
+        504, "job-timeout", "Job timed out", "job exceeded the time limit of 30 s and was stopped"
+    ),
 }
 
 PRUNE_REQUEST_BODY: dict[str, Any] = {
@@ -168,8 +287,9 @@ PRUNE_REQUEST_BODY: dict[str, Any] = {
             "schema": {
                 "type": "object",
                 "required": ["file"],
-                "properties": {"file": {"type": "string", "format": "binary",
-                                        "description": "The PNG mask."}},
+                "properties": {
+                    "file": {"type": "string", "format": "binary", "description": "The PNG mask."}
+                },
             },
             "encoding": {"file": {"contentType": "image/png"}},
         },
@@ -183,7 +303,9 @@ PRUNE_REQUEST_BODY: dict[str, Any] = {
                 },
             },
         },
-        "application/geo+json": {"schema": {"$ref": REF + "PolygonRequest"},
-                                 "example": SQUARE_POLYGON},
+        "application/geo+json": {
+            "schema": {"$ref": REF + "PolygonRequest"},
+            "example": SQUARE_POLYGON,
+        },
     },
 }

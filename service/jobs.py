@@ -56,8 +56,11 @@ class Job:
 
 #: Response headers of the PNG answer: one value a component, comma-separated, in the
 #: document's order (``repr`` of the float: it reads back exactly).
-PNG_HEADERS = {"X-Skelprune-RER": "rer", "X-Skelprune-SS": "ss",
-               "X-Skelprune-Objective": "objective"}
+PNG_HEADERS = {
+    "X-Skelprune-RER": "rer",
+    "X-Skelprune-SS": "ss",
+    "X-Skelprune-Objective": "objective",
+}
 
 
 @dataclass(frozen=True)
@@ -112,8 +115,10 @@ def warmup() -> str:
     loaded, compiled = kernel_counts()
     took = f"{time.perf_counter() - t0:.1f} s"
     if compiled:
-        return (f"compiled {compiled} numba kernels ({loaded} loaded from the cache) "
-                f"in {took}; they are cached now")
+        return (
+            f"compiled {compiled} numba kernels ({loaded} loaded from the cache) "
+            f"in {took}; they are cached now"
+        )
     return f"{loaded} numba kernels loaded from the cache in {took}"
 
 
@@ -122,8 +127,9 @@ def _mask(job: Job) -> tuple[np.ndarray, PixelFrame | None, Foreground]:
         # read_shape also opens files by path: never let anything but bytes through.
         if not isinstance(job.png, bytes | bytearray | memoryview):
             raise InvalidImageError("PNG input must be bytes, not a file name")
-        mask, taken = read_shape(bytes(job.png), foreground=job.foreground,
-                                 max_pixels=job.max_pixels)
+        mask, taken = read_shape(
+            bytes(job.png), foreground=job.foreground, max_pixels=job.max_pixels
+        )
         return mask, None, taken
     assert job.geojson is not None
     mask, frame = polygon_mask(job.geojson, max_pixels=job.max_pixels, **job.raster)
@@ -143,8 +149,10 @@ def run_job(job: Job) -> JobResult:
     headers: dict[str, str] = {}
     if job.output == "png":
         body = res.overlay_png(job.overlay_scale, job.overlay_legend)
-        headers = {name: ",".join(repr(float(getattr(c, key))) for c in res.components)
-                   for name, key in PNG_HEADERS.items()}
+        headers = {
+            name: ",".join(repr(float(getattr(c, key))) for c in res.components)
+            for name, key in PNG_HEADERS.items()
+        }
         headers["X-Skelprune-Components"] = str(len(res.components))
     elif job.output == "geojson":
         body = _dumps(res.to_geojson(**framing))
@@ -154,8 +162,9 @@ def run_job(job: Job) -> JobResult:
             png = res.overlay_png(job.overlay_scale, job.overlay_legend)
             doc["overlay_png"] = base64.b64encode(png).decode("ascii")
         body = _dumps(doc)
-    return JobResult(body=body, media_type=MEDIA_TYPES[job.output], prune_seconds=elapsed,
-                     headers=headers)
+    return JobResult(
+        body=body, media_type=MEDIA_TYPES[job.output], prune_seconds=elapsed, headers=headers
+    )
 
 
 def _dumps(doc: Any) -> bytes:
@@ -164,5 +173,7 @@ def _dumps(doc: Any) -> bytes:
     try:
         return json.dumps(doc, separators=(",", ":"), allow_nan=False).encode()
     except ValueError:
-        raise SkelpruneError("the answer would hold a number JSON cannot write (an "
-                                "overflow); scale the input coordinates down") from None
+        raise SkelpruneError(
+            "the answer would hold a number JSON cannot write (an "
+            "overflow); scale the input coordinates down"
+        ) from None

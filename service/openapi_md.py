@@ -22,8 +22,7 @@ def _type(schema: dict[str, Any]) -> str:
     kind = schema.get("type", "any")
     if kind == "array":
         return f"array of {_type(schema.get('items', {}))}"
-    bounds = [f"{k} {schema[k]}" for k in ("minimum", "exclusiveMinimum", "maximum")
-              if k in schema]
+    bounds = [f"{k} {schema[k]}" for k in ("minimum", "exclusiveMinimum", "maximum") if k in schema]
     fmt = f" ({schema['format']})" if "format" in schema else ""
     return f"{kind}{fmt}" + (f", {', '.join(bounds)}" if bounds else "")
 
@@ -42,8 +41,12 @@ def _operation(path: str, method: str, op: dict[str, Any]) -> list[str]:
         out += [op["description"].strip(), ""]
     params = op.get("parameters", [])
     if params:
-        out += ["**Parameters**", "", "| name | in | type | required | description |",
-                "|---|---|---|---|---|"]
+        out += [
+            "**Parameters**",
+            "",
+            "| name | in | type | required | description |",
+            "|---|---|---|---|---|",
+        ]
         for p in params:
             out.append(
                 f"| `{p['name']}` | {p['in']} | {_type(p.get('schema', {}))} | "

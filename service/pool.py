@@ -140,7 +140,8 @@ class _Worker:
             return None
         if not self.conn.poll(timeout):
             raise WorkerCrashedError(
-                f"worker did not start within {timeout:g} s (SKELPRUNE_STARTUP_TIMEOUT)")
+                f"worker did not start within {timeout:g} s (SKELPRUNE_STARTUP_TIMEOUT)"
+            )
         tag, info = self._receive("worker died while starting ({reason})")
         if tag != "ready":
             raise WorkerCrashedError(f"worker failed to start: {info}")
@@ -153,9 +154,7 @@ class _Worker:
             return self.conn.recv()
         except (EOFError, OSError):
             self.proc.join(1)
-            raise WorkerCrashedError(
-                died.format(reason=_exit_reason(self.proc.exitcode))
-            ) from None
+            raise WorkerCrashedError(died.format(reason=_exit_reason(self.proc.exitcode))) from None
 
     def call(self, fn: Callable[..., Any], args: tuple[Any, ...], timeout: float) -> Any:
         self.conn.send((fn, args))
@@ -263,14 +262,21 @@ class WorkerPool:
         t0 = time.perf_counter()
         try:
             first = await self._spawn_in_thread()
-            info = await loop.run_in_executor(self._executor, first.wait_ready,
-                                              self.startup_timeout)
-            log.info("worker 1 of %d warm in %.1f s%s", self.size, time.perf_counter() - t0,
-                     f": {info}" if info else "")
+            info = await loop.run_in_executor(
+                self._executor, first.wait_ready, self.startup_timeout
+            )
+            log.info(
+                "worker 1 of %d warm in %.1f s%s",
+                self.size,
+                time.perf_counter() - t0,
+                f": {info}" if info else "",
+            )
             rest = [await self._spawn_in_thread() for _ in range(self.size - 1)]
             infos = await asyncio.gather(
-                *(loop.run_in_executor(self._executor, w.wait_ready, self.startup_timeout)
-                  for w in rest)
+                *(
+                    loop.run_in_executor(self._executor, w.wait_ready, self.startup_timeout)
+                    for w in rest
+                )
             )
             for i, info in enumerate(infos, start=2):
                 log.info("worker %d of %d warm%s", i, self.size, f": {info}" if info else "")
@@ -351,7 +357,8 @@ class WorkerPool:
         """
         if self.starting and not self.closed:
             raise PoolStartingError(
-                f"the worker pool is warming up ({self.warm} of {self.size} workers ready)")
+                f"the worker pool is warming up ({self.warm} of {self.size} workers ready)"
+            )
         if not self.started or self.closed or self._idle is None or self._loop is None:
             raise PoolClosedError("the worker pool is not running")
         if self._idle.empty() and self.waiting >= self.queue_size:

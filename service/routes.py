@@ -104,8 +104,15 @@ def negotiate(accept: str | None) -> Output:
         main = candidate.split("/")[0]
         best, best_rank = 0.0, -1
         for media, q in ranges:
-            rank = 2 if media == candidate else 1 if media == f"{main}/*" else 0 if media == "*/*" \
+            rank = (
+                2
+                if media == candidate
+                else 1
+                if media == f"{main}/*"
+                else 0
+                if media == "*/*"
                 else -1
+            )
             if rank > best_rank:
                 best, best_rank = q, rank
         return best if best_rank >= 0 else 0.0
@@ -129,9 +136,7 @@ async def job_function() -> Callable[[Job], Any]:
 
 
 def _validation(errors: list[dict[str, Any]], prefix: tuple[str, ...]) -> RequestValidationError:
-    return RequestValidationError(
-        [{**e, "loc": (*prefix, *e.get("loc", ()))} for e in errors]
-    )
+    return RequestValidationError([{**e, "loc": (*prefix, *e.get("loc", ()))} for e in errors])
 
 
 def parse_query(params: QueryParams) -> PruneQuery:
@@ -176,13 +181,15 @@ def _options(query: PruneQuery, body: Any, polygon: bool, output: Output) -> dic
         if misplaced:
             raise InvalidOptionError(
                 f"option(s) {', '.join(misplaced)} only apply to the JSON document "
-                f"(Accept: application/json), not to the {MEDIA_TYPES[output]} answer")
+                f"(Accept: application/json), not to the {MEDIA_TYPES[output]} answer"
+            )
     if output == "geojson" or (output == "json" and not opts.get("overlay")):
         misplaced = [k for k in OVERLAY_ONLY if k in opts]
         if misplaced:
             raise InvalidOptionError(
                 f"option(s) {', '.join(misplaced)} only apply to the overlay image "
-                "(Accept: image/png, or overlay=true)")
+                "(Accept: image/png, or overlay=true)"
+            )
     if not polygon:
         misplaced = [k for k in POLYGON_ONLY if k in opts]
         if misplaced:
@@ -211,9 +218,12 @@ def _body_errors(errors: list[Any]) -> list[dict[str, Any]]:
         loc = tuple(p for p in e.get("loc", ()) if p not in BODY_TAGS)
         if e.get("type") == "union_tag_invalid":
             given = (e.get("ctx") or {}).get("tag")
-            e = {**e, "msg": f"GeoJSON type {given!r} is not accepted: send a Polygon, "
-                 "MultiPolygon, Feature or FeatureCollection, or "
-                 '{"geojson": <one of those>, <options>}'}
+            e = {
+                **e,
+                "msg": f"GeoJSON type {given!r} is not accepted: send a Polygon, "
+                "MultiPolygon, Feature or FeatureCollection, or "
+                '{"geojson": <one of those>, <options>}',
+            }
         elif e.get("type") == "model_type":  # pydantic names the model class here
             e = {**e, "msg": "Input should be a JSON object"}
         shown.append({**e, "loc": loc})
@@ -236,18 +246,25 @@ async def _png_from_multipart(request: Request) -> tuple[bytes, PruneQuery]:
     async with request.form(max_files=1, max_fields=16) as form:
         upload = form.get("file")
         if not isinstance(upload, UploadFile):
-            raise RequestValidationError([{
-                "loc": ("body", "file"), "type": "missing",
-                "msg": "multipart field 'file' with the PNG is required",
-            }])
+            raise RequestValidationError(
+                [
+                    {
+                        "loc": ("body", "file"),
+                        "type": "missing",
+                        "msg": "multipart field 'file' with the PNG is required",
+                    }
+                ]
+            )
         # The other fields are options, read as the query's are (unknown ones refused).
-        fields = QueryParams([(k, v) for k, v in form.multi_items()
-                              if k != "file" and isinstance(v, str)])
+        fields = QueryParams(
+            [(k, v) for k, v in form.multi_items() if k != "file" and isinstance(v, str)]
+        )
         try:
             options = parse_query(fields)
         except RequestValidationError as exc:
             raise RequestValidationError(
-                [{**e, "loc": ("body", *e["loc"][1:])} for e in exc.errors()]) from None
+                [{**e, "loc": ("body", *e["loc"][1:])} for e in exc.errors()]
+            ) from None
         return await upload.read(), options
 
 
@@ -281,8 +298,10 @@ JSON envelope), never both; an option where it does not apply is refused (422).
     response_class=Response,
     responses=examples.PRUNE_RESPONSES,
     # the query options are parsed in the handler (parse_query): documented from the model
-    openapi_extra={"requestBody": examples.PRUNE_REQUEST_BODY,
-                   "parameters": query_parameters(PruneQuery)},
+    openapi_extra={
+        "requestBody": examples.PRUNE_REQUEST_BODY,
+        "parameters": query_parameters(PruneQuery),
+    },
     tags=["prune"],
 )
 async def prune(
@@ -327,12 +346,18 @@ async def prune(
     result = await pool.run(fn, job)
     request.app.state.metrics.prune_seconds.observe(result.prune_seconds)
     # The same URL answers in three formats: caches must key on Accept.
-    return Response(result.body, media_type=result.media_type,
-                    headers={"Vary": "Accept", **result.headers})
+    return Response(
+        result.body, media_type=result.media_type, headers={"Vary": "Accept", **result.headers}
+    )
 
 
-def _job(opts: dict[str, Any], settings: Settings, output: Output, png: bytes | None,
-         geojson: dict[str, Any] | None) -> Job:
+def _job(
+    opts: dict[str, Any],
+    settings: Settings,
+    output: Output,
+    png: bytes | None,
+    geojson: dict[str, Any] | None,
+) -> Job:
     """The worker's job for one shape and the request's options."""
     # The library's option classes check the values (the only place they are checked).
     prune_options = PruneOptions(**_group(opts, PruneOptions))
@@ -345,10 +370,17 @@ def _job(opts: dict[str, Any], settings: Settings, output: Output, png: bytes | 
             given.setdefault("longest_side", settings.polygon_longest_side)
         raster = {**RasterOptions(**given).kwargs(), "max_vertices": settings.max_vertices}
     return Job(
-        output=output, png=png, geojson=geojson, prune_options=prune_options.kwargs(),
-        raster=raster, curve=output_options.curve, overlay=output_options.overlay,
-        overlay_scale=output_options.overlay_scale, overlay_legend=output_options.overlay_legend,
-        max_pixels=settings.max_pixels, foreground=read_options.foreground,
+        output=output,
+        png=png,
+        geojson=geojson,
+        prune_options=prune_options.kwargs(),
+        raster=raster,
+        curve=output_options.curve,
+        overlay=output_options.overlay,
+        overlay_scale=output_options.overlay_scale,
+        overlay_legend=output_options.overlay_legend,
+        max_pixels=settings.max_pixels,
+        foreground=read_options.foreground,
     )
 
 
@@ -380,8 +412,9 @@ def _item_problem(exc: Exception) -> dict[str, Any]:
     return json.loads(problem(exc).body)
 
 
-def _batch_item(index: int, item: Any, opts: dict[str, Any], settings: Settings,
-                png: bool) -> Job | dict[str, Any]:
+def _batch_item(
+    index: int, item: Any, opts: dict[str, Any], settings: Settings, png: bool
+) -> Job | dict[str, Any]:
     """The job of one shape, or its problem line."""
     try:
         if png:
@@ -394,10 +427,8 @@ def _batch_item(index: int, item: Any, opts: dict[str, Any], settings: Settings,
             where = ".".join(str(p) for p in first["loc"])
             raise InvalidPolygonError(f"{where or 'shape'}: {first['msg']}") from None
         if isinstance(shape, PolygonJob):
-            raise InvalidOptionError("a batch item is a GeoJSON object; options go in the "
-                                     "query")
-        return _job(opts, settings, "json", None, shape.model_dump(mode="json",
-                                                                    exclude_none=True))
+            raise InvalidOptionError("a batch item is a GeoJSON object; options go in the query")
+        return _job(opts, settings, "json", None, shape.model_dump(mode="json", exclude_none=True))
     except SkelpruneError as exc:
         return {"index": index, "problem": _item_problem(exc)}
 
@@ -407,23 +438,58 @@ def _batch_item(index: int, item: Any, opts: dict[str, Any], settings: Settings,
     summary="Prune several shapes; NDJSON answer in input order",
     description=BATCH_DESCRIPTION,
     response_class=Response,
-    responses={**{k: v for k, v in examples.PRUNE_RESPONSES.items() if k != 200},
-               200: {"description": "One JSON line per shape, in input order.",
-                     "content": {NDJSON: {"schema": {"type": "string"}, "example": (
-                         '{"index":0,"result":{"width":60,"height":30,"components":[…]}}\n'
-                         '{"index":1,"problem":{"type":"urn:skelprune:problem:invalid-image",'
-                         '"title":"Invalid image","status":400,"detail":"not a PNG file '
-                         '(bad signature)"}}\n')}}},
-               413: examples.problem_response(413, "body-too-large", "Request body too large",
-                                              f"a batch holds at most {BATCH_MAX_ITEMS} "
-                                              "shapes, got 40", "/v1/prune/batch")},
-    openapi_extra={"parameters": query_parameters(PruneQuery), "requestBody": {
-        "required": True, "content": {
-            "multipart/form-data": {"schema": {"type": "object", "properties": {"file": {
-                "type": "array", "items": {"type": "string", "format": "binary"},
-                "maxItems": BATCH_MAX_ITEMS}}, "required": ["file"]}},
-            "application/json": {"schema": {"type": "array", "maxItems": BATCH_MAX_ITEMS,
-                                            "items": {"type": "object"}}}}}},
+    responses={
+        **{k: v for k, v in examples.PRUNE_RESPONSES.items() if k != 200},
+        200: {
+            "description": "One JSON line per shape, in input order.",
+            "content": {
+                NDJSON: {
+                    "schema": {"type": "string"},
+                    "example": (
+                        '{"index":0,"result":{"width":60,"height":30,"components":[…]}}\n'
+                        '{"index":1,"problem":{"type":"urn:skelprune:problem:invalid-image",'
+                        '"title":"Invalid image","status":400,"detail":"not a PNG file '
+                        '(bad signature)"}}\n'
+                    ),
+                }
+            },
+        },
+        413: examples.problem_response(
+            413,
+            "body-too-large",
+            "Request body too large",
+            f"a batch holds at most {BATCH_MAX_ITEMS} shapes, got 40",
+            "/v1/prune/batch",
+        ),
+    },
+    openapi_extra={
+        "parameters": query_parameters(PruneQuery),
+        "requestBody": {
+            "required": True,
+            "content": {
+                "multipart/form-data": {
+                    "schema": {
+                        "type": "object",
+                        "properties": {
+                            "file": {
+                                "type": "array",
+                                "items": {"type": "string", "format": "binary"},
+                                "maxItems": BATCH_MAX_ITEMS,
+                            }
+                        },
+                        "required": ["file"],
+                    }
+                },
+                "application/json": {
+                    "schema": {
+                        "type": "array",
+                        "maxItems": BATCH_MAX_ITEMS,
+                        "items": {"type": "object"},
+                    }
+                },
+            },
+        },
+    },
     tags=["prune"],
 )
 async def prune_batch(
@@ -444,31 +510,41 @@ async def prune_batch(
         async with request.form(max_files=BATCH_MAX_ITEMS + 1, max_fields=16) as form:
             uploads = [v for v in form.getlist("file") if isinstance(v, UploadFile)]
             items = [await u.read() for u in uploads]
-            fields = QueryParams([(k, v) for k, v in form.multi_items()
-                                  if k != "file" and isinstance(v, str)])
+            fields = QueryParams(
+                [(k, v) for k, v in form.multi_items() if k != "file" and isinstance(v, str)]
+            )
         try:
             form_options = parse_query(fields)
         except RequestValidationError as exc:
             raise RequestValidationError(
-                [{**e, "loc": ("body", *e["loc"][1:])} for e in exc.errors()]) from None
+                [{**e, "loc": ("body", *e["loc"][1:])} for e in exc.errors()]
+            ) from None
     elif ctype in JSON_TYPES:
         try:
             items = json.loads(body)
         except ValueError as exc:
-            raise RequestValidationError([{"loc": ("body",), "type": "json_invalid",
-                                           "msg": f"invalid JSON: {exc}"}]) from None
+            raise RequestValidationError(
+                [{"loc": ("body",), "type": "json_invalid", "msg": f"invalid JSON: {exc}"}]
+            ) from None
         if not isinstance(items, list):
-            raise RequestValidationError([{"loc": ("body",), "type": "list_type",
-                                           "msg": "a batch is a JSON list of GeoJSON objects"}])
+            raise RequestValidationError(
+                [
+                    {
+                        "loc": ("body",),
+                        "type": "list_type",
+                        "msg": "a batch is a JSON list of GeoJSON objects",
+                    }
+                ]
+            )
     else:
         raise UnsupportedMediaTypeError(
             f"Content-Type {ctype or 'none'!r} is not supported; send multipart/form-data "
-            "(fields 'file') or application/json (a list of GeoJSON objects)")
+            "(fields 'file') or application/json (a list of GeoJSON objects)"
+        )
     if not items:
         raise InvalidOptionError("the batch is empty: send at least one shape")
     if len(items) > BATCH_MAX_ITEMS:
-        raise BodyTooLargeError(f"a batch holds at most {BATCH_MAX_ITEMS} shapes, "
-                                f"got {len(items)}")
+        raise BodyTooLargeError(f"a batch holds at most {BATCH_MAX_ITEMS} shapes, got {len(items)}")
     png = ctype == "multipart/form-data"
     opts = _options(query, form_options, polygon=not png, output="json")
     _job(opts, settings, "json", b"" if png else None, None if png else {})  # options first
@@ -492,18 +568,45 @@ async def prune_batch(
 
 
 @router.get(
-    "/healthz", response_model=Health, summary="Liveness: the process answers", tags=["ops"],
-    responses={200: {"content": {"application/json": {"example": {
-        "status": "ok", "version": __version__, "algorithm": ALGORITHM_VERSION}}}}},
+    "/healthz",
+    response_model=Health,
+    summary="Liveness: the process answers",
+    tags=["ops"],
+    responses={
+        200: {
+            "content": {
+                "application/json": {
+                    "example": {
+                        "status": "ok",
+                        "version": __version__,
+                        "algorithm": ALGORITHM_VERSION,
+                    }
+                }
+            }
+        }
+    },
 )
 async def healthz() -> Health:
     return Health(status="ok", version=__version__, algorithm=ALGORITHM_VERSION)
 
 
 @router.get(
-    "/v1/version", response_model=Version, summary="Versions of the service and its results",
-    responses={200: {"content": {"application/json": {"example": {
-        "service": __version__, "library": __version__, "algorithm": ALGORITHM_VERSION}}}}},
+    "/v1/version",
+    response_model=Version,
+    summary="Versions of the service and its results",
+    responses={
+        200: {
+            "content": {
+                "application/json": {
+                    "example": {
+                        "service": __version__,
+                        "library": __version__,
+                        "algorithm": ALGORITHM_VERSION,
+                    }
+                }
+            }
+        }
+    },
     tags=["ops"],
 )
 async def version() -> Version:
@@ -515,10 +618,22 @@ async def version() -> Version:
     response_model=Readiness,
     summary="Readiness: worker pool up and the queue not full",
     responses={
-        200: {"content": {"application/json": {"example": {
-            "status": "ready", "workers": 4, "busy": 1, "queued": 0, "queue_size": 16}}}},
-        503: examples.problem_response(503, "queue-full", "Service busy",
-                                       "the queue is full (16 jobs waiting)", "/readyz"),
+        200: {
+            "content": {
+                "application/json": {
+                    "example": {
+                        "status": "ready",
+                        "workers": 4,
+                        "busy": 1,
+                        "queued": 0,
+                        "queue_size": 16,
+                    }
+                }
+            }
+        },
+        503: examples.problem_response(
+            503, "queue-full", "Service busy", "the queue is full (16 jobs waiting)", "/readyz"
+        ),
     },
     tags=["ops"],
 )
@@ -526,7 +641,8 @@ async def readyz(request: Request) -> Readiness:
     pool: WorkerPool = request.app.state.pool
     if pool.starting and not pool.closed:
         raise PoolStartingError(
-            f"the worker pool is warming up ({pool.warm} of {pool.size} workers ready)")
+            f"the worker pool is warming up ({pool.warm} of {pool.size} workers ready)"
+        )
     failure = request.app.state.pool_failure
     if failure is not None:
         raise PoolClosedError(f"the worker pool failed to start: {failure}")
@@ -535,7 +651,10 @@ async def readyz(request: Request) -> Readiness:
     if not pool.ready:
         raise QueueFullError(f"the queue is full ({pool.waiting} jobs waiting)")
     return Readiness(
-        status="ready", workers=pool.alive(), busy=pool.busy, queued=pool.waiting,
+        status="ready",
+        workers=pool.alive(),
+        busy=pool.busy,
+        queued=pool.waiting,
         queue_size=pool.queue_size,
     )
 
@@ -544,12 +663,18 @@ async def readyz(request: Request) -> Readiness:
     "/metrics",
     summary="Prometheus metrics",
     response_class=Response,
-    responses={200: {"description": "Prometheus text exposition format.",
-                     "content": {"text/plain": {"schema": {"type": "string"},
-                                                "example": examples.METRICS_EXAMPLE}}},
-               401: examples.UNAUTHORIZED},
+    responses={
+        200: {
+            "description": "Prometheus text exposition format.",
+            "content": {
+                "text/plain": {"schema": {"type": "string"}, "example": examples.METRICS_EXAMPLE}
+            },
+        },
+        401: examples.UNAUTHORIZED,
+    },
     tags=["ops"],
 )
 async def metrics(request: Request) -> Response:
-    return Response(generate_latest(request.app.state.metrics.registry),
-                    media_type=CONTENT_TYPE_LATEST)
+    return Response(
+        generate_latest(request.app.state.metrics.registry), media_type=CONTENT_TYPE_LATEST
+    )

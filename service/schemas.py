@@ -64,8 +64,13 @@ def _option_models() -> tuple[type[BaseModel], dict[str, Any], dict[str, Any]]:
         for f in dataclass_fields(group):
             choices = f.metadata["choices"]
             kind = hints[f.name]
-            wire: Any = Literal[choices] if choices else (
-                bool if kind is bool else int if int in (kind, *get_args(kind)) else FiniteFloat)
+            wire: Any = (
+                Literal[choices]
+                if choices
+                else (
+                    bool if kind is bool else int if int in (kind, *get_args(kind)) else FiniteFloat
+                )
+            )
             default = f.default if f.default is not None else "none" if choices else None
             text = f.metadata["help"]
             if default is not None and "default" not in text:
@@ -78,8 +83,9 @@ def _option_models() -> tuple[type[BaseModel], dict[str, Any], dict[str, Any]]:
             schema = getattr(f.metadata["check"], "schema", None)
             fields[f.name] = (wire | None, Field(None, description=text, json_schema_extra=schema))
     validators = {"check": field_validator(*fields)(_check)}
-    query = create_model("PruneQuery", __config__=ConfigDict(extra="forbid"),
-                         __validators__=validators, **fields)
+    query = create_model(
+        "PruneQuery", __config__=ConfigDict(extra="forbid"), __validators__=validators, **fields
+    )
     query.__doc__ = "Options in the query string (all optional; unknown parameters are refused)."
     return query, fields, validators
 
@@ -103,8 +109,7 @@ def query_parameters(model: type[BaseModel]) -> list[dict[str, Any]]:
     for name, field in model.model_fields.items():
         key = field.alias or name
         schema = {k: v for k, v in properties[key].items() if not (k == "default" and v is None)}
-        param: dict[str, Any] = {"name": key, "in": "query", "required": False,
-                                 "schema": schema}
+        param: dict[str, Any] = {"name": key, "in": "query", "required": False, "schema": schema}
         if field.description:
             param["description"] = field.description
         params.append(param)
@@ -167,8 +172,11 @@ GeoJSONInput = Annotated[
 
 
 PolygonJob = create_model(
-    "PolygonJob", __config__=STRICT, __validators__=_VALIDATORS,
-    geojson=(GeoJSONInput, ...), **_BODY_OPTIONS,
+    "PolygonJob",
+    __config__=STRICT,
+    __validators__=_VALIDATORS,
+    geojson=(GeoJSONInput, ...),
+    **_BODY_OPTIONS,
 )
 PolygonJob.__doc__ = (
     "A GeoJSON shape with options in the body (each also allowed in the query, not both)."
@@ -210,18 +218,27 @@ class Branch(BaseModel):
     id: int
     source: int
     target: int
-    length: float = Field(description="Step length of the path (1 axial, √2 diagonal), "
-                          "with the step into each junction cluster and a loop's closing step.")
-    points: list[Point3] = Field(description="The path, in order from the source node to the "
-                                 "target node; consecutive points are 8-neighbours.")
-    off_path: list[Point3] = Field(description="Skeleton pixels of the branch beside its path "
-                                   "(kept for reconstruction), sorted by (x, y).")
-    margin: float | None = Field(description="How clearly the trade-off keeps the branch: "
-                                 "λ(Ŝ − E) − λ(Ŝ) for an end branch E, λ at the step that "
-                                 "removes it minus λ(Ŝ) for an inner one; null if never "
-                                 "removed, for method=dce and degenerate shapes.")
-    removed_at: int | None = Field(description="Step of the pruning sequence that removes "
-                                   "the branch (null: never).")
+    length: float = Field(
+        description="Step length of the path (1 axial, √2 diagonal), "
+        "with the step into each junction cluster and a loop's closing step."
+    )
+    points: list[Point3] = Field(
+        description="The path, in order from the source node to the "
+        "target node; consecutive points are 8-neighbours."
+    )
+    off_path: list[Point3] = Field(
+        description="Skeleton pixels of the branch beside its path "
+        "(kept for reconstruction), sorted by (x, y)."
+    )
+    margin: float | None = Field(
+        description="How clearly the trade-off keeps the branch: "
+        "λ(Ŝ − E) − λ(Ŝ) for an end branch E, λ at the step that "
+        "removes it minus λ(Ŝ) for an inner one; null if never "
+        "removed, for method=dce and degenerate shapes."
+    )
+    removed_at: int | None = Field(
+        description="Step of the pruning sequence that removes the branch (null: never)."
+    )
 
 
 class Skeleton(BaseModel):
@@ -267,13 +284,16 @@ class ForegroundTaken(BaseModel):
 
     model_config = STRICT
     rule: Literal["auto", "nonzero", "zero"] | None = Field(
-        description="The rule asked for; null for polygon input.")
+        description="The rule asked for; null for polygon input."
+    )
     shape: Literal["nonzero", "zero", "light", "dark", "opaque", "polygon"] = Field(
         description="Pixels taken: non-zero / zero ones, grey values above (`light`) or at "
-        "or below (`dark`) `threshold`, alpha above `threshold` (`opaque`), or the polygon.")
+        "or below (`dark`) `threshold`, alpha above `threshold` (`opaque`), or the polygon."
+    )
     threshold: float | None = Field(description="The mid-range split, for light/dark/opaque.")
     border: float | None = Field(
-        description="Share of the image border on the background side (auto, grey values).")
+        description="Share of the image border on the background side (auto, grey values)."
+    )
 
 
 class Versions(BaseModel):
@@ -281,8 +301,10 @@ class Versions(BaseModel):
 
     model_config = STRICT
     library: str = Field(description="The skelprune package version.")
-    algorithm: str = Field(description="The results' version: it changes whenever the same "
-                           "input and options may give a different skeleton or numbers.")
+    algorithm: str = Field(
+        description="The results' version: it changes whenever the same "
+        "input and options may give a different skeleton or numbers."
+    )
 
 
 class PruneDocument(BaseModel):
@@ -304,8 +326,9 @@ class PruneDocument(BaseModel):
 class LineString(BaseModel):
     model_config = STRICT
     type: Literal["LineString"]
-    coordinates: Annotated[list[Annotated[list[float], Field(min_length=2, max_length=2)]],
-                           Field(min_length=2)]
+    coordinates: Annotated[
+        list[Annotated[list[float], Field(min_length=2, max_length=2)]], Field(min_length=2)
+    ]
 
 
 class PointGeometry(BaseModel):
@@ -396,14 +419,17 @@ class Problem(BaseModel):
     """RFC 9457 problem details."""
 
     model_config = STRICT
-    type: str = Field(description="Problem type URI: `urn:skelprune:problem:<slug>` or "
-                      "`about:blank` for plain HTTP errors.")
+    type: str = Field(
+        description="Problem type URI: `urn:skelprune:problem:<slug>` or "
+        "`about:blank` for plain HTTP errors."
+    )
     title: str
     status: int
     detail: str
     instance: str | None = None
     request_id: str | None = Field(
-        None, description="The request's ID, also in the `X-Request-ID` response header.")
+        None, description="The request's ID, also in the `X-Request-ID` response header."
+    )
     errors: list[ValidationItem] | None = Field(None, description="Validation errors (422).")
 
 
@@ -418,9 +444,11 @@ class Version(BaseModel):
     model_config = STRICT
     service: str = Field(description="The service version (the skelprune package's).")
     library: str = Field(description="The skelprune library version.")
-    algorithm: str = Field(description="The results' version: it changes whenever the same "
-                           "input and options may give a different skeleton or numbers, "
-                           "and only then.")
+    algorithm: str = Field(
+        description="The results' version: it changes whenever the same "
+        "input and options may give a different skeleton or numbers, "
+        "and only then."
+    )
 
 
 class Readiness(BaseModel):

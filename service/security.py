@@ -40,6 +40,7 @@ REQUEST_ID_HEADER = "X-Request-ID"
 OPEN_PATHS = frozenset({"/healthz", "/readyz"})
 _SANE_ID = re.compile(rb"^[A-Za-z0-9._:\-]{1,128}$")
 
+
 def _header(scope: Scope, name: bytes) -> bytes | None:
     for key, value in scope["headers"]:
         if key == name:
@@ -71,8 +72,9 @@ class RequestContextMiddleware:
             if message["type"] == "http.response.start":
                 started = True
                 status = message["status"]
-                headers = [(k, v) for k, v in message.get("headers", [])
-                           if k.lower() != b"x-request-id"]
+                headers = [
+                    (k, v) for k, v in message.get("headers", []) if k.lower() != b"x-request-id"
+                ]
                 headers.append((b"x-request-id", rid.encode("ascii")))
                 message = {**message, "headers": headers}
             await send(message)
@@ -87,7 +89,8 @@ class RequestContextMiddleware:
 
             response = problem(
                 PoolClosedError("the server shut down before this request finished; retry it"),
-                instance=scope["path"], headers={"Retry-After": "1"},
+                instance=scope["path"],
+                headers={"Retry-After": "1"},
             )
             await response(scope, receive, send_with_id)
             status = 503
@@ -95,14 +98,21 @@ class RequestContextMiddleware:
             # A bug that got past every handler: answer (if still possible) and log it
             # without the traceback (that needs SKELPRUNE_LOG_LEVEL=debug).
             ref = uuid.uuid4().hex[:12]
-            log.error("unhandled error %s on %s %s: %s", ref, scope["method"], scope["path"],
-                      type(exc).__name__, exc_info=log.isEnabledFor(logging.DEBUG),
-                      extra={"request_id": rid, "reference": ref})
+            log.error(
+                "unhandled error %s on %s %s: %s",
+                ref,
+                scope["method"],
+                scope["path"],
+                type(exc).__name__,
+                exc_info=log.isEnabledFor(logging.DEBUG),
+                extra={"request_id": rid, "reference": ref},
+            )
             if not started:
-
                 response = problem(
-                    InternalError(f"internal error (reference {ref}); the server log has "
-                                  "the details"), instance=scope["path"],
+                    InternalError(
+                        f"internal error (reference {ref}); the server log has the details"
+                    ),
+                    instance=scope["path"],
                 )
                 await response(scope, receive, send_with_id)
             status = 500
@@ -110,10 +120,18 @@ class RequestContextMiddleware:
             if self.access_log_enabled:
                 client = scope.get("client")
                 access_log.info(
-                    "%s %s %d", scope["method"], scope["path"], status,
-                    extra={"method": scope["method"], "path": scope["path"], "status": status,
-                           "duration_ms": round(1000 * (time.perf_counter() - t0), 3),
-                           "request_id": rid, "client": client[0] if client else None},
+                    "%s %s %d",
+                    scope["method"],
+                    scope["path"],
+                    status,
+                    extra={
+                        "method": scope["method"],
+                        "path": scope["path"],
+                        "status": status,
+                        "duration_ms": round(1000 * (time.perf_counter() - t0), 3),
+                        "request_id": rid,
+                        "client": client[0] if client else None,
+                    },
                 )
 
 
@@ -152,8 +170,10 @@ class ApiKeyMiddleware:
             challenge += ', error="invalid_token"'
             detail = "invalid API key"
         else:
-            detail = ("API key required: send 'Authorization: Bearer <key>' "
-                      "or 'X-API-Key: <key>'")
-        response = problem(UnauthorizedError(detail), instance=scope["path"],
-                           headers={"WWW-Authenticate": challenge})
+            detail = "API key required: send 'Authorization: Bearer <key>' or 'X-API-Key: <key>'"
+        response = problem(
+            UnauthorizedError(detail),
+            instance=scope["path"],
+            headers={"WWW-Authenticate": challenge},
+        )
         await response(scope, receive, send)

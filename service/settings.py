@@ -63,11 +63,15 @@ class Settings(BaseSettings):
     host: str = Field("127.0.0.1", description="Interface to listen on.")
     port: int = Field(8000, ge=0, le=65535, description="TCP port to listen on.")
     workers: int = Field(
-        default_factory=available_cores, ge=1, le=256,
+        default_factory=available_cores,
+        ge=1,
+        le=256,
         description="Worker processes that run pruning jobs (default: usable CPU cores).",
     )
     queue_size: int = Field(
-        16, ge=0, le=100_000,
+        16,
+        ge=0,
+        le=100_000,
         description="Jobs that may wait for a free worker; one more gets 503 + Retry-After.",
     )
     job_timeout: float = Field(
@@ -78,7 +82,8 @@ class Settings(BaseSettings):
     )
     warmup: bool = Field(True, description="Prune a tiny shape in each worker at start (JIT).")
     numba_cache_seed: str | None = Field(
-        None, description="A numba cache built with the image: copied into an empty "
+        None,
+        description="A numba cache built with the image: copied into an empty "
         "NUMBA_CACHE_DIR at start, so that workers load compiled code instead of compiling.",
     )
     retry_after: int = Field(1, ge=1, description="Retry-After seconds sent with a 503.")
@@ -99,24 +104,30 @@ class Settings(BaseSettings):
         description="multiprocessing start method for workers (forkserver: fast restarts).",
     )
     log_level: Literal["critical", "error", "warning", "info", "debug"] = Field(
-        "info", description="Log level of the service and uvicorn (JSON lines on stderr; "
-        "tracebacks only at debug)."
+        "info",
+        description="Log level of the service and uvicorn (JSON lines on stderr; "
+        "tracebacks only at debug).",
     )
     access_log: bool = Field(
-        True, description="One JSON log line per request: method, path, status, "
-        "duration_ms, request_id, client."
+        True,
+        description="One JSON log line per request: method, path, status, "
+        "duration_ms, request_id, client.",
     )
     api_key: SecretStr | None = Field(
-        None, description="If set, every endpoint but /healthz and /readyz needs "
+        None,
+        description="If set, every endpoint but /healthz and /readyz needs "
         "'Authorization: Bearer <key>' or 'X-API-Key: <key>' (401 otherwise). "
         "Empty = no key.",
     )
     cors_origins: Annotated[list[str], NoDecode] = Field(
-        default_factory=list, description="Origins allowed to call the API from a browser "
+        default_factory=list,
+        description="Origins allowed to call the API from a browser "
         "(comma-separated, or * for any); empty = no CORS headers at all.",
     )
     shutdown_timeout: float = Field(
-        50.0, gt=0, description="Seconds a graceful shutdown (SIGTERM) waits for requests "
+        50.0,
+        gt=0,
+        description="Seconds a graceful shutdown (SIGTERM) waits for requests "
         "in flight before closing them; keep it below the orchestrator's grace period.",
     )
 

@@ -71,8 +71,12 @@ def trace_boundaries(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
         r1 = r0 + 1
         for c0 in range(w - 1):
             c1 = c0 + 1
-            case = ((1 if padded[r0, c0] else 0) + (2 if padded[r0, c1] else 0)
-                    + (4 if padded[r1, c0] else 0) + (8 if padded[r1, c1] else 0))
+            case = (
+                (1 if padded[r0, c0] else 0)
+                + (2 if padded[r0, c1] else 0)
+                + (4 if padded[r1, c0] else 0)
+                + (8 if padded[r1, c1] else 0)
+            )
             if case == 0 or case == 15:
                 continue
             top = 2 * (r0 * w + c0)

@@ -22,8 +22,16 @@ from numba import njit
 
 from ._digital import disk_half_width, isqrt
 
-__all__ = ["BLOCK", "TILE", "DiskCounts", "coverage", "disk_loss", "disk_remove",
-           "drop_redundant_anchors", "last_cover"]
+__all__ = [
+    "BLOCK",
+    "TILE",
+    "DiskCounts",
+    "coverage",
+    "disk_loss",
+    "disk_remove",
+    "drop_redundant_anchors",
+    "last_cover",
+]
 
 BLOCK = 16
 
@@ -176,9 +184,43 @@ def _find(nxt, x) -> int:
 # Side of the square tiles :func:`last_cover` works in: 32 pixels, one int64 word holds
 # a tile's row as 32 bits (the other 32 stay clear, so no arithmetic ever overflows).
 TILE = 32
-_DE_BRUIJN = np.array([0, 1, 28, 2, 29, 14, 24, 3, 30, 22, 20, 15, 25, 17, 4, 8,
-                       31, 27, 13, 23, 21, 19, 16, 7, 26, 12, 18, 6, 11, 5, 10, 9],
-                      dtype=np.int64)
+_DE_BRUIJN = np.array(
+    [
+        0,
+        1,
+        28,
+        2,
+        29,
+        14,
+        24,
+        3,
+        30,
+        22,
+        20,
+        15,
+        25,
+        17,
+        4,
+        8,
+        31,
+        27,
+        13,
+        23,
+        21,
+        19,
+        16,
+        7,
+        26,
+        12,
+        18,
+        6,
+        11,
+        5,
+        10,
+        9,
+    ],
+    dtype=np.int64,
+)
 
 
 @njit(cache=True, inline="always")

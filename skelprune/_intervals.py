@@ -122,8 +122,9 @@ def owner_runs(rows, cols, r2, labels, n_labels):
         while j < order.size and labels[order[j]] == b:
             j += 1
         if j > i:
-            m = _disk_runs_into(out, m, rows, cols, r2, order[i:j], head, pool[0], pool[1],
-                                pool[2], pool[3])
+            m = _disk_runs_into(
+                out, m, rows, cols, r2, order[i:j], head, pool[0], pool[1], pool[2], pool[3]
+            )
         offsets[b + 1] = m
         i = j
     return out[:m].copy(), offsets
@@ -135,8 +136,9 @@ def union(a, b):
     out = np.empty((a.shape[0] + b.shape[0], 3), np.int64)
     i = j = m = 0
     while i < a.shape[0] or j < b.shape[0]:
-        if j == b.shape[0] or (i < a.shape[0] and (a[i, 0] < b[j, 0] or (
-                a[i, 0] == b[j, 0] and a[i, 1] <= b[j, 1]))):
+        if j == b.shape[0] or (
+            i < a.shape[0] and (a[i, 0] < b[j, 0] or (a[i, 0] == b[j, 0] and a[i, 1] <= b[j, 1]))
+        ):
             r, lo, hi = a[i, 0], a[i, 1], a[i, 2]
             i += 1
         else:

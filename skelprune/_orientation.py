@@ -39,8 +39,9 @@ class Orientation:
             a = a[:, ::-1]
         return a
 
-    def points_back(self, rows: np.ndarray, cols: np.ndarray,
-                    shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    def points_back(
+        self, rows: np.ndarray, cols: np.ndarray, shape: tuple[int, ...]
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Coordinates in the oriented array, of ``shape``, mapped back to the original."""
         h, w = shape[0], shape[1]
         if self.flip_rows:
@@ -62,7 +63,7 @@ def _spread_and_skew(counts: np.ndarray) -> tuple[int, int]:
     x = np.arange(counts.size, dtype=np.int64)
     c = counts.astype(np.int64)
     n, s1, s2, s3 = (int(c.sum()), int(c @ x), int(c @ (x * x)), int(c @ (x * x * x)))
-    return n * s2 - s1 * s1, n * n * s3 - 3 * n * s1 * s2 + 2 * s1 ** 3
+    return n * s2 - s1 * s1, n * n * s3 - 3 * n * s1 * s2 + 2 * s1**3
 
 
 def canonical_orientation(mask: np.ndarray) -> Orientation:
@@ -83,10 +84,10 @@ def canonical_orientation(mask: np.ndarray) -> Orientation:
     spread_r, skew_r = _spread_and_skew(mask.sum(axis=1))
     spread_c, skew_c = _spread_and_skew(mask.sum(axis=0))
     candidates = []
-    for swap in ((False, True) if spread_r == spread_c else (spread_r > spread_c,)):
+    for swap in (False, True) if spread_r == spread_c else (spread_r > spread_c,):
         kr, kc = (skew_c, skew_r) if swap else (skew_r, skew_c)
-        for fr in ((False, True) if kr == 0 else (kr < 0,)):
-            for fc in ((False, True) if kc == 0 else (kc < 0,)):
+        for fr in (False, True) if kr == 0 else (kr < 0,):
+            for fc in (False, True) if kc == 0 else (kc < 0,):
                 candidates.append(Orientation(swap, fr, fc))
     if len(candidates) == 1:
         return candidates[0]

@@ -39,8 +39,9 @@ from .options import (
 if TYPE_CHECKING:
     from .output.document import PruneResult
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="Parameter-free Bayesian skeleton pruning.")
+app = typer.Typer(
+    add_completion=False, no_args_is_help=True, help="Parameter-free Bayesian skeleton pruning."
+)
 
 
 def _print_version(value: bool) -> None:
@@ -53,8 +54,12 @@ def _print_version(value: bool) -> None:
 
 @app.callback()
 def _main(
-    version: Annotated[bool, typer.Option("--version", is_eager=True, callback=_print_version,
-                                          help="Print the version and exit.")] = False,
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version", is_eager=True, callback=_print_version, help="Print the version and exit."
+        ),
+    ] = False,
 ) -> None:
     """Parameter-free Bayesian skeleton pruning."""
 
@@ -65,8 +70,9 @@ GEOJSON_SUFFIXES = (".geojson", ".json")
 FOLDER_SUFFIXES = (".png", ".geojson")
 
 
-def _prune(path: str, read: ReadOptions, options: PruneOptions, raster: RasterOptions,
-           curve: bool) -> tuple[PruneResult, dict[str, Any]]:
+def _prune(
+    path: str, read: ReadOptions, options: PruneOptions, raster: RasterOptions, curve: bool
+) -> tuple[PruneResult, dict[str, Any]]:
     """The result and its document (a polygon's in the polygon's own coordinates)."""
     from .api import prune
 
@@ -90,8 +96,9 @@ def _prune(path: str, read: ReadOptions, options: PruneOptions, raster: RasterOp
     return res, res.to_dict(curve=curve, **framing)
 
 
-def _prune_file(path: str, read: ReadOptions, options: PruneOptions, raster: RasterOptions,
-                curve: bool) -> dict[str, Any]:
+def _prune_file(
+    path: str, read: ReadOptions, options: PruneOptions, raster: RasterOptions, curve: bool
+) -> dict[str, Any]:
     try:
         return {"file": path, "result": _prune(path, read, options, raster, curve)[1]}
     except (SkelpruneError, OSError) as exc:
@@ -102,8 +109,11 @@ def _expand(paths: list[Path]) -> list[Path]:
     files: list[Path] = []
     for p in paths:
         if p.is_dir():  # shape.PNG counts as much as shape.png
-            files.extend(sorted(f for f in p.iterdir()
-                                if f.suffix.lower() in FOLDER_SUFFIXES and f.is_file()))
+            files.extend(
+                sorted(
+                    f for f in p.iterdir() if f.suffix.lower() in FOLDER_SUFFIXES and f.is_file()
+                )
+            )
         else:
             files.append(p)
     return files
@@ -125,7 +135,8 @@ class _CleanCommand(typer.core.TyperCommand):
             if isinstance(param, typer.core.TyperArgument):
                 param.display_type = lambda ctx: ""  # type: ignore[method-assign]
                 param._usage_display_name = lambda p=param: (  # type: ignore[method-assign]
-                    f"{p.metavar or p.name.upper()}...")
+                    f"{p.metavar or p.name.upper()}..."
+                )
             elif getattr(param, "is_flag", False):
                 param.display_type = lambda ctx: ""  # type: ignore[method-assign]
 
@@ -136,8 +147,12 @@ class _CleanCommand(typer.core.TyperCommand):
         return option
 
 
-HELP = {name: text for name, _, text, _ in option_fields(PruneOptions, OutputOptions,
-                                                          ReadOptions, RasterOptions)}
+HELP = {
+    name: text
+    for name, _, text, _ in option_fields(PruneOptions, OutputOptions, ReadOptions, RasterOptions)
+}
+
+
 def _geojson_only(name: str) -> str:
     return "GeoJSON input: " + HELP[name][0].lower() + HELP[name][1:]
 
@@ -150,35 +165,46 @@ Rule = enum.Enum("Rule", {name: name for name in FOREGROUND_RULES}, type=str)
 
 @app.command("prune", cls=_CleanCommand)
 def prune_command(
-    files: Annotated[list[Path], typer.Argument(
-        metavar="FILE", help="PNG masks or GeoJSON polygons (.geojson, .json), or folders "
-        "of them (*.png, *.geojson, any case).")],
+    files: Annotated[
+        list[Path],
+        typer.Argument(
+            metavar="FILE",
+            help="PNG masks or GeoJSON polygons (.geojson, .json), or folders "
+            "of them (*.png, *.geojson, any case).",
+        ),
+    ],
     beta: Annotated[float, typer.Option(help=HELP["beta"])] = PruneOptions.beta,
     method: Annotated[Method, typer.Option(help=HELP["method"])] = Method(PruneOptions.method),
     coarse: Annotated[Coarse, typer.Option(help=HELP["coarse"])] = Coarse("dce"),
     dce_threshold: Annotated[float | None, typer.Option(help=HELP["dce_threshold"])] = None,
     min_margin: Annotated[float | None, typer.Option(help=HELP["min_margin"])] = None,
-    foreground: Annotated[Rule, typer.Option(help=HELP["foreground"])
-                          ] = Rule(ReadOptions.foreground),
-    overlay: Annotated[Path | None, typer.Option(help="Write the overlay PNG here "
-                                                 "(one input file only).")] = None,
+    foreground: Annotated[Rule, typer.Option(help=HELP["foreground"])] = Rule(
+        ReadOptions.foreground
+    ),
+    overlay: Annotated[
+        Path | None, typer.Option(help="Write the overlay PNG here (one input file only).")
+    ] = None,
     overlay_scale: Annotated[int | None, typer.Option(help=HELP["overlay_scale"])] = None,
-    overlay_legend: Annotated[bool, typer.Option(help=HELP["overlay_legend"])
-                              ] = OutputOptions.overlay_legend,
+    overlay_legend: Annotated[
+        bool, typer.Option(help=HELP["overlay_legend"])
+    ] = OutputOptions.overlay_legend,
     curve: Annotated[bool, typer.Option(help=HELP["curve"])] = OutputOptions.curve,
-    pixel_size: Annotated[float | None, typer.Option(
-        help=_geojson_only("pixel_size"))] = None,
-    longest_side: Annotated[int | None, typer.Option(
-        help=_geojson_only("longest_side"))] = None,
-    repair: Annotated[bool, typer.Option(help=_geojson_only("repair"))
-                      ] = RasterOptions.repair,
-    workers: Annotated[int, typer.Option(help="Worker processes for several files, >= 0 "
-                                         "(0: one a CPU core).")] = 0,
+    pixel_size: Annotated[float | None, typer.Option(help=_geojson_only("pixel_size"))] = None,
+    longest_side: Annotated[int | None, typer.Option(help=_geojson_only("longest_side"))] = None,
+    repair: Annotated[bool, typer.Option(help=_geojson_only("repair"))] = RasterOptions.repair,
+    workers: Annotated[
+        int, typer.Option(help="Worker processes for several files, >= 0 (0: one a CPU core).")
+    ] = 0,
 ) -> None:
     """Prune the skeleton of each shape and print the result as JSON."""
     try:  # checked once, before any file is read
-        options = PruneOptions(beta=beta, method=method.value, coarse=coarse.value,
-                               dce_threshold=dce_threshold, min_margin=min_margin)
+        options = PruneOptions(
+            beta=beta,
+            method=method.value,
+            coarse=coarse.value,
+            dce_threshold=dce_threshold,
+            min_margin=min_margin,
+        )
         read = ReadOptions(foreground=foreground.value)
         raster = RasterOptions(pixel_size=pixel_size, longest_side=longest_side, repair=repair)
         shown = OutputOptions(overlay_scale=overlay_scale, overlay_legend=overlay_legend)
@@ -214,8 +240,14 @@ def prune_command(
     failed = 0
     with ProcessPoolExecutor(max_workers=n) as pool:
         k = len(inputs)
-        jobs = pool.map(_prune_file, [str(p) for p in inputs], [read] * k, [options] * k,
-                        [raster] * k, [curve] * k)
+        jobs = pool.map(
+            _prune_file,
+            [str(p) for p in inputs],
+            [read] * k,
+            [options] * k,
+            [raster] * k,
+            [curve] * k,
+        )
         for line in tqdm(jobs, total=len(inputs), file=sys.stderr, unit="shape"):
             failed += "error" in line
             sys.stdout.write(json.dumps(line) + "\n")
@@ -225,23 +257,30 @@ def prune_command(
 
 @app.command("eval")
 def eval_command(
-    out: Annotated[Path, typer.Option(help="Folder for evaluation.md, stability.md "
-                                      "and figures/.")] = Path("docs"),
-    data: Annotated[Path | None, typer.Option(help="Folder with kimia216/ and kimia99/ "
-                                              "(default: $SKELPRUNE_DATA or "
-                                              "../shared/data).")] = None,
+    out: Annotated[
+        Path, typer.Option(help="Folder for evaluation.md, stability.md and figures/.")
+    ] = Path("docs"),
+    data: Annotated[
+        Path | None,
+        typer.Option(
+            help="Folder with kimia216/ and kimia99/ (default: $SKELPRUNE_DATA or ../shared/data)."
+        ),
+    ] = None,
     workers: Annotated[int, typer.Option(help="Processes of the stability run.")] = 2,
-    limit: Annotated[int | None, typer.Option(hidden=True,
-                                              help="First N shapes a dataset.")] = None,
-    rect_seeds: Annotated[int, typer.Option(hidden=True,
-                                            help="Noisy rectangles a noise kind.")] = 10,
+    limit: Annotated[
+        int | None, typer.Option(hidden=True, help="First N shapes a dataset.")
+    ] = None,
+    rect_seeds: Annotated[
+        int, typer.Option(hidden=True, help="Noisy rectangles a noise kind.")
+    ] = 10,
 ) -> None:
     """Regenerate the evaluation report and figures (needs the bench extra: matplotlib)."""
     from .evaluation.run import run_evaluation
 
     try:
-        written = run_evaluation(out, data=data, limit=limit, workers=workers,
-                                 rect_seeds=rect_seeds)
+        written = run_evaluation(
+            out, data=data, limit=limit, workers=workers, rect_seeds=rect_seeds
+        )
     except (FileNotFoundError, ImportError) as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(1) from None

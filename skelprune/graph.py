@@ -272,8 +272,7 @@ class BranchGraph:
         jof = junction_of.tolist()
         starts_l = starts.tolist()
         pts_l = pts.tolist()
-        for b, ((a0, a1), (na, nd)) in enumerate(zip(att.tolist(), counts.tolist(),
-                                                      strict=True)):
+        for b, ((a0, a1), (na, nd)) in enumerate(zip(att.tolist(), counts.tolist(), strict=True)):
             seg = pts_l[starts_l[b] : starts_l[b + 1]]
             if a0 == -2:
                 self.branches.append(Branch(seg, [None, None], [-1, -1], na, nd, loop=True))
@@ -300,10 +299,20 @@ class BranchGraph:
         g.shape = self.shape
         g.extra_na, g.extra_nd = self.extra_na, self.extra_nd
         g.na, g.nd = self.na, self.nd
-        g.branches = [Branch(list(b.points), list(b.node), list(b.attach), b.na, b.nd,
-                             b.loop, b.alive, list(b.side)) for b in self.branches]
-        g.junctions = [Junction(list(j.points), list(j.ends), j.alive)
-                       for j in self.junctions]
+        g.branches = [
+            Branch(
+                list(b.points),
+                list(b.node),
+                list(b.attach),
+                b.na,
+                b.nd,
+                b.loop,
+                b.alive,
+                list(b.side),
+            )
+            for b in self.branches
+        ]
+        g.junctions = [Junction(list(j.points), list(j.ends), j.alive) for j in self.junctions]
         g.ends = set(self.ends)
         return g
 
@@ -358,8 +367,9 @@ class BranchGraph:
         if len(rest) == 2:
             (b1, e1), (b2, e2) = rest
             # a shortest path's (axial, diagonal) counts are the same either way round
-            _, pa, pd = self._cluster_path(jid, self.branches[b1].attach[e1],
-                                           self.branches[b2].attach[e2])
+            _, pa, pd = self._cluster_path(
+                jid, self.branches[b1].attach[e1], self.branches[b2].attach[e2]
+            )
             na, nd = na + pa, nd + pd
         return na, nd
 
@@ -433,8 +443,9 @@ class BranchGraph:
         ends = list(junc.ends)
         junc.ends.clear()
         if not ends:  # an isolated blob of junction pixels: one branch, two free ends
-            self.branches.append(Branch(list(junc.points), [None, None], [-1, -1], 0, 0,
-                                        side=list(junc.points[1:])))
+            self.branches.append(
+                Branch(list(junc.points), [None, None], [-1, -1], 0, 0, side=list(junc.points[1:]))
+            )
             return None
         if len(ends) == 1:  # the cluster is the tip of a branch
             b, e = ends[0]
@@ -452,7 +463,7 @@ class BranchGraph:
             path, na, nd = self._cluster_path(jid, br.attach[1], br.attach[0])
             moved = list(dict.fromkeys(path + list(junc.points)))
             br.points = br.points + moved
-            br.side = br.side + moved[len(path):]
+            br.side = br.side + moved[len(path) :]
             br.na += na
             br.nd += nd
             self.extra_na += na

@@ -34,8 +34,15 @@ from ._disk_counts import coverage, disk_loss, disk_remove, drop_redundant_ancho
 from ._orientation import IDENTITY_ORIENTATION, oriented
 from .errors import InvalidImageError
 
-__all__ = ["DEGREE", "SIMPLE", "MedialAxis", "medial_axis", "oriented_medial_axis",
-           "squared_distance"]
+__all__ = [
+    "DEGREE",
+    "SIMPLE",
+    "MedialAxis",
+    "medial_axis",
+    "oriented_medial_axis",
+    "squared_distance",
+]
+
 
 def squared_distance(padded: np.ndarray) -> np.ndarray:
     """Exact squared Euclidean distance of each pixel to the nearest background pixel.
@@ -116,13 +123,23 @@ def _squared_edt(fg: np.ndarray) -> np.ndarray:
 REACH = 3
 # Shortest first: the containing disk is most often a near one (the order does not
 # change the result, only how soon the search stops).
-VECTORS = np.array(sorted(((dy, dx) for dy in range(-REACH, REACH + 1)
-                           for dx in range(-REACH, REACH + 1) if (dy, dx) != (0, 0)),
-                          key=lambda v: (v[0] ** 2 + v[1] ** 2, v)), dtype=np.int64)
+VECTORS = np.array(
+    sorted(
+        (
+            (dy, dx)
+            for dy in range(-REACH, REACH + 1)
+            for dx in range(-REACH, REACH + 1)
+            if (dy, dx) != (0, 0)
+        ),
+        key=lambda v: (v[0] ** 2 + v[1] ** 2, v),
+    ),
+    dtype=np.int64,
+)
 # Disks are symmetric, so the table depends on (min, max) of |dy|, |dx| only.
 _KINDS = sorted({tuple(sorted((abs(int(a)), abs(int(b))))) for a, b in VECTORS})
-VECTOR_KIND = np.array([_KINDS.index(tuple(sorted((abs(int(a)), abs(int(b))))))
-                        for a, b in VECTORS], dtype=np.int64)
+VECTOR_KIND = np.array(
+    [_KINDS.index(tuple(sorted((abs(int(a)), abs(int(b)))))) for a, b in VECTORS], dtype=np.int64
+)
 
 
 def _domination_table(values: np.ndarray) -> np.ndarray:
@@ -142,8 +159,7 @@ def _cached_domination_table(max_r2: int) -> np.ndarray:
     """
     # int32 while the entries fit (below (√R + 3√2)² + 1 < 2³¹): half the memory of a
     # table that a 4096-px shape makes 4 M rows long
-    need = np.full((max_r2 + 1, len(_KINDS)), -1,
-                   dtype=np.int32 if max_r2 <= 1 << 30 else np.int64)
+    need = np.full((max_r2 + 1, len(_KINDS)), -1, dtype=np.int32 if max_r2 <= 1 << 30 else np.int64)
     _farthest_points(need, np.array(_KINDS, dtype=np.int64))
     return need
 
@@ -452,8 +468,9 @@ def medial_axis(padded: np.ndarray, r2: np.ndarray | None = None) -> MedialAxis:
     padded = np.asarray(padded, dtype=bool)
     if padded[0].any() or padded[-1].any() or padded[:, 0].any() or padded[:, -1].any():
         # the kernels look one pixel beyond every shape pixel, without bounds checks
-        raise InvalidImageError("the shape touches the array border: pad it with one "
-                                "background pixel first")
+        raise InvalidImageError(
+            "the shape touches the array border: pad it with one background pixel first"
+        )
     if r2 is None:
         r2 = squared_distance(padded)
     seen, o = oriented(padded)

@@ -47,8 +47,12 @@ DEFAULT_LONGEST_SIDE = 512
 LONGEST_SIDE_RANGE = (8, 16384)
 
 
-def _option(default: Any, help: str, check: Callable[[str, Any], Any],
-            choices: tuple[str, ...] | None = None) -> Any:
+def _option(
+    default: Any,
+    help: str,
+    check: Callable[[str, Any], Any],
+    choices: tuple[str, ...] | None = None,
+) -> Any:
     return field(default=default, metadata={"help": help, "choices": choices, "check": check})
 
 
@@ -61,8 +65,11 @@ def _with_schema(check: Callable[[str, Any], Any], **schema: Any) -> Callable[[s
 def _number(low: float, strict: bool) -> Callable[[str, Any], float]:
     def check(name: str, value: Any) -> float:
         try:
-            finite = not isinstance(value, bool) and isinstance(value, int | float) \
+            finite = (
+                not isinstance(value, bool)
+                and isinstance(value, int | float)
                 and math.isfinite(value)
+            )
         except OverflowError:  # an integer too large for a float
             finite = False
         if not finite or value < low or (strict and value == low):
@@ -118,9 +125,12 @@ class ReadOptions:
     """Which pixels of an image are the shape (image input only)."""
 
     foreground: str = _option(
-        "auto", "Which pixels are the shape: auto (the grey side not holding most of the "
+        "auto",
+        "Which pixels are the shape: auto (the grey side not holding most of the "
         "image border, split at mid-grey; the opaque part of a transparent image), nonzero "
-        "or zero.", _choice(FOREGROUND_RULES), FOREGROUND_RULES,
+        "or zero.",
+        _choice(FOREGROUND_RULES),
+        FOREGROUND_RULES,
     )
 
     def __post_init__(self) -> None:
@@ -142,25 +152,34 @@ class PruneOptions:
     """
 
     beta: float = _option(
-        9.0, "Weight β of the reconstruction term, > 0: α = β·log(L(M)/ℓ̄). The paper's 9.",
+        9.0,
+        "Weight β of the reconstruction term, > 0: α = β·log(L(M)/ℓ̄). The paper's 9.",
         _number(0, strict=True),
     )
     method: str = _option(
-        "bayesian", "bayesian: the paper's pruning; dce: contour-partition pruning (its "
-        "ref. [10]).", _choice(METHODS), METHODS,
+        "bayesian",
+        "bayesian: the paper's pruning; dce: contour-partition pruning (its ref. [10]).",
+        _choice(METHODS),
+        METHODS,
     )
     coarse: str | None = _option(
-        "dce", "dce: a coarse DCE stage before the Bayesian pruning (the default); none: "
-        "start from the full medial axis. Ignored by method=dce.", _choice(COARSE), COARSE,
+        "dce",
+        "dce: a coarse DCE stage before the Bayesian pruning (the default); none: "
+        "start from the full medial axis. Ignored by method=dce.",
+        _choice(COARSE),
+        COARSE,
     )
     dce_threshold: float | None = _option(
-        None, "For method=dce: the DCE stop threshold on relevance, >= 0 (scale-free; "
-        "default 0.01).", _number(0, strict=False),
+        None,
+        "For method=dce: the DCE stop threshold on relevance, >= 0 (scale-free; default 0.01).",
+        _number(0, strict=False),
     )
     min_margin: float | None = _option(
-        None, "For method=bayesian: also drop the answer's end branches whose margin is "
+        None,
+        "For method=bayesian: also drop the answer's end branches whose margin is "
         "below this, >= 0, cheapest first, as the sequence goes on (default off: the "
-        "paper's answer).", _number(0, strict=False),
+        "paper's answer).",
+        _number(0, strict=False),
     )
 
     def __post_init__(self) -> None:
@@ -170,8 +189,10 @@ class PruneOptions:
         if self.coarse == "none":
             object.__setattr__(self, "coarse", None)
         if self.min_margin is not None and self.method != "bayesian":
-            raise InvalidOptionError("min_margin applies to method='bayesian' only: the "
-                                     "margin measures the Bayesian trade-off")
+            raise InvalidOptionError(
+                "min_margin applies to method='bayesian' only: the "
+                "margin measures the Bayesian trade-off"
+            )
 
     def kwargs(self) -> dict[str, Any]:
         """As keyword arguments of :func:`skelprune.prune`."""
@@ -182,17 +203,17 @@ class PruneOptions:
 class OutputOptions:
     """What the output document holds."""
 
-    curve: bool = _option(True, "Include the pruning curve (α·AR, LR and λ at every step).",
-                          _flag)
-    overlay: bool = _option(False, "Add the overlay image as a base64 PNG (overlay_png).",
-                            _flag)
+    curve: bool = _option(True, "Include the pruning curve (α·AR, LR and λ at every step).", _flag)
+    overlay: bool = _option(False, "Add the overlay image as a base64 PNG (overlay_png).", _flag)
     overlay_scale: int | None = _option(
-        None, "Overlay image: each input pixel as N × N pixels, a whole number from 1 to "
+        None,
+        "Overlay image: each input pixel as N × N pixels, a whole number from 1 to "
         "16 (default: the smallest that makes the longer side at least 512 px).",
         _integer(1, 16),
     )
     overlay_legend: bool = _option(
-        False, "Overlay image: add a strip with the colour key, RER and SS.", _flag)
+        False, "Overlay image: add a strip with the colour key, RER and SS.", _flag
+    )
 
     def __post_init__(self) -> None:
         _check_fields(self)
@@ -213,16 +234,19 @@ class RasterOptions:
     """
 
     pixel_size: float | None = _option(
-        None, "Raster pixel size in the polygon's units, > 0 (instead of longest_side).",
+        None,
+        "Raster pixel size in the polygon's units, > 0 (instead of longest_side).",
         _number(0, strict=True),
     )
     longest_side: int | None = _option(
-        None, "Pixels across the longer side of the bounding box, a whole number from "
+        None,
+        "Pixels across the longer side of the bounding box, a whole number from "
         f"{LONGEST_SIDE_RANGE[0]} to {LONGEST_SIDE_RANGE[1]} (default {DEFAULT_LONGEST_SIDE}).",
         _integer(*LONGEST_SIDE_RANGE),
     )
     repair: bool = _option(
-        True, "Repair self-intersections with shapely's make_valid (true) or refuse them.",
+        True,
+        "Repair self-intersections with shapely's make_valid (true) or refuse them.",
         _flag,
     )
 
@@ -265,5 +289,8 @@ def option_fields(*groups: type) -> list[tuple[str, Any, str, tuple[str, ...] | 
     >>> [name for name, *_ in option_fields(OutputOptions)]
     ['curve', 'overlay', 'overlay_scale', 'overlay_legend']
     """
-    return [(f.name, f.default, f.metadata["help"], f.metadata["choices"])
-            for group in groups for f in fields(group)]
+    return [
+        (f.name, f.default, f.metadata["help"], f.metadata["choices"])
+        for group in groups
+        for f in fields(group)
+    ]

@@ -47,8 +47,9 @@ def reconstruction(
     """
     out = np.zeros(shape, dtype=np.bool_)
     if len(rows):
-        _paint_bool(out, np.asarray(rows, np.int64), np.asarray(cols, np.int64),
-                    np.asarray(r2, np.int64))
+        _paint_bool(
+            out, np.asarray(rows, np.int64), np.asarray(cols, np.int64), np.asarray(r2, np.int64)
+        )
     return out
 
 
@@ -63,8 +64,9 @@ def reconstruction_error(
     return float((mask & ~rec).sum()) / area
 
 
-def count_covered(pixels: np.ndarray, width: int, rows: np.ndarray, cols: np.ndarray,
-                  r2: np.ndarray) -> int:
+def count_covered(
+    pixels: np.ndarray, width: int, rows: np.ndarray, cols: np.ndarray, r2: np.ndarray
+) -> int:
     """How many of ``pixels`` (flat indices, row length ``width``) the disks cover.
 
     For a few pixels and many disks: a test per pair, no painting.
@@ -76,10 +78,15 @@ def count_covered(pixels: np.ndarray, width: int, rows: np.ndarray, cols: np.nda
     """
     if len(pixels) == 0 or len(rows) == 0:
         return 0
-    return int(_count_covered(np.asarray(pixels, np.int64) // width,
-                              np.asarray(pixels, np.int64) % width,
-                              np.asarray(rows, np.int64), np.asarray(cols, np.int64),
-                              np.asarray(r2, np.int64)))
+    return int(
+        _count_covered(
+            np.asarray(pixels, np.int64) // width,
+            np.asarray(pixels, np.int64) % width,
+            np.asarray(rows, np.int64),
+            np.asarray(cols, np.int64),
+            np.asarray(r2, np.int64),
+        )
+    )
 
 
 @njit(cache=True)
@@ -216,10 +223,14 @@ class Coverage:
     """
 
     def __init__(self, mask, rows, cols, r2, labels, n_labels: int) -> None:
-        runs, offsets = owner_runs(np.asarray(rows, np.int64), np.asarray(cols, np.int64),
-                                   np.asarray(r2, np.int64), np.asarray(labels, np.int64),
-                                   n_labels)
-        self.runs = [runs[offsets[b]:offsets[b + 1]] for b in range(n_labels)]
+        runs, offsets = owner_runs(
+            np.asarray(rows, np.int64),
+            np.asarray(cols, np.int64),
+            np.asarray(r2, np.int64),
+            np.asarray(labels, np.int64),
+            n_labels,
+        )
+        self.runs = [runs[offsets[b] : offsets[b + 1]] for b in range(n_labels)]
         self.c = np.zeros(mask.shape, np.int32)
         self.s = np.zeros(mask.shape, np.int64)
         _paint_owners(self.c, self.s, runs, offsets)
@@ -240,7 +251,8 @@ class Coverage:
         """Give all points labelled ``old`` the label ``new``."""
         if old == new or len(self.runs[old]) == 0:
             return
-        self.exclusive[new] += _merge_owner(self.c, self.s, self.runs[old], self.runs[new],
-                                            old, new)
+        self.exclusive[new] += _merge_owner(
+            self.c, self.s, self.runs[old], self.runs[new], old, new
+        )
         self.runs[new] = union(self.runs[new], self.runs[old])
         self.runs[old] = self.runs[old][:0]

@@ -46,8 +46,7 @@ def normalisation(graph: BranchGraph, r2: np.ndarray, beta: float) -> Normalisat
     """
     rows, cols = graph.rows, graph.cols
     seed = int(np.lexsort((cols, rows, -r2))[0])
-    ends = sorted({graph.endpoint(b) for b in range(len(graph.branches))
-                   if graph.is_end_branch(b)})
+    ends = sorted({graph.endpoint(b) for b in range(len(graph.branches)) if graph.is_end_branch(b)})
     if not ends:
         return Normalisation(seed, 0.0, None)
     dist = _path_lengths(graph.nbr, seed)
@@ -155,8 +154,9 @@ class Skeleton:
     def n_points(self) -> int:
         """Pixels in this skeleton."""
         graph = self.graph
-        return (sum(len(b.points) for b in graph.branches if b.alive)
-                + sum(len(j.points) for j in graph.junctions if j.alive))
+        return sum(len(b.points) for b in graph.branches if b.alive) + sum(
+            len(j.points) for j in graph.junctions if j.alive
+        )
 
     @property
     def n_branches(self) -> int:
@@ -179,8 +179,9 @@ class Skeleton:
         idx = self.points()
         return reconstruction(self.shape.shape, self.rows[idx], self.cols[idx], self.r2[idx])
 
-    def image_coordinates(self, rows: np.ndarray,
-                          cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def image_coordinates(
+        self, rows: np.ndarray, cols: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Rows and columns of pixels of ``shape`` in the image frame: back to the crop's
         own orientation, then ``+ origin``."""
         rows, cols = self.orientation.points_back(rows, cols, self.shape.shape)

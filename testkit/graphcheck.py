@@ -32,8 +32,11 @@ def xy(p: list[float]) -> tuple[int, int]:
 
 
 def node_pixels(node: dict[str, Any]) -> list[tuple[int, int]]:
-    return [xy(p) for p in node["points"]] if node["kind"] == "junction" \
+    return (
+        [xy(p) for p in node["points"]]
+        if node["kind"] == "junction"
         else [xy([node["x"], node["y"]])]
+    )
 
 
 def check_paths(skeleton: dict[str, Any]) -> None:
@@ -48,8 +51,11 @@ def check_paths(skeleton: dict[str, Any]) -> None:
         for end, node in ((path[0], src), (path[-1], dst)):
             if node["kind"] == "junction":
                 # adjacent to the cluster; the step into it is counted
-                near = [step(end, q) for q in node_pixels(node)
-                        if max(abs(end[0] - q[0]), abs(end[1] - q[1])) == 1]
+                near = [
+                    step(end, q)
+                    for q in node_pixels(node)
+                    if max(abs(end[0] - q[0]), abs(end[1] - q[1])) == 1
+                ]
                 assert near, (br["id"], end)
                 length += min(near)
             else:  # endpoint or loop: the path starts (ends) on the node's pixel
@@ -58,10 +64,17 @@ def check_paths(skeleton: dict[str, Any]) -> None:
             assert br["source"] == br["target"]
             assert path[0] == node_pixels(src)[0]
             length += step(path[-1], path[0])  # the closing step
-        assert math.isclose(length, br["length"], rel_tol=0, abs_tol=1e-9), \
-            (br["id"], length, br["length"])
-    assert math.isclose(sum(b["length"] for b in skeleton["branches"]), skeleton["length"],
-                        rel_tol=1e-12, abs_tol=1e-9)
+        assert math.isclose(length, br["length"], rel_tol=0, abs_tol=1e-9), (
+            br["id"],
+            length,
+            br["length"],
+        )
+    assert math.isclose(
+        sum(b["length"] for b in skeleton["branches"]),
+        skeleton["length"],
+        rel_tol=1e-12,
+        abs_tol=1e-9,
+    )
 
 
 def skeleton_pixels(skeleton: dict[str, Any]) -> list[list[float]]:

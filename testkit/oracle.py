@@ -52,8 +52,9 @@ def uncovered(mask_flat: np.ndarray, disks: list[np.ndarray], points) -> int:
     return int((mask_flat & ~covered).sum())
 
 
-def naive_sequence(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray, alpha: float,
-                   lbar: float) -> tuple[list[int], list[float]]:
+def naive_sequence(
+    graph: BranchGraph, mask: np.ndarray, r2: np.ndarray, alpha: float, lbar: float
+) -> tuple[list[int], list[float]]:
     """Removal order and the λ of every skeleton S(0..n), recomputed from scratch."""
     flat = mask.ravel()
     area = int(flat.sum())

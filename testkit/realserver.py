@@ -33,13 +33,25 @@ def running_server(log_path: Path, ready: str = "/readyz", **settings: str) -> I
     did not stop itself is killed (with its workers) on exit. No API key unless given.
     """
     port = free_port()
-    env = {**os.environ, "SKELPRUNE_HOST": "127.0.0.1", "SKELPRUNE_PORT": str(port),
-           "SKELPRUNE_LOG_LEVEL": "warning", "OMP_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
+    env = {
+        **os.environ,
+        "SKELPRUNE_HOST": "127.0.0.1",
+        "SKELPRUNE_PORT": str(port),
+        "SKELPRUNE_LOG_LEVEL": "warning",
+        "OMP_NUM_THREADS": "1",
+        "NUMBA_NUM_THREADS": "1",
+    }
     env.pop("SKELPRUNE_API_KEY", None)
     env.update({f"SKELPRUNE_{k.upper()}": v for k, v in settings.items()})
     with log_path.open("wb") as log:
-        proc = subprocess.Popen([sys.executable, "-m", "service"], cwd=REPO, env=env,
-                                stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "service"],
+            cwd=REPO,
+            env=env,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+        )
         base = f"http://127.0.0.1:{port}"
         try:
             deadline = time.monotonic() + 120
@@ -59,8 +71,9 @@ def running_server(log_path: Path, ready: str = "/readyz", **settings: str) -> I
                 proc.wait(30)
 
 
-def stop(proc: subprocess.Popen[bytes], sig: int = signal.SIGTERM,
-         timeout: float = 60) -> int | None:
+def stop(
+    proc: subprocess.Popen[bytes], sig: int = signal.SIGTERM, timeout: float = 60
+) -> int | None:
     """Ask the server to stop; its exit code, or None if it had to be killed."""
     proc.send_signal(sig)
     try:

@@ -57,10 +57,16 @@ def load_anchors(folder: Path) -> list[tuple[str, str, str, Path, int | None, fl
         with table.open(newline="") as f:
             for r in csv.DictReader(f):
                 ok = not r["matlab_error"]
-                rows.append((batch, r["shape"], r["perturbation"],
-                             Path(folder) / "masks" / batch / r["file"],
-                             int(r["matlab_endpoints"]) if ok else None,
-                             float(r["matlab_rer"]) if ok else None))
+                rows.append(
+                    (
+                        batch,
+                        r["shape"],
+                        r["perturbation"],
+                        Path(folder) / "masks" / batch / r["file"],
+                        int(r["matlab_endpoints"]) if ok else None,
+                        float(r["matlab_rer"]) if ok else None,
+                    )
+                )
     return rows
 
 
@@ -85,11 +91,15 @@ class AnchorRun:
     perturbations: tuple[str, ...]
 
     def _counts(self, method: str, batches: Sequence[str]) -> dict[tuple[str, str, str], int]:
-        return {(r.batch, r.shape, r.perturbation): r.endpoints for r in self.records
-                if r.method == method and r.batch in batches and r.endpoints is not None}
+        return {
+            (r.batch, r.shape, r.perturbation): r.endpoints
+            for r in self.records
+            if r.method == method and r.batch in batches and r.endpoints is not None
+        }
 
-    def agreement(self, method: str, perturbation: str, within: int = 0,
-                  batches: Sequence[str] = BATCHES) -> float:
+    def agreement(
+        self, method: str, perturbation: str, within: int = 0, batches: Sequence[str] = BATCHES
+    ) -> float:
         """Share of shapes (of ``batches``) whose count is within ``within`` of the clean one.
 
         A failed run (clean or perturbed) counts as a disagreement.
@@ -102,10 +112,15 @@ class AnchorRun:
             got.append(c is not None and p is not None and abs(p - c) <= within)
         return float(np.mean(got)) if got else math.nan
 
-    def median_rer(self, method: str, perturbation: str,
-                   batches: Sequence[str] = BATCHES) -> float:
-        got = [r.rer for r in self.records if r.method == method and r.batch in batches
-               and r.perturbation == perturbation and r.rer is not None]
+    def median_rer(self, method: str, perturbation: str, batches: Sequence[str] = BATCHES) -> float:
+        got = [
+            r.rer
+            for r in self.records
+            if r.method == method
+            and r.batch in batches
+            and r.perturbation == perturbation
+            and r.rer is not None
+        ]
         return float(np.median(got)) if got else math.nan
 
     def n_shapes(self, batches: Sequence[str] = BATCHES) -> int:
@@ -115,12 +130,21 @@ class AnchorRun:
         """At least the authors' exact and ±1 share under every perturbation (pooled and
         per batch)."""
         groups = [BATCHES, *((b,) for b in BATCHES)]
-        return all(self.agreement(method, p, k, g) >= self.agreement(ANCHOR, p, k, g)
-                   for p in self.perturbations for k in (0, 1) for g in groups)
+        return all(
+            self.agreement(method, p, k, g) >= self.agreement(ANCHOR, p, k, g)
+            for p in self.perturbations
+            for k in (0, 1)
+            for g in groups
+        )
 
 
-def run_anchors(folder: Path, variants: Iterable[str] = ("bayesian+dce", "bayesian", "dce"),
-                workers: int = 2, progress: bool = True, limit: int | None = None) -> AnchorRun:
+def run_anchors(
+    folder: Path,
+    variants: Iterable[str] = ("bayesian+dce", "bayesian", "dce"),
+    workers: int = 2,
+    progress: bool = True,
+    limit: int | None = None,
+) -> AnchorRun:
     """Run ``variants`` on every anchor mask (a process pool of ``workers``).
 
     ``limit``: only the first ``limit`` shapes of each batch (quick looks, tests).
@@ -130,8 +154,11 @@ def run_anchors(folder: Path, variants: Iterable[str] = ("bayesian+dce", "bayesi
     variants = tuple(variants)
     rows = load_anchors(folder)
     if limit is not None:
-        keep = {(b, s) for b in BATCHES
-                for s in list(dict.fromkeys(r[1] for r in rows if r[0] == b))[:limit]}
+        keep = {
+            (b, s)
+            for b in BATCHES
+            for s in list(dict.fromkeys(r[1] for r in rows if r[0] == b))[:limit]
+        }
         rows = [r for r in rows if (r[0], r[1]) in keep]
     records = [AnchorRecord(b, s, p, ANCHOR, e, rer) for b, s, p, _, e, rer in rows]
     jobs = [(b, s, p, path, variants) for b, s, p, path, _, _ in rows]
@@ -156,11 +183,14 @@ def anchor_table(run: AnchorRun, batches: Sequence[str] = BATCHES) -> str:
     from .tables import markdown_table, pct
 
     def cell(m: str, p: str) -> str:
-        return (f"{pct(run.agreement(m, p, 0, batches))} / {pct(run.agreement(m, p, 1, batches))}"
-                f" · {100 * run.median_rer(m, p, batches):.2f} %")
+        return (
+            f"{pct(run.agreement(m, p, 0, batches))} / {pct(run.agreement(m, p, 1, batches))}"
+            f" · {100 * run.median_rer(m, p, batches):.2f} %"
+        )
 
-    rows = [["clean", *(f"· {100 * run.median_rer(m, 'clean', batches):.2f} %"
-                        for m in run.methods)]]
+    rows = [
+        ["clean", *(f"· {100 * run.median_rer(m, 'clean', batches):.2f} %" for m in run.methods)]
+    ]
     rows += [[p, *(cell(m, p) for m in run.methods)] for p in run.perturbations]
     return markdown_table(["perturbation (exact / ±1 · median RER)", *run.methods], rows)
 

@@ -110,5 +110,10 @@ def skeletonize_cut(mask: np.ndarray, min_length: float) -> BaselineSkeleton:
     keep = graph.alive_points()
     rr, cc = graph.rows[keep], graph.cols[keep]
     na, nd = graph.length_counts()
-    return BaselineSkeleton(rows=rr - 1, cols=cc - 1, r2=r2img[rr, cc].astype(np.int64),
-                            endpoints=graph.n_endpoints(), length=step_length(na, nd))
+    return BaselineSkeleton(
+        rows=rr - 1,
+        cols=cc - 1,
+        r2=r2img[rr, cc].astype(np.int64),
+        endpoints=graph.n_endpoints(),
+        length=step_length(na, nd),
+    )

@@ -54,8 +54,9 @@ def overlay(variant: Variant, mask: np.ndarray) -> tuple[np.ndarray, int]:
     on = np.zeros(fg.shape, bool)
     on[sk.rows, sk.cols] = True
     padded = np.pad(on, 1)
-    deg = sum(np.roll(np.roll(padded, dy, 0), dx, 1)
-              for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx)[1:-1, 1:-1]
+    deg = sum(
+        np.roll(np.roll(padded, dy, 0), dx, 1) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx
+    )[1:-1, 1:-1]
     ends = np.argwhere(on & (deg == 1))
     return render_overlay(fg, sk.rows, sk.cols, sk.r2, endpoints=ends), sk.endpoints
 
@@ -74,15 +75,22 @@ def _fit(img: np.ndarray, size: int) -> np.ndarray:
     return np.asarray(Image.fromarray(sq).resize((size, size), how))
 
 
-def _grid(axes_images: Sequence[Sequence[np.ndarray]], row_labels: Sequence[str],
-          col_labels: Sequence[str], path: Path, cell: float = 1.4, dpi: int = 100,
-          captions: Sequence[Sequence[str]] | None = None) -> None:
+def _grid(
+    axes_images: Sequence[Sequence[np.ndarray]],
+    row_labels: Sequence[str],
+    col_labels: Sequence[str],
+    path: Path,
+    cell: float = 1.4,
+    dpi: int = 100,
+    captions: Sequence[Sequence[str]] | None = None,
+) -> None:
     plt = _plt()
     nr, nc = len(axes_images), len(axes_images[0])
     # room under each row for its captions, so they do not run into the next row
     extra = 0.2 * nr if captions is not None else 0.0
-    fig, axes = plt.subplots(nr, nc, figsize=(cell * nc + 0.6, cell * nr + 0.4 + extra),
-                             squeeze=False)
+    fig, axes = plt.subplots(
+        nr, nc, figsize=(cell * nc + 0.6, cell * nr + 0.4 + extra), squeeze=False
+    )
     for i, row in enumerate(axes_images):
         for j, img in enumerate(row):
             ax = axes[i][j]
@@ -100,9 +108,12 @@ def _grid(axes_images: Sequence[Sequence[np.ndarray]], row_labels: Sequence[str]
     plt.close(fig)
 
 
-def perturbation_figure(shapes: Sequence[tuple[str, np.ndarray]],
-                        perturbed: Sequence[Sequence[tuple[str, np.ndarray]]],
-                        variant: Variant, path: Path) -> None:
+def perturbation_figure(
+    shapes: Sequence[tuple[str, np.ndarray]],
+    perturbed: Sequence[Sequence[tuple[str, np.ndarray]]],
+    variant: Variant,
+    path: Path,
+) -> None:
     """Figs. 6–7: rows = shapes, columns = clean and each perturbation; endpoint counts."""
     rows, caps = [], []
     for (_name, mask), pert in zip(shapes, perturbed, strict=True):
@@ -113,17 +124,24 @@ def perturbation_figure(shapes: Sequence[tuple[str, np.ndarray]],
     _grid(rows, [n for n, _ in shapes], cols, path, cell=1.3, captions=caps)
 
 
-def methods_figure(shapes: Sequence[tuple[str, np.ndarray]], variants: Sequence[str],
-                   path: Path) -> None:
+def methods_figure(
+    shapes: Sequence[tuple[str, np.ndarray]], variants: Sequence[str], path: Path
+) -> None:
     """The same shapes under every variant, side by side, with endpoint counts."""
     cells = [[overlay(VARIANTS[v], m) for v in variants] for _, m in shapes]
-    _grid([[_fit(img, 140) for img, _ in row] for row in cells], [n for n, _ in shapes],
-          list(variants), path, cell=1.5,
-          captions=[[f"{n} endpoints" for _, n in row] for row in cells])
+    _grid(
+        [[_fit(img, 140) for img, _ in row] for row in cells],
+        [n for n, _ in shapes],
+        list(variants),
+        path,
+        cell=1.5,
+        captions=[[f"{n} endpoints" for _, n in row] for row in cells],
+    )
 
 
-def rectangles_figure(rects: Sequence[tuple[str, np.ndarray]], variants: Sequence[str],
-                      path: Path) -> None:
+def rectangles_figure(
+    rects: Sequence[tuple[str, np.ndarray]], variants: Sequence[str], path: Path
+) -> None:
     """Fig. 9: one rectangle per noise kind (rows) under each variant (columns)."""
     plt = _plt()
     nr, nc = len(rects), len(variants)
@@ -151,8 +169,9 @@ def curves_figure(shapes: Sequence[tuple[str, np.ndarray]], path: Path) -> None:
 
     plt = _plt()
     n = len(shapes)
-    fig, axes = plt.subplots(2, n, figsize=(2.8 * n, 5.0), squeeze=False,
-                             gridspec_kw={"height_ratios": [1.0, 1.3]})
+    fig, axes = plt.subplots(
+        2, n, figsize=(2.8 * n, 5.0), squeeze=False, gridspec_kw={"height_ratios": [1.0, 1.3]}
+    )
     for j, (name, mask) in enumerate(shapes):
         res = prune(mask)
         comp = max(res.components, key=lambda c: c.area)
@@ -168,8 +187,13 @@ def curves_figure(shapes: Sequence[tuple[str, np.ndarray]], path: Path) -> None:
         ax.plot(steps, seq.lr, label="LR = log(Γ+1)", color="tab:blue")
         ax.plot(steps, seq.objective, label="λ = α·AR + LR", color="black")
         ax.axvline(comp.chosen_step, color="tab:green", linestyle="--", linewidth=1)
-        ax.plot([comp.chosen_step], [seq.objective[comp.chosen_step]], "o", color="tab:green",
-                label="chosen (argmin λ)")
+        ax.plot(
+            [comp.chosen_step],
+            [seq.objective[comp.chosen_step]],
+            "o",
+            color="tab:green",
+            label="chosen (argmin λ)",
+        )
         ax.set_xlabel("pruning step", fontsize=8)
         ax.tick_params(labelsize=7)
         ax.set_title(f"α = {alpha:.1f}", fontsize=8)
@@ -180,8 +204,9 @@ def curves_figure(shapes: Sequence[tuple[str, np.ndarray]], path: Path) -> None:
     plt.close(fig)
 
 
-def montage_figure(shapes: Sequence[tuple[str, np.ndarray]], path: Path,
-                   cell: int = 96, columns: int = 12) -> None:
+def montage_figure(
+    shapes: Sequence[tuple[str, np.ndarray]], path: Path, cell: int = 96, columns: int = 12
+) -> None:
     """Fig. 11: every shape's default skeleton overlay, with its RER, in one grid."""
     from ..api import prune
 

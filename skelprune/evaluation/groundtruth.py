@@ -40,8 +40,9 @@ __all__ = [
 TOLERANCES: tuple[int, ...] = (0, 1, 2, 3)
 
 
-def pixel_scores(ours: np.ndarray, truth: np.ndarray,
-                 tolerances: Sequence[int] = TOLERANCES) -> np.ndarray:
+def pixel_scores(
+    ours: np.ndarray, truth: np.ndarray, tolerances: Sequence[int] = TOLERANCES
+) -> np.ndarray:
     """``(len(tolerances), 3)`` precision, recall, F1 of two skeleton masks (same grid).
 
     Examples
@@ -106,9 +107,13 @@ class GroundTruthRun:
         return [(n, f) for f, n in f1[:k]]
 
 
-def run_groundtruth(folder: Path, variants: Iterable[str] = tuple(VARIANTS),
-                    workers: int = 2, progress: bool = True,
-                    limit: int | None = None) -> GroundTruthRun:
+def run_groundtruth(
+    folder: Path,
+    variants: Iterable[str] = tuple(VARIANTS),
+    workers: int = 2,
+    progress: bool = True,
+    limit: int | None = None,
+) -> GroundTruthRun:
     """Score ``variants`` on every shape of ``folder`` (``shapes/``, ``skeletons/``)."""
     from tqdm import tqdm
 
@@ -158,23 +163,33 @@ def misses_figure(run: GroundTruthRun, variant: str, out: Path, k: int = 6) -> l
     if not tiles:
         return []
     h = max(t.shape[0] for t in tiles)
-    row = np.concatenate([np.pad(t, ((0, h - t.shape[0]), (0, 0), (0, 0)),
-                                 constant_values=255) for t in tiles], axis=1)
+    row = np.concatenate(
+        [np.pad(t, ((0, h - t.shape[0]), (0, 0), (0, 0)), constant_values=255) for t in tiles],
+        axis=1,
+    )
     out.parent.mkdir(parents=True, exist_ok=True)
     Image.fromarray(np.kron(row, np.ones((2, 2, 1), np.uint8))).save(out)
     return [n for n, _ in worst]
 
 
-def groundtruth_markdown(run: GroundTruthRun, figure: str | None = None,
-                         figure_shapes: Sequence[str] = ()) -> str:
+def groundtruth_markdown(
+    run: GroundTruthRun, figure: str | None = None, figure_shapes: Sequence[str] = ()
+) -> str:
     """The ground-truth section of the evaluation report."""
     from .tables import markdown_table
 
     rows = []
     for v in run.variants:
         m = run.mean(v)
-        rows.append([v, *(f"{m[i, 0]:.3f} / {m[i, 1]:.3f} / **{m[i, 2]:.3f}**"
-                          for i in range(len(TOLERANCES)))])
+        rows.append(
+            [
+                v,
+                *(
+                    f"{m[i, 0]:.3f} / {m[i, 1]:.3f} / **{m[i, 2]:.3f}**"
+                    for i in range(len(TOLERANCES))
+                ),
+            ]
+        )
     parts = [
         "## Skeleton pixels against the SkelNetOn ground truth",
         "",
@@ -183,15 +198,19 @@ def groundtruth_markdown(run: GroundTruthRun, figure: str | None = None,
         "pixel), recall (ground-truth pixels within t px of ours) and F1; mean over shapes. "
         "SPEC §5 asks for the default's F1 at 2 px to be at least every alternative's.",
         "",
-        markdown_table(["variant (precision / recall / F1)",
-                        *(f"t = {t} px" for t in TOLERANCES)], rows),
+        markdown_table(
+            ["variant (precision / recall / F1)", *(f"t = {t} px" for t in TOLERANCES)], rows
+        ),
     ]
     if figure:
         best = run.worst(run.variants[0], len(figure_shapes))
-        parts += ["", f"The {len(figure_shapes)} shapes where `{run.variants[0]}` scores "
-                  "lowest at 2 px (" + ", ".join(f"{n}: F1 {f:.2f}" for n, f in best) + "). "
-                  "Black: both skeletons within 2 px; red: our pixels farther than 2 px from "
-                  "the ground truth; blue: ground-truth pixels farther than 2 px from ours.",
-                  "", f"![ground truth misses]({figure})"]
+        parts += [
+            "",
+            f"The {len(figure_shapes)} shapes where `{run.variants[0]}` scores "
+            "lowest at 2 px (" + ", ".join(f"{n}: F1 {f:.2f}" for n, f in best) + "). "
+            "Black: both skeletons within 2 px; red: our pixels farther than 2 px from "
+            "the ground truth; blue: ground-truth pixels farther than 2 px from ours.",
+            "",
+            f"![ground truth misses]({figure})",
+        ]
     return "\n".join(parts)
-

@@ -28,8 +28,14 @@ import numpy as np
 from .perturb import PERTURBATIONS, Perturbation
 from .stability import _rng
 
-__all__ = ["MATCH_RADIUS", "MIN_MARGINS", "MarginRun", "end_branches", "margin_markdown",
-           "run_margins"]
+__all__ = [
+    "MATCH_RADIUS",
+    "MIN_MARGINS",
+    "MarginRun",
+    "end_branches",
+    "margin_markdown",
+    "run_margins",
+]
 
 #: Endpoints this close (pixels of the clean shape) are the same branch's.
 MATCH_RADIUS = 5.0
@@ -95,8 +101,9 @@ def _rer(res) -> float:
     return sum(c.rer * c.area for c in res.components) / area
 
 
-def _task(args: tuple[str, int, np.ndarray, int, tuple[Perturbation, ...],
-                      tuple[float, ...]]) -> _ShapeResult:
+def _task(
+    args: tuple[str, int, np.ndarray, int, tuple[Perturbation, ...], tuple[float, ...]],
+) -> _ShapeResult:
     from ..api import prune
 
     dataset, index, mask, seed, perts, mins = args
@@ -146,26 +153,33 @@ class MarginRun:
     def flips(self, kind: str, perturbation: str) -> tuple[list[float], int, int]:
         """Share flipped per margin quartile, flips in all, branches in all."""
         edges = self.edges()
-        rows = [x for r in self.results for x in getattr(r, kind)[perturbation]
-                if math.isfinite(x[0])]
+        rows = [
+            x for r in self.results for x in getattr(r, kind)[perturbation] if math.isfinite(x[0])
+        ]
         q = np.searchsorted(edges, [x[0] for x in rows], side="right")
         flipped = np.array([x[1] for x in rows], bool)
-        shares = [float(flipped[q == k].mean()) if (q == k).any() else math.nan
-                  for k in range(4)]
+        shares = [float(flipped[q == k].mean()) if (q == k).any() else math.nan for k in range(4)]
         return shares, int(flipped.sum()), len(rows)
 
     def low_share(self, perturbation: str) -> float:
         """Of all flips (lost and gained), the share in the lowest margin quartile."""
         edges = self.edges()
-        flips = [x[0] for r in self.results for kind in ("lost", "gained")
-                 for x in getattr(r, kind)[perturbation] if x[1] and math.isfinite(x[0])]
+        flips = [
+            x[0]
+            for r in self.results
+            for kind in ("lost", "gained")
+            for x in getattr(r, kind)[perturbation]
+            if x[1] and math.isfinite(x[0])
+        ]
         if not flips:
             return math.nan
         return float(np.mean(np.asarray(flips) <= edges[0]))
 
     def agreement(self, m: float | None, perturbation: str, within: int = 0) -> float:
-        got = [abs(r.endpoints[m][perturbation] - r.endpoints[m]["clean"]) <= within
-               for r in self.results]
+        got = [
+            abs(r.endpoints[m][perturbation] - r.endpoints[m]["clean"]) <= within
+            for r in self.results
+        ]
         return float(np.mean(got))
 
     def median_rer(self, m: float | None, dataset: str) -> float:
@@ -175,17 +189,24 @@ class MarginRun:
         return float(np.mean([r.endpoints[m]["clean"] for r in self.results]))
 
 
-def run_margins(datasets: dict[str, Sequence[tuple[str, np.ndarray]]],
-                perturbations: Iterable[Perturbation] = tuple(PERTURBATIONS.values()),
-                min_margins: Iterable[float] = MIN_MARGINS, seed: int = 7,
-                workers: int = 2, progress: bool = True) -> MarginRun:
+def run_margins(
+    datasets: dict[str, Sequence[tuple[str, np.ndarray]]],
+    perturbations: Iterable[Perturbation] = tuple(PERTURBATIONS.values()),
+    min_margins: Iterable[float] = MIN_MARGINS,
+    seed: int = 7,
+    workers: int = 2,
+    progress: bool = True,
+) -> MarginRun:
     """Run the flip and ``min_margin`` measurements (one task per shape)."""
     from tqdm import tqdm
 
     perts = tuple(perturbations)
     mins = tuple(min_margins)
-    jobs = [(d, i, m, seed, perts, mins)
-            for d, items in datasets.items() for i, (_, m) in enumerate(items)]
+    jobs = [
+        (d, i, m, seed, perts, mins)
+        for d, items in datasets.items()
+        for i, (_, m) in enumerate(items)
+    ]
     results: list[_ShapeResult] = []
     with tqdm(total=len(jobs), unit="shape", disable=not progress, desc="margins") as bar:
         if workers > 1:
@@ -208,25 +229,34 @@ def _pct(x: float) -> str:
 def flip_table(run: MarginRun) -> str:
     """Markdown: lost and gained shares by margin quartile, per perturbation."""
     e = run.edges()
-    head = (f"| perturbation | lost, all | lost Q1 (≤ {e[0]:.3g}) | lost Q2 | lost Q3 "
-            f"| lost Q4 (> {e[2]:.3g}) | gained, all | gained Q1 | gained Q2 | gained Q3 "
-            "| gained Q4 | flips in Q1 |")
+    head = (
+        f"| perturbation | lost, all | lost Q1 (≤ {e[0]:.3g}) | lost Q2 | lost Q3 "
+        f"| lost Q4 (> {e[2]:.3g}) | gained, all | gained Q1 | gained Q2 | gained Q3 "
+        "| gained Q4 | flips in Q1 |"
+    )
     lines = [head, "|---" * 12 + "|"]
     for p in run.perturbations:
         lost, nl, tl = run.flips("lost", p)
         gained, ng, tg = run.flips("gained", p)
-        lines.append(f"| {p} | {nl}/{tl} | " + " | ".join(_pct(x) for x in lost)
-                     + f" | {ng}/{tg} | " + " | ".join(_pct(x) for x in gained)
-                     + f" | {_pct(run.low_share(p))} |")
+        lines.append(
+            f"| {p} | {nl}/{tl} | "
+            + " | ".join(_pct(x) for x in lost)
+            + f" | {ng}/{tg} | "
+            + " | ".join(_pct(x) for x in gained)
+            + f" | {_pct(run.low_share(p))} |"
+        )
     return "\n".join(lines)
 
 
 def min_margin_table(run: MarginRun) -> str:
     """Markdown: RER, endpoints and endpoint agreement for each ``min_margin``."""
-    lines = ["| min_margin | " + " | ".join(f"median RER {d}" for d in run.datasets)
-             + " | endpoints, mean | agreement, mean of perturbations | worst perturbation"
-             " | within ±1, mean |",
-             "|---" * (len(run.datasets) + 5) + "|"]
+    lines = [
+        "| min_margin | "
+        + " | ".join(f"median RER {d}" for d in run.datasets)
+        + " | endpoints, mean | agreement, mean of perturbations | worst perturbation"
+        " | within ±1, mean |",
+        "|---" * (len(run.datasets) + 5) + "|",
+    ]
     for m in (None, *run.min_margins):
         agree = [run.agreement(m, p) for p in run.perturbations]
         near = [run.agreement(m, p, within=1) for p in run.perturbations]
@@ -235,7 +265,8 @@ def min_margin_table(run: MarginRun) -> str:
             f"| {'off (default)' if m is None else f'{m:g}'} | "
             + " | ".join(f"{100 * run.median_rer(m, d):.2f} %" for d in run.datasets)
             + f" | {run.mean_endpoints(m):.2f} | {_pct(float(np.mean(agree)))} | "
-            f"{_pct(agree[worst])} ({run.perturbations[worst]}) | {_pct(float(np.mean(near)))} |")
+            f"{_pct(agree[worst])} ({run.perturbations[worst]}) | {_pct(float(np.mean(near)))} |"
+        )
     return "\n".join(lines)
 
 

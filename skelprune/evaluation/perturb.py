@@ -364,8 +364,9 @@ def boundary_flips(
     rng = np.random.default_rng(rng)
     padded = np.pad(mask, margin)
     cross = ndi.generate_binary_structure(2, 1)
-    band = (padded & ~ndi.binary_erosion(padded, cross)) | \
-        (~padded & ndi.binary_dilation(padded, cross))
+    band = (padded & ~ndi.binary_erosion(padded, cross)) | (
+        ~padded & ndi.binary_dilation(padded, cross)
+    )
     flipped = padded ^ (band & (rng.random(padded.shape) < share))
     rings = _rings(mask)
     holes = [(rings[k] + margin, seed + margin) for k, seed in _hole_seeds(rings, mask.shape)]
@@ -439,8 +440,9 @@ def noisy_rectangle(
     mask[margin : margin + height, margin : margin + width] = True
     if scale > 0:
         mask = boundary_noise(mask, kind, scale, rng)
-    g = rectangle_medial_axis(margin - 0.5, margin - 0.5, margin + height - 0.5,
-                              margin + width - 0.5)
+    g = rectangle_medial_axis(
+        margin - 0.5, margin - 0.5, margin + height - 0.5, margin + width - 0.5
+    )
     return mask, g
 
 

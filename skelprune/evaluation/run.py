@@ -85,8 +85,9 @@ def _bare(mask: np.ndarray) -> float:
     return 1000 * (time.perf_counter() - t)
 
 
-def speed(shapes: Sequence[tuple[str, np.ndarray]], repeat: int = 3,
-          progress: bool = True) -> list[SpeedRow]:
+def speed(
+    shapes: Sequence[tuple[str, np.ndarray]], repeat: int = 3, progress: bool = True
+) -> list[SpeedRow]:
     """One core, this process: min over ``repeat`` runs a shape, median over shapes.
 
     The reference, bare ``skeletonize`` + ``distance_transform_edt``, is timed on the same
@@ -103,8 +104,10 @@ def speed(shapes: Sequence[tuple[str, np.ndarray]], repeat: int = 3,
             times[v].append(min(measure(VARIANTS[v], m).ms for _ in range(repeat)))
     ref = float(np.median(times["bare"]))
     rows = [SpeedRow("skeletonize + EDT (reference)", ref, 1.0)]
-    rows += [SpeedRow(v, float(np.median(times[v])), float(np.median(times[v])) / ref)
-             for v in TABLE_VARIANTS]
+    rows += [
+        SpeedRow(v, float(np.median(times[v])), float(np.median(times[v])) / ref)
+        for v in TABLE_VARIANTS
+    ]
     return rows
 
 
@@ -120,8 +123,12 @@ def table1(run: StabilityRun) -> str:
             recs = run.clean(d, v)
             rer = np.array([r.rer for r in recs])
             ss = np.array([r.ss for r in recs if r.ss is not None])
-            row += [f"{100 * rer.mean():.2f} %", f"{100 * rer.std():.2f} %",
-                    f"{ss.mean():.3f}", f"{ss.std():.3f}"]
+            row += [
+                f"{100 * rer.mean():.2f} %",
+                f"{100 * rer.std():.2f} %",
+                f"{ss.mean():.3f}",
+                f"{ss.std():.3f}",
+            ]
         rows.append(row)
     return markdown_table(header, rows)
 
@@ -131,23 +138,38 @@ def table2(run: StabilityRun) -> str:
     noisy = [n for n, _, _ in NOISE_KINDS if n in run.rect_noises()]
     rows = []
     for n in run.rect_noises():
-        rows.append([n, *(f"{run.rect_error(n, v):.2f} ({pct(run.rect_share4(n, v))})"
-                          for v in run.variants)])
-    rows.append(["**average of the noisy kinds**",
-                 *(f"{np.mean([run.rect_error(n, v) for n in noisy]):.2f}"
-                   f" ({pct(float(np.mean([run.rect_share4(n, v) for n in noisy])))})"
-                   for v in run.variants)])
+        rows.append(
+            [
+                n,
+                *(
+                    f"{run.rect_error(n, v):.2f} ({pct(run.rect_share4(n, v))})"
+                    for v in run.variants
+                ),
+            ]
+        )
+    rows.append(
+        [
+            "**average of the noisy kinds**",
+            *(
+                f"{np.mean([run.rect_error(n, v) for n in noisy]):.2f}"
+                f" ({pct(float(np.mean([run.rect_share4(n, v) for n in noisy])))})"
+                for v in run.variants
+            ),
+        ]
+    )
     return markdown_table(["noise: error px² (share with 4 endpoints)", *run.variants], rows)
 
 
 def speed_table(rows: Sequence[SpeedRow], n: int) -> str:
     return markdown_table(
         ["method", f"median ms a shape (kimia216, {n} shapes)", "× skeletonize + EDT"],
-        [[r.method, f"{r.ms:.2f}", f"{r.ratio:.1f}"] for r in rows])
+        [[r.method, f"{r.ms:.2f}", f"{r.ratio:.1f}"] for r in rows],
+    )
 
 
-def _pick(shapes: Sequence[tuple[str, np.ndarray]], names: Sequence[str],
-          k: int) -> list[tuple[str, np.ndarray]]:
+def _pick(
+    shapes: Sequence[tuple[str, np.ndarray]], names: Sequence[str], k: int
+) -> list[tuple[str, np.ndarray]]:
     by = dict(shapes)
     chosen = [(n, by[n]) for n in names if n in by]
     for item in shapes:  # fill up from the start when a named shape is not in the subset
@@ -158,8 +180,13 @@ def _pick(shapes: Sequence[tuple[str, np.ndarray]], names: Sequence[str],
     return chosen[:k]
 
 
-def figures(sets: dict[str, list[tuple[str, np.ndarray]]], out: Path, seed: int,
-            progress: bool = True, small: bool = False) -> dict[str, str]:
+def figures(
+    sets: dict[str, list[tuple[str, np.ndarray]]],
+    out: Path,
+    seed: int,
+    progress: bool = True,
+    small: bool = False,
+) -> dict[str, str]:
     """Write every figure under ``out/figures``; returns {key: relative path}.
 
     ``small`` (with ``--limit``): fewer rows in the per-shape figures, for quick runs.
@@ -182,20 +209,36 @@ def figures(sets: dict[str, list[tuple[str, np.ndarray]]], out: Path, seed: int,
         elif step == "stability":
             names = [n for n, _ in k216]
             shapes = _pick(k216, STABILITY_SHAPES, 1 if small else 3)
-            perturbed = [[(p.name, p.apply(m, _rng(seed, names.index(n), p.name)))
-                          for p in PERTURBATIONS.values()] for n, m in shapes]
-            ef.perturbation_figure(shapes, perturbed, VARIANTS["bayesian+dce"],
-                                   fig_dir / "fig6_7_stability.png")
+            perturbed = [
+                [
+                    (p.name, p.apply(m, _rng(seed, names.index(n), p.name)))
+                    for p in PERTURBATIONS.values()
+                ]
+                for n, m in shapes
+            ]
+            ef.perturbation_figure(
+                shapes, perturbed, VARIANTS["bayesian+dce"], fig_dir / "fig6_7_stability.png"
+            )
             paths[step] = "figures/fig6_7_stability.png"
         elif step == "methods":
-            ef.methods_figure(_pick(k216, FIGURE_SHAPES, 4), TABLE_VARIANTS,
-                              fig_dir / "methods.png")
+            ef.methods_figure(
+                _pick(k216, FIGURE_SHAPES, 4), TABLE_VARIANTS, fig_dir / "methods.png"
+            )
             paths[step] = "figures/methods.png"
         elif step == "rectangles":
             rects = [("none", noisy_rectangle(*RECTANGLE, "uniform", 0.0)[0])]
-            rects += [(n, noisy_rectangle(*RECTANGLE, kind, scale,  # type: ignore[arg-type]
-                                          _rng(seed, 0, n))[0])
-                      for n, kind, scale in NOISE_KINDS[: 1 if small else None]]
+            rects += [
+                (
+                    n,
+                    noisy_rectangle(
+                        *RECTANGLE,
+                        kind,
+                        scale,  # type: ignore[arg-type]
+                        _rng(seed, 0, n),
+                    )[0],
+                )
+                for n, kind, scale in NOISE_KINDS[: 1 if small else None]
+            ]
             ef.rectangles_figure(rects, TABLE_VARIANTS, fig_dir / "fig9_rectangles.png")
             paths[step] = "figures/fig9_rectangles.png"
         else:
@@ -204,97 +247,112 @@ def figures(sets: dict[str, list[tuple[str, np.ndarray]]], out: Path, seed: int,
     return paths
 
 
-def _markdown(run: StabilityRun, spd: list[SpeedRow], n_speed: int, figs: dict[str, str],
-              command: str, groundtruth: str | None = None,
-              anchors: AnchorRun | None = None) -> str:
-    counts = ", ".join(f"{d} ({len({r.shape for r in run.shapes if r.dataset == d})} shapes)"
-                       for d in run.datasets)
+def _markdown(
+    run: StabilityRun,
+    spd: list[SpeedRow],
+    n_speed: int,
+    figs: dict[str, str],
+    command: str,
+    groundtruth: str | None = None,
+    anchors: AnchorRun | None = None,
+) -> str:
+    counts = ", ".join(
+        f"{d} ({len({r.shape for r in run.shapes if r.dataset == d})} shapes)" for d in run.datasets
+    )
     labels = "\n".join(f"- `{v}`: {VARIANTS[v].label}" for v in run.variants)
-    return "\n".join([
-        "# Evaluation (the paper's Section 7)",
-        "",
-        f"Generated by `{command}` from `shared/data`; do not edit by hand. Datasets: "
-        f"{counts}. Stability run: {run.seconds / 60:.1f} min on 2 worker processes.",
-        "",
-        "Methods (columns of every table):",
-        "",
-        labels,
-        "",
-        "`skeletonize + cut` is what users would otherwise pick (the skan / PlantCV way): "
-        "`skimage.morphology.skeletonize`, then end branches shorter than L pixels are "
-        "removed, shortest first, until none is left; radii are the Euclidean distance "
-        "transform at the skeleton pixels, so RER is measured exactly as for the others. "
-        "SS of every method uses the same length unit per shape (ℓ̄ of the shape's "
-        "medial axis, SPEC §2.3).",
-        "",
-        "## Table 1: reconstruction error ratio and skeleton simplicity",
-        "",
-        "RER = AR(Ŝ), SS = LR(Ŝ) = log(Γ(Ŝ) + 1) on the clean shapes (the paper's Table 1; "
-        "it reports RER < 1 % for its method). Lower is better for both; they trade off.",
-        "",
-        table1(run),
-        "",
-        "## Table 2: noisy rectangles",
-        "",
-        f"A {RECTANGLE[0]}×{RECTANGLE[1]} rectangle with boundary noise (the paper's Fig. 9 "
-        f"and Table 2), {run.seeds} draws per noise kind plus the clean one. Mean eq. 13 "
-        "error in px² (mean squared distance of the skeleton pixels to the exact medial "
-        "axis) and, in brackets, the share of rectangles whose skeleton has 4 endpoints.",
-        "",
-        table2(run),
-        "",
-        f"![rectangles]({figs['rectangles']})",
-        "",
-        "## Stability under noise, rotation and scaling (Figs. 6–7)",
-        "",
-        "Share of shapes whose number of endpoints after the perturbation equals the clean "
-        "shape's, same method. SPEC §5's target: at least the authors' code's share on the "
-        "same masks (`data/anchors`, compared in [stability.md](stability.md)); 90 % is kept "
-        "as a reading.",
-        "",
-        targets_table(run, anchors),
-        "",
-        *(line for d in run.datasets for line in (f"### {d}", "", agreement_table(run, d), "")),
-        "Default method (`bayesian+dce`) on a few shapes under every perturbation; the row "
-        "label lists the endpoint counts (clean first):",
-        "",
-        f"![stability]({figs['stability']})",
-        "",
-        "Every method on the same shapes:",
-        "",
-        f"![methods]({figs['methods']})",
-        "",
-        *([groundtruth, ""] if groundtruth else []),
-        "## Fig. 3: the pruning curve",
-        "",
-        "α·AR, LR and λ over the removal steps of the default method; the chosen skeleton "
-        "(argmin λ, ties to the later step) is marked.",
-        "",
-        f"![curves]({figs['curves']})",
-        "",
-        "## Speed",
-        "",
-        "One core, this process, min of 3 runs a shape, median over shapes; the reference is "
-        "bare `skeletonize` + `distance_transform_edt` timed in the same loop.",
-        "",
-        speed_table(spd, n_speed),
-        "",
-        "Clean shapes, timed in the stability run's workers (2 at once):",
-        "",
-        clean_table(run),
-        "",
-        "## Fig. 11: every kimia216 skeleton",
-        "",
-        "Default method; reconstruction error in red, RER in brackets.",
-        "",
-        f"![kimia216]({figs['montage']})",
-        "",
-    ])
+    return "\n".join(
+        [
+            "# Evaluation (the paper's Section 7)",
+            "",
+            f"Generated by `{command}` from `shared/data`; do not edit by hand. Datasets: "
+            f"{counts}. Stability run: {run.seconds / 60:.1f} min on 2 worker processes.",
+            "",
+            "Methods (columns of every table):",
+            "",
+            labels,
+            "",
+            "`skeletonize + cut` is what users would otherwise pick (the skan / PlantCV way): "
+            "`skimage.morphology.skeletonize`, then end branches shorter than L pixels are "
+            "removed, shortest first, until none is left; radii are the Euclidean distance "
+            "transform at the skeleton pixels, so RER is measured exactly as for the others. "
+            "SS of every method uses the same length unit per shape (ℓ̄ of the shape's "
+            "medial axis, SPEC §2.3).",
+            "",
+            "## Table 1: reconstruction error ratio and skeleton simplicity",
+            "",
+            "RER = AR(Ŝ), SS = LR(Ŝ) = log(Γ(Ŝ) + 1) on the clean shapes (the paper's Table 1; "
+            "it reports RER < 1 % for its method). Lower is better for both; they trade off.",
+            "",
+            table1(run),
+            "",
+            "## Table 2: noisy rectangles",
+            "",
+            f"A {RECTANGLE[0]}×{RECTANGLE[1]} rectangle with boundary noise (the paper's Fig. 9 "
+            f"and Table 2), {run.seeds} draws per noise kind plus the clean one. Mean eq. 13 "
+            "error in px² (mean squared distance of the skeleton pixels to the exact medial "
+            "axis) and, in brackets, the share of rectangles whose skeleton has 4 endpoints.",
+            "",
+            table2(run),
+            "",
+            f"![rectangles]({figs['rectangles']})",
+            "",
+            "## Stability under noise, rotation and scaling (Figs. 6–7)",
+            "",
+            "Share of shapes whose number of endpoints after the perturbation equals the clean "
+            "shape's, same method. SPEC §5's target: at least the authors' code's share on the "
+            "same masks (`data/anchors`, compared in [stability.md](stability.md)); 90 % is kept "
+            "as a reading.",
+            "",
+            targets_table(run, anchors),
+            "",
+            *(line for d in run.datasets for line in (f"### {d}", "", agreement_table(run, d), "")),
+            "Default method (`bayesian+dce`) on a few shapes under every perturbation; the row "
+            "label lists the endpoint counts (clean first):",
+            "",
+            f"![stability]({figs['stability']})",
+            "",
+            "Every method on the same shapes:",
+            "",
+            f"![methods]({figs['methods']})",
+            "",
+            *([groundtruth, ""] if groundtruth else []),
+            "## Fig. 3: the pruning curve",
+            "",
+            "α·AR, LR and λ over the removal steps of the default method; the chosen skeleton "
+            "(argmin λ, ties to the later step) is marked.",
+            "",
+            f"![curves]({figs['curves']})",
+            "",
+            "## Speed",
+            "",
+            "One core, this process, min of 3 runs a shape, median over shapes; the reference is "
+            "bare `skeletonize` + `distance_transform_edt` timed in the same loop.",
+            "",
+            speed_table(spd, n_speed),
+            "",
+            "Clean shapes, timed in the stability run's workers (2 at once):",
+            "",
+            clean_table(run),
+            "",
+            "## Fig. 11: every kimia216 skeleton",
+            "",
+            "Default method; reconstruction error in red, RER in brackets.",
+            "",
+            f"![kimia216]({figs['montage']})",
+            "",
+        ]
+    )
 
 
-def run_evaluation(out: Path, data: Path | None = None, limit: int | None = None,
-                   workers: int = 2, rect_seeds: int = 10, seed: int = 7,
-                   progress: bool = True) -> dict[str, Path]:
+def run_evaluation(
+    out: Path,
+    data: Path | None = None,
+    limit: int | None = None,
+    workers: int = 2,
+    rect_seeds: int = 10,
+    seed: int = 7,
+    progress: bool = True,
+) -> dict[str, Path]:
     """Compute the whole evaluation and write its reports and figures into ``out``.
 
     Parameters
@@ -326,14 +384,14 @@ def run_evaluation(out: Path, data: Path | None = None, limit: int | None = None
     missing = [d for d, items in sets.items() if not items]
     if missing:
         raise FileNotFoundError(f"no PNG masks in {', '.join(str(data / d) for d in missing)}")
-    run = run_stability(sets, TABLE_VARIANTS, rect_seeds=rect_seeds, seed=seed,
-                        workers=workers, progress=progress)
+    run = run_stability(
+        sets, TABLE_VARIANTS, rect_seeds=rect_seeds, seed=seed, workers=workers, progress=progress
+    )
     anchors = None
     if (data / "anchors").is_dir():
         from .anchors import run_anchors
 
-        anchors = run_anchors(data / "anchors", workers=workers, progress=progress,
-                              limit=limit)
+        anchors = run_anchors(data / "anchors", workers=workers, progress=progress, limit=limit)
     spd = speed(sets[DATASETS[0]], progress=progress)
     figs = figures(sets, out, seed, progress=progress, small=limit is not None)
     command = "skelprune eval --out docs" + ("" if limit is None else f" --limit {limit}")
@@ -341,20 +399,29 @@ def run_evaluation(out: Path, data: Path | None = None, limit: int | None = None
     if (data / "skelneton-dev" / "skeletons").is_dir():
         from .groundtruth import groundtruth_markdown, misses_figure, run_groundtruth
 
-        gt = run_groundtruth(data / "skelneton-dev", TABLE_VARIANTS, workers=workers,
-                             progress=progress, limit=limit)
-        names = misses_figure(gt, TABLE_VARIANTS[0], out / "figures" / "groundtruth_misses.png",
-                              k=2 if limit is not None else 6)
+        gt = run_groundtruth(
+            data / "skelneton-dev", TABLE_VARIANTS, workers=workers, progress=progress, limit=limit
+        )
+        names = misses_figure(
+            gt,
+            TABLE_VARIANTS[0],
+            out / "figures" / "groundtruth_misses.png",
+            k=2 if limit is not None else 6,
+        )
         figs["groundtruth"] = "figures/groundtruth_misses.png"
         groundtruth = groundtruth_markdown(gt, figs["groundtruth"], names)
     (out / "evaluation.md").write_text(
-        _markdown(run, spd, len(sets[DATASETS[0]]), figs, command, groundtruth, anchors))
+        _markdown(run, spd, len(sets[DATASETS[0]]), figs, command, groundtruth, anchors)
+    )
     (out / "stability.md").write_text(stability_markdown(run, command, anchors))
     from .margin import margin_markdown, run_margins
 
     margins = run_margins(sets, seed=seed, workers=workers, progress=progress)
     (out / "margin.md").write_text(margin_markdown(margins, command))
-    written = {"evaluation": out / "evaluation.md", "stability": out / "stability.md",
-               "margin": out / "margin.md"}
+    written = {
+        "evaluation": out / "evaluation.md",
+        "stability": out / "stability.md",
+        "margin": out / "margin.md",
+    }
     written.update({k: out / v for k, v in figs.items()})
     return written

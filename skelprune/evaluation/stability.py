@@ -89,13 +89,20 @@ class Variant:
 VARIANTS: dict[str, Variant] = {
     v.name: v
     for v in (
-        Variant("bayesian+dce", "Bayesian, coarse=\"dce\" (the default)", "prune",
-                (("coarse", "dce"),)),
-        Variant("bayesian", "Bayesian, coarse=None (from the full medial axis)", "prune",
-                (("coarse", None),)),
-        Variant("dce", "DCE pruning [10] (method=\"dce\")", "prune", (("method", "dce"),)),
-        *(Variant(f"cut-{L:g}", f"skeletonize + cut < {L:g} px", "cut", (("min_length", L),))
-          for L in CUT_LENGTHS),
+        Variant(
+            "bayesian+dce", 'Bayesian, coarse="dce" (the default)', "prune", (("coarse", "dce"),)
+        ),
+        Variant(
+            "bayesian",
+            "Bayesian, coarse=None (from the full medial axis)",
+            "prune",
+            (("coarse", None),),
+        ),
+        Variant("dce", 'DCE pruning [10] (method="dce")', "prune", (("method", "dce"),)),
+        *(
+            Variant(f"cut-{L:g}", f"skeletonize + cut < {L:g} px", "cut", (("min_length", L),))
+            for L in CUT_LENGTHS
+        ),
     )
 }
 
@@ -127,8 +134,9 @@ def _lbar(mask: np.ndarray) -> float:
     return Skeleton.medial_axis(crop).normalisation(9.0).lbar
 
 
-def measure(variant: Variant, mask: np.ndarray, with_ss: bool = False,
-            with_points: bool = False) -> Measurement:
+def measure(
+    variant: Variant, mask: np.ndarray, with_ss: bool = False, with_points: bool = False
+) -> Measurement:
     """Run one variant on one mask and measure it.
 
     Parameters
@@ -213,11 +221,13 @@ def _rng(seed: int, index: int, name: str) -> np.random.Generator:
     return np.random.default_rng([seed, index, zlib.crc32(name.encode())])
 
 
-def _shape_task(args: tuple[str, str, int, np.ndarray, int, tuple[str, ...],
-                            tuple[Perturbation, ...]]) -> list[ShapeRecord]:
+def _shape_task(
+    args: tuple[str, str, int, np.ndarray, int, tuple[str, ...], tuple[Perturbation, ...]],
+) -> list[ShapeRecord]:
     dataset, shape, index, mask, seed, variants, perts = args
-    masks = [("clean", mask, None)] + [(p.name, *p.apply_mapped(mask, _rng(seed, index, p.name)))
-                                       for p in perts]
+    masks = [("clean", mask, None)] + [
+        (p.name, *p.apply_mapped(mask, _rng(seed, index, p.name))) for p in perts
+    ]
     area = float(np.count_nonzero(mask))
     clean_points: dict[str, np.ndarray] = {}
     out = []
@@ -230,8 +240,9 @@ def _shape_task(args: tuple[str, str, int, np.ndarray, int, tuple[str, ...],
                 clean_points[vname] = r.points
             else:
                 dist = skeleton_distance(clean_points[vname], back(r.points), area)
-            out.append(ShapeRecord(dataset, shape, pname, vname, r.endpoints, r.rer, r.ss,
-                                   r.ms, dist))
+            out.append(
+                ShapeRecord(dataset, shape, pname, vname, r.endpoints, r.rer, r.ss, r.ms, dist)
+            )
     return out
 
 
@@ -242,8 +253,11 @@ def _rect_task(args: tuple[str, str, float, int, tuple[str, ...]]) -> list[RectR
     for vname in variants:
         r = measure(VARIANTS[vname], mask, with_points=True)
         assert r.points is not None
-        out.append(RectRecord(noise, seed, vname, r.endpoints,
-                              skeleton_error(r.points, truth), r.rer, r.ms))
+        out.append(
+            RectRecord(
+                noise, seed, vname, r.endpoints, skeleton_error(r.points, truth), r.rer, r.ms
+            )
+        )
     return out
 
 
@@ -277,11 +291,13 @@ class StabilityRun:
 
     # -- aggregations ------------------------------------------------------------------
     def clean(self, dataset: str, variant: str) -> list[ShapeRecord]:
-        return [r for r in self.shapes
-                if r.dataset == dataset and r.variant == variant and r.perturbation == "clean"]
+        return [
+            r
+            for r in self.shapes
+            if r.dataset == dataset and r.variant == variant and r.perturbation == "clean"
+        ]
 
-    def agreement(self, dataset: str, variant: str, perturbation: str,
-                  within: int = 0) -> float:
+    def agreement(self, dataset: str, variant: str, perturbation: str, within: int = 0) -> float:
         """Share of shapes whose endpoint count under ``perturbation`` is the clean one's.
 
         With ``within > 0``, the share whose count is off by at most that many endpoints:
@@ -289,30 +305,42 @@ class StabilityRun:
         instead of it.
         """
         ref = {r.shape: r.endpoints for r in self.clean(dataset, variant)}
-        got = [abs(r.endpoints - ref[r.shape]) <= within for r in self.shapes
-               if r.dataset == dataset and r.variant == variant
-               and r.perturbation == perturbation]
+        got = [
+            abs(r.endpoints - ref[r.shape]) <= within
+            for r in self.shapes
+            if r.dataset == dataset and r.variant == variant and r.perturbation == perturbation
+        ]
         return float(np.mean(got)) if got else math.nan
 
     def distance(self, dataset: str, variant: str, perturbation: str) -> float:
         """Median skeleton distance to the clean skeleton (``nan`` if none measured)."""
-        got = [r.distance for r in self.shapes
-               if r.dataset == dataset and r.variant == variant
-               and r.perturbation == perturbation and r.distance is not None]
+        got = [
+            r.distance
+            for r in self.shapes
+            if r.dataset == dataset
+            and r.variant == variant
+            and r.perturbation == perturbation
+            and r.distance is not None
+        ]
         got = [d for d in got if not math.isnan(d)]
         return float(np.median(got)) if got else math.nan
 
     def min_agreement(self, variant: str) -> float:
-        return min(self.agreement(d, variant, p)
-                   for d in self.datasets for p in self.perturbations)
+        return min(self.agreement(d, variant, p) for d in self.datasets for p in self.perturbations)
 
-    def disagreements(self, dataset: str, variant: str,
-                      perturbation: str) -> list[tuple[str, int, int]]:
+    def disagreements(
+        self, dataset: str, variant: str, perturbation: str
+    ) -> list[tuple[str, int, int]]:
         """``(shape, clean endpoints, perturbed endpoints)`` where they differ."""
         ref = {r.shape: r.endpoints for r in self.clean(dataset, variant)}
-        return [(r.shape, ref[r.shape], r.endpoints) for r in self.shapes
-                if r.dataset == dataset and r.variant == variant
-                and r.perturbation == perturbation and r.endpoints != ref[r.shape]]
+        return [
+            (r.shape, ref[r.shape], r.endpoints)
+            for r in self.shapes
+            if r.dataset == dataset
+            and r.variant == variant
+            and r.perturbation == perturbation
+            and r.endpoints != ref[r.shape]
+        ]
 
     def rect_share4(self, noise: str, variant: str) -> float:
         got = [r.endpoints == 4 for r in self.rects if r.noise == noise and r.variant == variant]
@@ -331,20 +359,26 @@ class StabilityRun:
         rectangles, median RER ≤ 1 %."""
         noisy = [n for n, _, _ in NOISE_KINDS if n in self.rect_noises()]
         return {
-            "agreement": bool(self.min_agreement(variant) >= 0.9) if self.perturbations
-            else False,
-            "rectangles": bool(noisy) and all(
+            "agreement": bool(self.min_agreement(variant) >= 0.9) if self.perturbations else False,
+            "rectangles": bool(noisy)
+            and all(
                 self.rect_share4(n, variant) == 1.0 and self.rect_error(n, variant) <= 1.0
-                for n in noisy),
-            "rer": all(float(np.median([r.rer for r in self.clean(d, variant)])) <= 0.01
-                       for d in self.datasets),
+                for n in noisy
+            ),
+            "rer": all(
+                float(np.median([r.rer for r in self.clean(d, variant)])) <= 0.01
+                for d in self.datasets
+            ),
         }
 
 
 def _pool(workers: int) -> ProcessPoolExecutor:
     # forkserver: the parent may already hold numba/OpenMP state that fork would copy.
-    return ProcessPoolExecutor(max_workers=workers, initializer=_warm_up,
-                               mp_context=multiprocessing.get_context("forkserver"))
+    return ProcessPoolExecutor(
+        max_workers=workers,
+        initializer=_warm_up,
+        mp_context=multiprocessing.get_context("forkserver"),
+    )
 
 
 def run_stability(
@@ -386,18 +420,25 @@ def run_stability(
 
     variants = tuple(variants)
     perts = tuple(perturbations)
-    shape_jobs = [(d, name, i, m, seed, variants, perts)
-                  for d, items in datasets.items() for i, (name, m) in enumerate(items)]
+    shape_jobs = [
+        (d, name, i, m, seed, variants, perts)
+        for d, items in datasets.items()
+        for i, (name, m) in enumerate(items)
+    ]
     rect_jobs = []
     if rect_seeds:
         rect_jobs.append(("none", "uniform", 0.0, 0, variants))
-        rect_jobs += [(noise, kind, scale, s, variants)
-                      for noise, kind, scale in NOISE_KINDS for s in range(rect_seeds)]
+        rect_jobs += [
+            (noise, kind, scale, s, variants)
+            for noise, kind, scale in NOISE_KINDS
+            for s in range(rect_seeds)
+        ]
     t0 = time.perf_counter()
     shapes: list[ShapeRecord] = []
     rects: list[RectRecord] = []
-    bar = tqdm(total=len(shape_jobs) + len(rect_jobs), unit="shape", disable=not progress,
-               desc="stability")
+    bar = tqdm(
+        total=len(shape_jobs) + len(rect_jobs), unit="shape", disable=not progress, desc="stability"
+    )
     if workers > 1:
         with _pool(workers) as pool:
             # Rectangles first: they are short, and the big scale-2 shapes then finish last
@@ -421,5 +462,12 @@ def run_stability(
             if on_result:
                 on_result()
     bar.close()
-    return StabilityRun(shapes, rects, variants, tuple(p.name for p in perts),
-                        tuple(datasets), rect_seeds, time.perf_counter() - t0)
+    return StabilityRun(
+        shapes,
+        rects,
+        variants,
+        tuple(p.name for p in perts),
+        tuple(datasets),
+        rect_seeds,
+        time.perf_counter() - t0,
+    )

@@ -55,8 +55,12 @@ class Foreground:
     border: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        return {"rule": self.rule, "shape": self.shape, "threshold": self.threshold,
-                "border": self.border}
+        return {
+            "rule": self.rule,
+            "shape": self.shape,
+            "threshold": self.threshold,
+            "border": self.border,
+        }
 
 
 POLYGON_FOREGROUND = Foreground(None, "polygon")
@@ -73,8 +77,9 @@ def _border(a: np.ndarray) -> np.ndarray:
     return np.concatenate([a[0], a[-1], a[1:-1, 0], a[1:-1, -1]])
 
 
-def select(values: np.ndarray, rule: str = "auto",
-           alpha: np.ndarray | None = None) -> tuple[np.ndarray, Foreground]:
+def select(
+    values: np.ndarray, rule: str = "auto", alpha: np.ndarray | None = None
+) -> tuple[np.ndarray, Foreground]:
     """The shape mask of an image by the foreground rule (see the module docstring).
 
     Parameters
@@ -113,8 +118,11 @@ def select(values: np.ndarray, rule: str = "auto",
         nz = np.any(v != 0, axis=-1) if v.ndim == 3 else v != 0
         taken = "nonzero" if rule == "auto" else rule
         return (nz if taken == "nonzero" else ~nz), Foreground(rule, taken)  # type: ignore[arg-type]
-    grey = v @ _LUMA[: v.shape[-1]] if v.ndim == 3 and v.shape[-1] == 3 else (
-        v[..., 0] if v.ndim == 3 else v)
+    grey = (
+        v @ _LUMA[: v.shape[-1]]
+        if v.ndim == 3 and v.shape[-1] == 3
+        else (v[..., 0] if v.ndim == 3 else v)
+    )
     grey = np.asarray(grey, dtype=np.float64)
     lo, hi = float(grey.min()), float(grey.max())
     if lo == hi:  # one level: nothing to split

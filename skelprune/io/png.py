@@ -138,8 +138,15 @@ def _decode(data: bytes) -> Image.Image:
         im.load()
     except Image.DecompressionBombError as exc:
         raise ImageTooLargeError(f"image too large to decode safely: {exc}") from None
-    except (UnidentifiedImageError, OSError, SyntaxError, ValueError, EOFError,
-            struct.error, zlib.error) as exc:
+    except (
+        UnidentifiedImageError,
+        OSError,
+        SyntaxError,
+        ValueError,
+        EOFError,
+        struct.error,
+        zlib.error,
+    ) as exc:
         raise InvalidImageError(f"cannot decode PNG: {exc}") from None
     return im
 
@@ -250,7 +257,8 @@ def read_shape(
                 data = Path(source).read_bytes()
             except OSError as exc:
                 raise InvalidImageError(
-                    f"cannot read {os.fspath(source)!r}: {exc.strerror}") from None
+                    f"cannot read {os.fspath(source)!r}: {exc.strerror}"
+                ) from None
         else:
             data = bytes(source)
         width, height, depth, _ = _ihdr(data)

@@ -89,8 +89,11 @@ def _finite(v: int | float) -> bool:
 def _areas(geom: Any) -> list[Polygon]:
     """The non-empty polygons of any geometry (collections flattened)."""
     return [g for g in shapely.get_parts(geom) if isinstance(g, Polygon) and not g.is_empty] + [
-        p for g in shapely.get_parts(geom) if isinstance(g, MultiPolygon | GeometryCollection)
-        for p in _areas(g)]
+        p
+        for g in shapely.get_parts(geom)
+        if isinstance(g, MultiPolygon | GeometryCollection)
+        for p in _areas(g)
+    ]
 
 
 def _bounds(geom: Any) -> tuple[float, float, float, float]:
@@ -127,8 +130,13 @@ def _count(coords: Any, multi: bool) -> int:
     if not isinstance(coords, list | tuple):
         return 0
     polys = coords if multi else [coords]
-    return sum(len(r) for p in polys if isinstance(p, list | tuple)
-               for r in p if isinstance(r, list | tuple))
+    return sum(
+        len(r)
+        for p in polys
+        if isinstance(p, list | tuple)
+        for r in p
+        if isinstance(r, list | tuple)
+    )
 
 
 def _polygons(coords: Any, where: str, multi: bool) -> Iterator[tuple[str, list[np.ndarray]]]:
@@ -169,8 +177,9 @@ def parse_geojson(
     geometries = list(_geometries(obj, "$"))
     if max_vertices is not None:
         # Counted before any position is looked at, so a huge input is refused cheaply.
-        n_vertices = sum(_count(g.get("coordinates"), g["type"] == "MultiPolygon")
-                         for _, g in geometries)
+        n_vertices = sum(
+            _count(g.get("coordinates"), g["type"] == "MultiPolygon") for _, g in geometries
+        )
         if n_vertices > max_vertices:
             raise InvalidPolygonError(
                 f"too many vertices: {n_vertices} positions, more than {max_vertices} allowed"
@@ -184,7 +193,8 @@ def parse_geojson(
                 # be finite (JSON cannot write them).
                 raise InvalidPolygonError(
                     "coordinates span too large a range to rasterise: every coordinate must "
-                    f"lie within ±{MAX_COORDINATE:.0e}")
+                    f"lie within ±{MAX_COORDINATE:.0e}"
+                )
             poly = Polygon(rings[0], rings[1:])
             if not poly.is_valid and not repair:
                 reason = shapely.is_valid_reason(poly)
@@ -200,8 +210,7 @@ def parse_geojson(
             try:
                 fixed = shapely.make_valid(poly, method="structure", keep_collapsed=False)
             except shapely.errors.GEOSException as exc:
-                raise InvalidPolygonError(
-                    f"{pwhere}: cannot repair the polygon: {exc}") from None
+                raise InvalidPolygonError(f"{pwhere}: cannot repair the polygon: {exc}") from None
         # make_valid may also yield lines and points (zero-area slivers), and GEOS refuses
         # to union mixed dimensions: keep only the areas.
         areas += _areas(fixed)
@@ -339,7 +348,9 @@ def polygon_mask(
     """
     geom = parse_geojson(obj, max_vertices=max_vertices, repair=repair)
     return rasterize(
-        geom, pixel_size=pixel_size, longest_side=longest_side, margin=margin,
+        geom,
+        pixel_size=pixel_size,
+        longest_side=longest_side,
+        margin=margin,
         max_pixels=max_pixels,
     )
-

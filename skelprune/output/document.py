@@ -75,8 +75,9 @@ class ComponentResult:
     def area(self) -> int:
         return self.skeleton.area
 
-    def image_coordinates(self, rows: np.ndarray,
-                          cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def image_coordinates(
+        self, rows: np.ndarray, cols: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Rows and columns of graph points in the image frame."""
         return self.skeleton.image_coordinates(rows, cols)
 
@@ -122,13 +123,22 @@ class ComponentResult:
             pts = sorted(junc.points, key=lambda p: (-r2[p], g.rows[p], g.cols[p]))
             x, y, r = xyr(pts[0])
             junction_node[j] = len(nodes)
-            nodes.append({"id": len(nodes), "x": x, "y": y, "radius": r, "kind": "junction",
-                          "points": [xyr(p) for p in sorted(junc.points)]})
+            nodes.append(
+                {
+                    "id": len(nodes),
+                    "x": x,
+                    "y": y,
+                    "radius": r,
+                    "kind": "junction",
+                    "points": [xyr(p) for p in sorted(junc.points)],
+                }
+            )
 
         def new_node(p: int, kind: str) -> int:
             x, y, r = xyr(p)
-            nodes.append({"id": len(nodes), "x": x, "y": y, "radius": r, "kind": kind,
-                          "points": []})
+            nodes.append(
+                {"id": len(nodes), "x": x, "y": y, "radius": r, "kind": kind, "points": []}
+            )
             return len(nodes) - 1
 
         branches: list[dict[str, Any]] = []
@@ -148,12 +158,18 @@ class ComponentResult:
                     else:
                         ends.append(new_node(p, "endpoint"))
                 src, dst = ends
-            branches.append({"id": len(branches), "source": src, "target": dst,
-                             "length": float(br.length),
-                             "points": [xyr(p) for p in path],
-                             "off_path": [xyr(p) for p in sorted(br.side)],
-                             "margin": self.margins.margin.get(b),
-                             "removed_at": self.margins.removed_at.get(b)})
+            branches.append(
+                {
+                    "id": len(branches),
+                    "source": src,
+                    "target": dst,
+                    "length": float(br.length),
+                    "points": [xyr(p) for p in path],
+                    "off_path": [xyr(p) for p in sorted(br.side)],
+                    "margin": self.margins.margin.get(b),
+                    "removed_at": self.margins.removed_at.get(b),
+                }
+            )
         return nodes, branches
 
     def to_dict(self, curve: bool = True, frame: PixelFrame = IDENTITY) -> dict[str, Any]:
@@ -194,10 +210,16 @@ class ComponentResult:
         }
         if curve:
             doc["curve"] = [
-                {"step": i, "length": frame.distance(float(L)), "ar": float(a),
-                 "lr": float(lr), "objective": float(o)}
+                {
+                    "step": i,
+                    "length": frame.distance(float(L)),
+                    "ar": float(a),
+                    "lr": float(lr),
+                    "objective": float(o),
+                }
                 for i, (L, a, lr, o) in enumerate(
-                    zip(seq.length, seq.ar, seq.lr, seq.objective, strict=True))
+                    zip(seq.length, seq.ar, seq.lr, seq.objective, strict=True)
+                )
             ]
         return doc
 
@@ -253,8 +275,9 @@ class PruneResult:
             return e, e, e
         return tuple(np.concatenate(a) for a in zip(*parts, strict=True))  # type: ignore[return-value]
 
-    def to_dict(self, curve: bool = True, overlay: bool = False,
-                frame: PixelFrame | None = IDENTITY) -> dict[str, Any]:
+    def to_dict(
+        self, curve: bool = True, overlay: bool = False, frame: PixelFrame | None = IDENTITY
+    ) -> dict[str, Any]:
         """The output document of SPEC §3 (plain JSON types).
 
         Examples
@@ -267,8 +290,11 @@ class PruneResult:
         """
         frame = IDENTITY if frame is None else frame  # None: the image's own pixels
         doc: dict[str, Any] = {
-            "width": self.width, "height": self.height, "method": self.method,
-            "beta": float(self.beta), "coarse": self.coarse,
+            "width": self.width,
+            "height": self.height,
+            "method": self.method,
+            "beta": float(self.beta),
+            "coarse": self.coarse,
             "foreground": self.foreground.to_dict(),
             "components": [c.to_dict(curve=curve, frame=frame) for c in self.components],
             "version": {"library": __version__, "algorithm": ALGORITHM_VERSION},
@@ -291,31 +317,59 @@ class PruneResult:
             sk = comp["skeleton"]
             # on every feature too: GIS tools show a feature's properties, not the collection's
             numbers = {"rer": comp["rer"], "ss": comp["ss"]}
-            summaries.append({"component": ci, "area": comp["area"], "alpha": comp["alpha"],
-                              **numbers, "objective": comp["objective"]})
+            summaries.append(
+                {
+                    "component": ci,
+                    "area": comp["area"],
+                    "alpha": comp["alpha"],
+                    **numbers,
+                    "objective": comp["objective"],
+                }
+            )
             for br in sk["branches"]:
                 line = branch_line(sk, br)
-                features.append({
-                    "type": "Feature",
-                    "geometry": {"type": "LineString",
-                                 "coordinates": [[x, y] for x, y, _ in line]},
-                    "properties": {"component": ci, "kind": "branch", "id": br["id"],
-                                   "source": br["source"], "target": br["target"],
-                                   "length": br["length"], "radii": [r for *_, r in line],
-                                   "margin": br["margin"], "removed_at": br["removed_at"],
-                                   **numbers},
-                })
+                features.append(
+                    {
+                        "type": "Feature",
+                        "geometry": {
+                            "type": "LineString",
+                            "coordinates": [[x, y] for x, y, _ in line],
+                        },
+                        "properties": {
+                            "component": ci,
+                            "kind": "branch",
+                            "id": br["id"],
+                            "source": br["source"],
+                            "target": br["target"],
+                            "length": br["length"],
+                            "radii": [r for *_, r in line],
+                            "margin": br["margin"],
+                            "removed_at": br["removed_at"],
+                            **numbers,
+                        },
+                    }
+                )
             for nd in sk["nodes"]:
-                features.append({
-                    "type": "Feature",
-                    "geometry": {"type": "Point", "coordinates": [nd["x"], nd["y"]]},
-                    "properties": {"component": ci, "kind": nd["kind"], "id": nd["id"],
-                                   "radius": nd["radius"], **numbers},
-                })
+                features.append(
+                    {
+                        "type": "Feature",
+                        "geometry": {"type": "Point", "coordinates": [nd["x"], nd["y"]]},
+                        "properties": {
+                            "component": ci,
+                            "kind": nd["kind"],
+                            "id": nd["id"],
+                            "radius": nd["radius"],
+                            **numbers,
+                        },
+                    }
+                )
         # A foreign member of the collection (RFC 7946 §6.1): the document's numbers.
         properties = {k: doc[k] for k in ("width", "height", "method", "beta", "coarse")}
-        return {"type": "FeatureCollection",
-                "properties": {**properties, "components": summaries}, "features": features}
+        return {
+            "type": "FeatureCollection",
+            "properties": {**properties, "components": summaries},
+            "features": features,
+        }
 
     def to_networkx(self, frame: PixelFrame | None = IDENTITY) -> Any:
         """The skeleton as a ``networkx.MultiGraph`` (needs the optional ``networkx``).
@@ -336,18 +390,27 @@ class PruneResult:
         try:
             import networkx as nx
         except ImportError:  # an optional dependency: say how to get it
-            raise ImportError("to_networkx needs networkx: pip install 'skelprune[graph]'") \
-                from None
+            raise ImportError(
+                "to_networkx needs networkx: pip install 'skelprune[graph]'"
+            ) from None
         g = nx.MultiGraph()
         for ci, comp in enumerate(self.to_dict(curve=False, frame=frame)["components"]):
             sk = comp["skeleton"]
             for nd in sk["nodes"]:
-                g.add_node((ci, nd["id"]), component=ci,
-                           **{k: v for k, v in nd.items() if k != "id"})
+                g.add_node(
+                    (ci, nd["id"]), component=ci, **{k: v for k, v in nd.items() if k != "id"}
+                )
             for br in sk["branches"]:
-                g.add_edge((ci, br["source"]), (ci, br["target"]), key=br["id"], component=ci,
-                           length=br["length"], points=br["points"], off_path=br["off_path"],
-                           line=branch_line(sk, br))
+                g.add_edge(
+                    (ci, br["source"]),
+                    (ci, br["target"]),
+                    key=br["id"],
+                    component=ci,
+                    length=br["length"],
+                    points=br["points"],
+                    off_path=br["off_path"],
+                    line=branch_line(sk, br),
+                )
         return g
 
     def render_overlay(self, scale: int = 1, legend: bool = False) -> np.ndarray:
@@ -372,15 +435,23 @@ class PruneResult:
             text = "   ".join(
                 (f"component {i}: " if len(self.components) > 1 else "")
                 + f"RER {100 * c.rer:.2f} %, SS {c.ss:.3f}"
-                for i, c in enumerate(self.components[:4]))
-        return render_overlay(self.mask, rows, cols, r2,
-                              np.array(marks["endpoint"], int).reshape(-1, 2),
-                              np.array(marks["junction"], int).reshape(-1, 2),
-                              scale=scale, legend=text)
+                for i, c in enumerate(self.components[:4])
+            )
+        return render_overlay(
+            self.mask,
+            rows,
+            cols,
+            r2,
+            np.array(marks["endpoint"], int).reshape(-1, 2),
+            np.array(marks["junction"], int).reshape(-1, 2),
+            scale=scale,
+            legend=text,
+        )
 
     def overlay_png(self, scale: int | None = None, legend: bool = False) -> bytes:
         """The overlay as PNG bytes; ``scale`` None: the smallest integer scale that
         makes the longer side at least 512 px (:func:`~skelprune.output.render.auto_scale`).
         """
-        return encode_png(self.render_overlay(
-            auto_scale(self.mask.shape) if scale is None else scale, legend))
+        return encode_png(
+            self.render_overlay(auto_scale(self.mask.shape) if scale is None else scale, legend)
+        )

@@ -24,8 +24,8 @@ MARK_EVERY = 150
 
 COLOURS = {
     "background": (255, 255, 255),
-    "shape": (150, 210, 150),       # reconstructed part of the shape
-    "error": (220, 40, 40),         # shape pixels the skeleton does not reconstruct
+    "shape": (150, 210, 150),  # reconstructed part of the shape
+    "error": (220, 40, 40),  # shape pixels the skeleton does not reconstruct
     "skeleton": (20, 20, 20),
     "endpoint": (30, 90, 230),
     "junction": (230, 150, 0),
@@ -42,8 +42,9 @@ def auto_scale(shape: tuple[int, ...]) -> int:
     return int(min(MAX_SCALE, max(1, -(-READABLE_SIDE // max(shape[:2])))))
 
 
-def _mark(img: np.ndarray, r: int, c: int, colour: tuple[int, int, int], scale: int,
-          radius: float) -> None:
+def _mark(
+    img: np.ndarray, r: int, c: int, colour: tuple[int, int, int], scale: int, radius: float
+) -> None:
     h, w = img.shape[:2]
     if radius <= 1.5:  # a 3 × 3 square
         img[max(r - 1, 0) : min(r + 2, h), max(c - 1, 0) : min(c + 2, w)] = colour
@@ -62,8 +63,13 @@ def _legend(img: np.ndarray, text: str) -> np.ndarray:
 
     width = img.shape[1]
     size = max(12, width // 45)
-    keys = [("shape", "reconstructed"), ("error", "error"), ("skeleton", "skeleton"),
-            ("endpoint", "endpoint"), ("junction", "junction")]
+    keys = [
+        ("shape", "reconstructed"),
+        ("error", "error"),
+        ("skeleton", "skeleton"),
+        ("endpoint", "endpoint"),
+        ("junction", "junction"),
+    ]
     strip = Image.new("RGB", (width, 2 * size + 3 * size // 2), COLOURS["background"])
     draw = ImageDraw.Draw(strip)
     font = ImageFont.load_default(size=size)

@@ -14,8 +14,12 @@ import numpy as np
 
 from ._partition import BoundaryPartition
 
-__all__ = ["TOUCH_TOLERANCE", "SegmentRaster", "generated_in_several_segments",
-           "generating_segments"]
+__all__ = [
+    "TOUCH_TOLERANCE",
+    "SegmentRaster",
+    "generated_in_several_segments",
+    "generating_segments",
+]
 
 #: A boundary point generates skeleton point ``s`` iff its distance to ``s`` is at most
 #: ``r(s) + TOUCH_TOLERANCE`` pixels (about one pixel of digitisation slack).
@@ -50,15 +54,23 @@ class SegmentRaster:
            [ 1,  3, -1]])
     """
 
-    def __init__(self, partition: BoundaryPartition, points: np.ndarray, r2: np.ndarray,
-                 tolerance: float = TOUCH_TOLERANCE) -> None:
+    def __init__(
+        self,
+        partition: BoundaryPartition,
+        points: np.ndarray,
+        r2: np.ndarray,
+        tolerance: float = TOUCH_TOLERANCE,
+    ) -> None:
         pts = np.ascontiguousarray(np.asarray(points, dtype=np.int64).reshape(-1, 2))
         self.r2 = np.ascontiguousarray(np.asarray(r2, np.int64).reshape(len(pts)))
         self.tolerance = float(tolerance)
         self.seg_lo, self.seg_hi, self.local = _raster(
             np.ascontiguousarray(partition.points, dtype=np.int64),
             np.ascontiguousarray(partition.segment, dtype=np.int64),
-            pts, self.r2, self.tolerance)
+            pts,
+            self.r2,
+            self.tolerance,
+        )
 
     def labels(self, index: np.ndarray, limit: int = 3) -> np.ndarray:
         """The distinct segment ids around the rims of points ``index``, up to ``limit``.
@@ -66,8 +78,9 @@ class SegmentRaster:
         Row ``k`` holds the ids found for ``index[k]`` in scan order, padded with -1.
         """
         index = np.asarray(index, np.int64)
-        return _rim_labels(self.seg_lo, self.seg_hi, self.local, self.r2, index,
-                           self.tolerance, limit)
+        return _rim_labels(
+            self.seg_lo, self.seg_hi, self.local, self.r2, index, self.tolerance, limit
+        )
 
 
 def generated_in_several_segments(
@@ -142,8 +155,9 @@ def generating_segments(
 
 
 @numba.njit(cache=True)
-def _raster(bp: np.ndarray, seg: np.ndarray, pts: np.ndarray, r2: np.ndarray,
-            tolerance: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _raster(
+    bp: np.ndarray, seg: np.ndarray, pts: np.ndarray, r2: np.ndarray, tolerance: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     # Segment labels on a raster (a boundary pixel can border two segments: keep the
     # smallest and largest label) that holds every point's scan square, whose half-side
     # is at most ceil(r + tolerance) + 1; and the points in the raster's frame.
@@ -177,8 +191,15 @@ def _add_label(out: np.ndarray, found: int, lab: int) -> int:
 
 
 @numba.njit(cache=True)
-def _rim_labels(seg_lo: np.ndarray, seg_hi: np.ndarray, pts: np.ndarray, r2_all: np.ndarray,
-                index: np.ndarray, tolerance: float, limit: int) -> np.ndarray:
+def _rim_labels(
+    seg_lo: np.ndarray,
+    seg_hi: np.ndarray,
+    pts: np.ndarray,
+    r2_all: np.ndarray,
+    index: np.ndarray,
+    tolerance: float,
+    limit: int,
+) -> np.ndarray:
     out = np.full((index.shape[0], limit), -1, np.int64)
     for k in range(index.shape[0]):
         i = index[k]
@@ -187,8 +208,15 @@ def _rim_labels(seg_lo: np.ndarray, seg_hi: np.ndarray, pts: np.ndarray, r2_all:
 
 
 @numba.njit(cache=True)
-def rim_labels(seg_lo: np.ndarray, seg_hi: np.ndarray, r: int, c: int, r2: int,
-               tolerance: float, out: np.ndarray) -> None:
+def rim_labels(
+    seg_lo: np.ndarray,
+    seg_hi: np.ndarray,
+    r: int,
+    c: int,
+    r2: int,
+    tolerance: float,
+    out: np.ndarray,
+) -> None:
     """Fill ``out`` (-1 on entry) with the distinct labels on the rim of one disk.
 
     For compiled callers only (a kernel both compiled and Python callers use can fail

@@ -85,8 +85,12 @@ class PruningSequence:
     def objective(self) -> np.ndarray:
         if self.alpha is None:
             return self.lr
-        return np.array([objective(lo, self.area, a, d, self.alpha, self.lbar)
-                         for lo, a, d in zip(self.lost, self.na, self.nd, strict=True)])
+        return np.array(
+            [
+                objective(lo, self.area, a, d, self.alpha, self.lbar)
+                for lo, a, d in zip(self.lost, self.na, self.nd, strict=True)
+            ]
+        )
 
     def skeleton_at(self, step: int) -> Skeleton:
         """``S(step)``: the start with the first ``step`` removals made (on a copy)."""
@@ -141,10 +145,17 @@ def bayesian_sequence(
         if junc.alive:
             labels[junc.points] = nb + 1 + j
     alive = graph.alive_points()
-    cov = Coverage(mask, graph.rows[alive], graph.cols[alive], r2[alive], labels[alive],
-                   nb + len(graph.junctions) + 1)
-    seq = PruningSequence(start, [], [cov.lost], [graph.na], [graph.nd], area, alpha, lbar,
-                          end=graph)
+    cov = Coverage(
+        mask,
+        graph.rows[alive],
+        graph.cols[alive],
+        r2[alive],
+        labels[alive],
+        nb + len(graph.junctions) + 1,
+    )
+    seq = PruningSequence(
+        start, [], [cov.lost], [graph.na], [graph.nd], area, alpha, lbar, end=graph
+    )
     if uncovered:
         seq.uncovered = np.flatnonzero(mask & (cov.c == 0))
     if alpha is None and order is None:
@@ -167,8 +178,9 @@ def bayesian_sequence(
         ends = np.flatnonzero(is_end)
         seq.end_areas.append((ends, cov.exclusive[ends + 1]))
         if order is None:
-            pick = _pick(is_end, cov.exclusive, bna, bnd, ep, cov.lost, area, graph.na,
-                         graph.nd, alpha, lbar)
+            pick = _pick(
+                is_end, cov.exclusive, bna, bnd, ep, cov.lost, area, graph.na, graph.nd, alpha, lbar
+            )
         elif len(seq.removed) < len(order):
             pick = order[len(seq.removed)]
         else:
@@ -193,9 +205,11 @@ def bayesian_sequence(
     return seq
 
 
-def remove_unsupported(graph: BranchGraph,
-                       supported: np.ndarray | Callable[[int], bool],
-                       candidates: list[int] | None = None) -> list[int]:
+def remove_unsupported(
+    graph: BranchGraph,
+    supported: np.ndarray | Callable[[int], bool],
+    candidates: list[int] | None = None,
+) -> list[int]:
     """DCE pruning on the graph alone: remove, smallest endpoint (row, col) first,
     every end branch none of whose points is supported, until each has one.
 
@@ -210,6 +224,7 @@ def remove_unsupported(graph: BranchGraph,
     if callable(supported):
         is_supported = supported
     else:
+
         def is_supported(b: int) -> bool:
             return bool(supported[graph.branches[b].points].any())
 
@@ -248,8 +263,9 @@ def _pick(is_end, exclusive, bna, bnd, ep, lost, area, na, nd, alpha, lbar):
         if not is_end[b]:
             continue
         d = exclusive[b + 1]
-        lam = alpha * (lost + d) / area + math.log(step_length(na - bna[b], nd - bnd[b])
-                                                   / lbar + 1.0)
+        lam = alpha * (lost + d) / area + math.log(
+            step_length(na - bna[b], nd - bnd[b]) / lbar + 1.0
+        )
         length = step_length(bna[b], bnd[b])
         if best < 0 or (lam, d, length, ep[b, 0], ep[b, 1]) < (b_lam, b_d, b_len, b_r, b_c):
             best, b_lam, b_d, b_len, b_r, b_c = b, lam, d, length, ep[b, 0], ep[b, 1]

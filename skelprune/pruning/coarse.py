@@ -128,11 +128,21 @@ def _opening_closing_changes(m: np.ndarray) -> tuple[int, int]:
     for i in range(1, h - 1):
         for j in range(1, w - 1):
             if m[i, j]:  # removed by the opening: no eroded pixel in its cross
-                changed += not (eroded[i, j] or eroded[i - 1, j] or eroded[i + 1, j]
-                                or eroded[i, j - 1] or eroded[i, j + 1])
+                changed += not (
+                    eroded[i, j]
+                    or eroded[i - 1, j]
+                    or eroded[i + 1, j]
+                    or eroded[i, j - 1]
+                    or eroded[i, j + 1]
+                )
             else:  # added by the closing: its whole cross is dilated
-                changed += (dilated[i, j] and dilated[i - 1, j] and dilated[i + 1, j]
-                            and dilated[i, j - 1] and dilated[i, j + 1])
+                changed += (
+                    dilated[i, j]
+                    and dilated[i - 1, j]
+                    and dilated[i + 1, j]
+                    and dilated[i, j - 1]
+                    and dilated[i, j + 1]
+                )
     return perimeter, changed
 
 
@@ -154,12 +164,12 @@ def coarse_threshold(mask: np.ndarray) -> float:
 def coarse_partition(mask: np.ndarray) -> BoundaryPartition:
     """The DCE partition of the coarse stage: the roughness-raised stop
     (:func:`coarse_threshold`), at most :data:`COARSE_VERTICES` vertices a polygon."""
-    return boundary_partition(mask, n_vertices=COARSE_VERTICES,
-                              pixel_threshold=coarse_threshold(mask))
+    return boundary_partition(
+        mask, n_vertices=COARSE_VERTICES, pixel_threshold=coarse_threshold(mask)
+    )
 
 
-def _convex_vertices(partition: BoundaryPartition) -> tuple[np.ndarray, np.ndarray,
-                                                             np.ndarray]:
+def _convex_vertices(partition: BoundaryPartition) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Each convex vertex: the segments before and after it, and its position.
 
     Segment ``j`` of a polygon starts at its ``j``-th convex vertex, so the vertex
@@ -176,14 +186,19 @@ def _convex_vertices(partition: BoundaryPartition) -> tuple[np.ndarray, np.ndarr
             after.extend(range(base, base + n))
             positions.extend(cuts)
         base += n
-    return (np.asarray(before, np.int64), np.asarray(after, np.int64),
-            np.asarray(positions, np.float64).reshape(-1, 2))
+    return (
+        np.asarray(before, np.int64),
+        np.asarray(after, np.int64),
+        np.asarray(positions, np.float64).reshape(-1, 2),
+    )
 
 
 def _flatten(graph: BranchGraph, branches: list[int]) -> tuple[np.ndarray, np.ndarray]:
     """The points of end ``branches``, each from its junction end, and the offsets."""
-    lists = [br.points[::-1] if br.node[0] is None else br.points
-             for br in (graph.branches[b] for b in branches)]
+    lists = [
+        br.points[::-1] if br.node[0] is None else br.points
+        for br in (graph.branches[b] for b in branches)
+    ]
     offsets = np.zeros(len(lists) + 1, np.int64)
     np.cumsum(np.fromiter(map(len, lists), np.int64, len(lists)), out=offsets[1:])
     return np.fromiter(chain.from_iterable(lists), np.int64, int(offsets[-1])), offsets
@@ -201,8 +216,15 @@ class _EndBranches:
     changes its point count: that is the cache key.
     """
 
-    def __init__(self, graph: BranchGraph, r2: np.ndarray, partition: BoundaryPartition,
-                 before: np.ndarray, after: np.ndarray, positions: np.ndarray) -> None:
+    def __init__(
+        self,
+        graph: BranchGraph,
+        r2: np.ndarray,
+        partition: BoundaryPartition,
+        before: np.ndarray,
+        after: np.ndarray,
+        positions: np.ndarray,
+    ) -> None:
         self.graph = graph
         self.raster = SegmentRaster(partition, np.stack([graph.rows, graph.cols], axis=1), r2)
         n = graph.rows.size
@@ -221,15 +243,30 @@ class _EndBranches:
     def update(self, branches: list[int]) -> None:
         """Bring the cached answers of ``branches`` up to date (one compiled call)."""
         graph = self.graph
-        stale = [b for b in branches if (hit := self.cache.get(b)) is None
-                 or hit[0] != len(graph.branches[b].points)]
+        stale = [
+            b
+            for b in branches
+            if (hit := self.cache.get(b)) is None or hit[0] != len(graph.branches[b].points)
+        ]
         if not stale:
             return
         flat, offsets = _flatten(graph, stale)
         sup, claimed = _branch_states(
-            flat, offsets, self.raster.seg_lo, self.raster.seg_hi, self.raster.local,
-            self.raster.r2, self.raster.tolerance, self.known, self.first, self.supported,
-            self.vertex, self.vertex_of, self.before, self.after)
+            flat,
+            offsets,
+            self.raster.seg_lo,
+            self.raster.seg_hi,
+            self.raster.local,
+            self.raster.r2,
+            self.raster.tolerance,
+            self.known,
+            self.first,
+            self.supported,
+            self.vertex,
+            self.vertex_of,
+            self.before,
+            self.after,
+        )
         for b, ok, v in zip(stale, sup.tolist(), claimed.tolist(), strict=True):
             d2 = 0.0
             if v >= 0:
@@ -260,11 +297,22 @@ class _EndBranches:
 
 
 @numba.njit(cache=True)
-def _branch_states(flat: np.ndarray, offsets: np.ndarray, seg_lo: np.ndarray,
-                   seg_hi: np.ndarray, local: np.ndarray, r2: np.ndarray, tolerance: float,
-                   known: np.ndarray, first: np.ndarray, supported: np.ndarray,
-                   vertex: np.ndarray, vertex_of: np.ndarray, before: np.ndarray,
-                   after: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _branch_states(
+    flat: np.ndarray,
+    offsets: np.ndarray,
+    seg_lo: np.ndarray,
+    seg_hi: np.ndarray,
+    local: np.ndarray,
+    r2: np.ndarray,
+    tolerance: float,
+    known: np.ndarray,
+    first: np.ndarray,
+    supported: np.ndarray,
+    vertex: np.ndarray,
+    vertex_of: np.ndarray,
+    before: np.ndarray,
+    after: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
     """Per branch (points ``flat[offsets[k]:offsets[k + 1]]``): supported, claimed vertex.
 
     Scans (and records in ``known``/``first``/``supported``/``vertex``) each point
@@ -283,8 +331,7 @@ def _branch_states(flat: np.ndarray, offsets: np.ndarray, seg_lo: np.ndarray,
             p = flat[t]
             if not known[p]:
                 labels[:] = -1
-                rim_labels(seg_lo, seg_hi, local[p, 0], local[p, 1], r2[p], tolerance,
-                           labels)
+                rim_labels(seg_lo, seg_hi, local[p, 0], local[p, 1], r2[p], tolerance, labels)
                 known[p] = True
                 first[p] = labels[0]
                 supported[p] = labels[1] != -1
@@ -304,8 +351,7 @@ def _branch_states(flat: np.ndarray, offsets: np.ndarray, seg_lo: np.ndarray,
         # every point was scanned: those of one segment must lie on one of v's two
         for t in range(offsets[k], offsets[k + 1]):
             p = flat[t]
-            if vertex[p] == -1 and first[p] >= 0 and first[p] != before[v] \
-                    and first[p] != after[v]:
+            if vertex[p] == -1 and first[p] >= 0 and first[p] != before[v] and first[p] != after[v]:
                 v = -1
                 break
         claimed[k] = v
@@ -353,8 +399,9 @@ def coarse_removals(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> lis
     """
     partition = coarse_partition(mask)
     ends = _EndBranches(graph, r2, partition, *_convex_vertices(partition))
-    removed = remove_unsupported(graph, ends.is_supported,
-                                 candidates=ends.unsupported(graph.end_branches()))
+    removed = remove_unsupported(
+        graph, ends.is_supported, candidates=ends.unsupported(graph.end_branches())
+    )
     while surplus := ends.surplus():
         # one at a time: a removal can merge branches and change other claims
         merged = graph.remove_end_branch(surplus[0])

@@ -69,8 +69,7 @@ def branch_margins(graph: BranchGraph, seq: PruningSequence, chosen: int) -> Mar
     return Margins(margin, removed_at)
 
 
-def _removal_steps(seq: PruningSequence, chosen: int,
-                   alive: list[int]) -> dict[int, int | None]:
+def _removal_steps(seq: PruningSequence, chosen: int, alive: list[int]) -> dict[int, int | None]:
     """The step at which the sequence, from step ``chosen`` on, removes each branch."""
     held = {b: [b] for b in alive}  # running branch -> the answer's branches it holds
     steps: dict[int, int | None] = {b: None for b in alive}

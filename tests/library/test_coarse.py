@@ -102,8 +102,9 @@ def test_generating_segments_agrees_with_the_support_test():
     pts = np.stack([ma.rows, ma.cols], axis=1)
     labels = generating_segments(pts, ma.r2, part)
     assert labels.shape == (len(pts), 3)
-    np.testing.assert_array_equal(labels[:, 1] != -1,
-                                  generated_in_several_segments(pts, ma.r2, part))
+    np.testing.assert_array_equal(
+        labels[:, 1] != -1, generated_in_several_segments(pts, ma.r2, part)
+    )
     assert ((labels >= -1) & (labels < part.n_segments)).all()
     assert (labels[:, 0] >= 0).all()  # every disk touches the boundary somewhere
     # ids are distinct within a row
@@ -123,8 +124,11 @@ def test_noisy_rectangle_gets_one_branch_per_corner(kind, scale, seed):
     ends = comp.to_dict()["skeleton"]["endpoints"]
     assert len(ends) == 4
     h, w = mask.shape
-    corners = {(n["y"] > h / 2, n["x"] > w / 2) for n in comp.to_dict()["skeleton"]["nodes"]
-               if n["id"] in ends}
+    corners = {
+        (n["y"] > h / 2, n["x"] > w / 2)
+        for n in comp.to_dict()["skeleton"]["nodes"]
+        if n["id"] in ends
+    }
     assert len(corners) == 4
 
 
@@ -178,8 +182,9 @@ def test_roughness_counts_equal_scipy_morphology(seed):
     cross = ndimage.generate_binary_structure(2, 1)
     m = np.pad(mask, 2)
     perimeter = np.count_nonzero(m & ~ndimage.binary_erosion(m, cross))
-    changed = (np.count_nonzero(m & ~ndimage.binary_opening(m, cross))
-               + np.count_nonzero(ndimage.binary_closing(m, cross) & ~m))
+    changed = np.count_nonzero(m & ~ndimage.binary_opening(m, cross)) + np.count_nonzero(
+        ndimage.binary_closing(m, cross) & ~m
+    )
     assert boundary_roughness(mask) == pytest.approx(changed / perimeter, abs=0)
 
 
@@ -207,8 +212,11 @@ def reference_coarse(graph: BranchGraph, crop: np.ndarray, r2: np.ndarray) -> li
             segs.update(s for s in labels[p].tolist() if s >= 0)
             if labels[p, 2] != -1:
                 return -1
-        vertices = {meet.get((int(labels[p, 0]), int(labels[p, 1])), -2)
-                    for p in graph.branches[b].points if labels[p, 1] != -1}
+        vertices = {
+            meet.get((int(labels[p, 0]), int(labels[p, 1])), -2)
+            for p in graph.branches[b].points
+            if labels[p, 1] != -1
+        }
         if len(vertices) != 1 or -2 in vertices:
             return -1
         v = vertices.pop()
@@ -221,8 +229,9 @@ def reference_coarse(graph: BranchGraph, crop: np.ndarray, r2: np.ndarray) -> li
             v = claim(b)
             if v >= 0:
                 p = graph.endpoint(b)
-                d2 = float((graph.rows[p] - positions[v, 0]) ** 2
-                           + (graph.cols[p] - positions[v, 1]) ** 2)
+                d2 = float(
+                    (graph.rows[p] - positions[v, 0]) ** 2 + (graph.cols[p] - positions[v, 1]) ** 2
+                )
                 by_vertex.setdefault(v, []).append((d2, b))
         surplus = [b for c in by_vertex.values() if len(c) > 1 for _, b in sorted(c)[1:]]
         if not surplus:
@@ -236,8 +245,11 @@ def reference_coarse(graph: BranchGraph, crop: np.ndarray, r2: np.ndarray) -> li
 def _coarse_cases():
     from testkit.shapes import blobs, rectangle_with_holes, two_components
 
-    out = [("rect-holes", rectangle_with_holes()), ("two", two_components()),
-           ("blobs", blobs(4, size=72, n=5, holes=2))]
+    out = [
+        ("rect-holes", rectangle_with_holes()),
+        ("two", two_components()),
+        ("blobs", blobs(4, size=72, n=5, holes=2)),
+    ]
     for k, path in enumerate(SHAPES[::2]):
         m = load(path)
         out.append((path.stem, m))
@@ -247,8 +259,9 @@ def _coarse_cases():
     return out
 
 
-@pytest.mark.parametrize(("name", "mask"), _coarse_cases(), ids=lambda x: x
-                         if isinstance(x, str) else "")
+@pytest.mark.parametrize(
+    ("name", "mask"), _coarse_cases(), ids=lambda x: x if isinstance(x, str) else ""
+)
 def test_lazy_coarse_stage_equals_the_eager_reference(name, mask):
     for crop, _ in components(mask):
         ma = medial_axis(crop, squared_distance(crop))

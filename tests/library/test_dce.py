@@ -132,8 +132,12 @@ def test_rectangle_has_four_segments_one_per_side():
     assert len(part.points) == 2 * (20 + 40)
     assert not m[part.points[:, 0], part.points[:, 1]].any()
     # each side lies (apart from the cut at the corner) in a single segment
-    sides = [part.points[:, 0] == 4, part.points[:, 0] == 25,
-             part.points[:, 1] == 4, part.points[:, 1] == 45]
+    sides = [
+        part.points[:, 0] == 4,
+        part.points[:, 0] == 25,
+        part.points[:, 1] == 4,
+        part.points[:, 1] == 45,
+    ]
     for side in sides:
         _, counts = np.unique(part.segment[side], return_counts=True)
         assert counts.max() >= side.sum() - 1

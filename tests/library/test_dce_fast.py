@@ -122,8 +122,13 @@ def test_perturbed_shapes(seed):
 
 
 def test_holes_border_and_several_components():
-    for m in [rectangle_with_holes(), touching_border(), two_components(),
-              blobs(3, size=56, n=4, holes=2), blobs(7, size=64, n=5, holes=3)]:
+    for m in [
+        rectangle_with_holes(),
+        touching_border(),
+        two_components(),
+        blobs(3, size=56, n=4, holes=2),
+        blobs(7, size=64, n=5, holes=3),
+    ]:
         assert_same_polygons(m)
     m = load(K216[0])
     assert_same_polygons(m[: m.shape[0] // 2])  # cut through the shape: touches the border
@@ -146,8 +151,10 @@ def reference_evolution(xy: np.ndarray, n_keep: int, threshold: float) -> list[i
     live = list(range(len(xy)))
     while len(live) > 3:
         m = len(live)
-        keys = [(_relevance(xy, live[t - 1], live[t], live[(t + 1) % m], perimeter), live[t])
-                for t in range(m)]
+        keys = [
+            (_relevance(xy, live[t - 1], live[t], live[(t + 1) % m], perimeter), live[t])
+            for t in range(m)
+        ]
         key, i = min(keys)
         if m <= n_keep and key > threshold:
             break
@@ -155,16 +162,28 @@ def reference_evolution(xy: np.ndarray, n_keep: int, threshold: float) -> list[i
     return live
 
 
-EVOLUTION_CASES = [(None, 0.0), (None, 0.002), (None, 0.01), (16, 0.01), (16, None), (5, None),
-                   (40, 0.0)]
+EVOLUTION_CASES = [
+    (None, 0.0),
+    (None, 0.002),
+    (None, 0.01),
+    (16, 0.01),
+    (16, None),
+    (5, None),
+    (40, 0.0),
+]
 
 
 @pytest.mark.parametrize(("n_vertices", "threshold"), EVOLUTION_CASES)
 def test_evolution_equals_plain_dce(n_vertices, threshold):
     from skelprune.pruning.dce import evolve_polygon
 
-    masks = [load(K216[7]), load(K99[40]), blobs(5, size=40, n=3, holes=1),
-             rectangle_with_holes(), np.ones((3, 9), bool)]
+    masks = [
+        load(K216[7]),
+        load(K99[40]),
+        blobs(5, size=40, n=3, holes=1),
+        rectangle_with_holes(),
+        np.ones((3, 9), bool),
+    ]
     masks.append(np.zeros((9, 9), bool))
     masks[-1][4, 1:8] = masks[-1][1:8, 4] = True  # a plus: few vertices off straight runs
     for m in masks:

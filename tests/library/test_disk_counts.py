@@ -24,7 +24,6 @@ from testkit.shapes import blobs, dataset, load
 ma = importlib.import_module("skelprune.medial_axis")
 
 
-
 def true_counts(cover: np.ndarray, lazy: np.ndarray) -> np.ndarray:
     """The plain count array that ``cover`` and its per-block ``lazy`` increments stand for."""
     return cover + np.repeat(lazy, BLOCK, axis=1)[:, : cover.shape[1]]
@@ -88,8 +87,11 @@ def _drop_plainly(anchor, r2, rows, cols) -> None:
 @pytest.mark.parametrize("case", range(6))
 def test_drop_redundant_anchors_matches_plain_counts(case):
     masks = dataset("kimia216")
-    mask = (load(masks[case * 30]) if case < 3 else
-            boundary_noise(blobs(case, size=56, n=5), "gaussian", 1.0, rng=case, margin=2))
+    mask = (
+        load(masks[case * 30])
+        if case < 3
+        else boundary_noise(blobs(case, size=56, n=5), "gaussian", 1.0, rng=case, margin=2)
+    )
     for crop, _ in components(mask):
         r2 = ma.squared_distance(crop)
         anchor = ma._anchors(r2, ma._domination_table(r2[r2 > 0]), ma.VECTORS, ma.VECTOR_KIND)
@@ -110,7 +112,7 @@ def test_domination_table_is_the_containment_threshold(size):
     need = ma._cached_domination_table(size)
     assert need.shape == (size + 1, len(ma._KINDS))
     reach = isqrt(size) + 1
-    dy, dx = np.mgrid[-reach:reach + 1, -reach:reach + 1]
+    dy, dx = np.mgrid[-reach : reach + 1, -reach : reach + 1]
     d2 = dy * dy + dx * dx
     for big_r in range(1, size + 1):
         inside = d2 < big_r

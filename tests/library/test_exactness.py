@@ -26,9 +26,11 @@ CASES = (
     + [pytest.param(("k99", i), id=f"kimia99-{K99[i].stem}") for i in range(0, 99, 11)]
     + [pytest.param(("blobs", s), id=f"blobs-{s}") for s in range(4)]
     + [pytest.param(("holes", s), id=f"blobs-holes-{s}") for s in range(4)]
-    + [pytest.param(("rect-holes", 0), id="rectangle-two-holes"),
-       pytest.param(("border", 0), id="touching-border"),
-       pytest.param(("two", 0), id="two-components")]
+    + [
+        pytest.param(("rect-holes", 0), id="rectangle-two-holes"),
+        pytest.param(("border", 0), id="touching-border"),
+        pytest.param(("two", 0), id="two-components"),
+    ]
 )
 
 
@@ -42,8 +44,9 @@ def make(case: tuple[str, int]) -> np.ndarray:
         return blobs(100 + i, size=56, n=5)
     if kind == "holes":
         return blobs(200 + i, size=56, n=4, holes=2)
-    return {"rect-holes": rectangle_with_holes, "border": touching_border,
-            "two": two_components}[kind]()
+    return {"rect-holes": rectangle_with_holes, "border": touching_border, "two": two_components}[
+        kind
+    ]()
 
 
 def test_at_least_thirty_shapes():
@@ -62,16 +65,19 @@ def test_fast_equals_naive(case):
         if norm.alpha is None:
             continue
         fast = bayesian_sequence(medial, norm.alpha, norm.lbar)
-        removed, lams = naive_sequence(medial.working_graph(), medial.shape, medial.r2,
-                                       norm.alpha, norm.lbar)
+        removed, lams = naive_sequence(
+            medial.working_graph(), medial.shape, medial.r2, norm.alpha, norm.lbar
+        )
         assert fast.removed == removed
         np.testing.assert_allclose(fast.objective, lams, rtol=0, atol=1e-9)
         steps += len(removed)
     assert steps > 0  # the case really exercised pruning
 
 
-NOISY = [pytest.param(("k216", i, s), id=f"noisy-kimia216-{K216[i].stem}-{s}")
-         for i, s in ((5, 1.0), (60, 1.5), (150, 1.0))]
+NOISY = [
+    pytest.param(("k216", i, s), id=f"noisy-kimia216-{K216[i].stem}-{s}")
+    for i, s in ((5, 1.0), (60, 1.5), (150, 1.0))
+]
 
 
 def make_noisy(case: tuple[str, int, float]) -> np.ndarray:
@@ -101,8 +107,9 @@ def test_fast_equals_naive_from_the_coarse_dce_skeleton(case):
         if norm.alpha is None:
             continue
         fast = bayesian_sequence(start, norm.alpha, norm.lbar)
-        removed, lams = naive_sequence(start.working_graph(), start.shape, start.r2,
-                                       norm.alpha, norm.lbar)
+        removed, lams = naive_sequence(
+            start.working_graph(), start.shape, start.r2, norm.alpha, norm.lbar
+        )
         assert fast.removed == removed
         np.testing.assert_allclose(fast.objective, lams, rtol=0, atol=1e-9)
         steps += len(removed) + (medial.n_points - start.n_points)

@@ -40,8 +40,10 @@ def test_datasets_read_exactly_as_before() -> None:
 
 def _skeleton_key(res: skelprune.PruneResult) -> tuple:
     rows, cols, r2 = res.skeleton_points()
-    return (sorted(zip(rows.tolist(), cols.tolist(), r2.tolist(), strict=True)),
-            [(c.rer, c.ss, c.chosen_step, c.graph.n_endpoints()) for c in res.components])
+    return (
+        sorted(zip(rows.tolist(), cols.tolist(), r2.tolist(), strict=True)),
+        [(c.rer, c.ss, c.chosen_step, c.graph.n_endpoints()) for c in res.components],
+    )
 
 
 def test_inverted_dataset_shapes_give_the_same_skeleton() -> None:
@@ -118,8 +120,7 @@ def test_library_option_and_report() -> None:
     arr = np.full((30, 40), 255, np.uint8)
     arr[8:22, 5:35] = 0
     doc = skelprune.prune(arr, foreground="auto").to_dict(curve=False)
-    assert doc["foreground"] == {"rule": "auto", "shape": "dark", "threshold": 127.5,
-                                 "border": 1.0}
+    assert doc["foreground"] == {"rule": "auto", "shape": "dark", "threshold": 127.5, "border": 1.0}
     assert doc["components"][0]["area"] == 14 * 30
     assert skelprune.prune(arr, foreground="zero").to_dict()["components"][0]["area"] == 420
     nonzero = skelprune.prune(arr).to_dict(curve=False)  # arrays: non-zero by default
@@ -139,14 +140,23 @@ def test_cli_option(tmp_path) -> None:
     path.write_bytes(png(arr))
     docs = {}
     for rule in ("auto", "nonzero", "zero"):
-        run = subprocess.run([*CLI, "prune", str(path), "--foreground", rule, "--no-curve"],
-                             capture_output=True, text=True, timeout=300, check=True)
+        run = subprocess.run(
+            [*CLI, "prune", str(path), "--foreground", rule, "--no-curve"],
+            capture_output=True,
+            text=True,
+            timeout=300,
+            check=True,
+        )
         docs[rule] = json.loads(run.stdout)
     assert docs["auto"]["foreground"]["shape"] == "dark"
     assert docs["auto"]["components"] == docs["zero"]["components"]
     assert docs["nonzero"]["components"][0]["area"] == 30 * 40 - 420
-    bad = subprocess.run([*CLI, "prune", str(path), "--foreground", "white"],
-                         capture_output=True, text=True, timeout=120)
+    bad = subprocess.run(
+        [*CLI, "prune", str(path), "--foreground", "white"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert bad.returncode == 2 and "--foreground" in bad.stderr and "'nonzero'" in bad.stderr
     assert "Traceback" not in bad.stderr and bad.stderr.count("\n") == 1
 
@@ -166,19 +176,25 @@ def test_service_option_raw_and_multipart(client: TestClient) -> None:
     assert raw.json()["foreground"]["shape"] == "dark"
     assert raw.json()["components"][0]["area"] == 420
     for rule, area in (("nonzero", 780), ("zero", 420), ("auto", 420)):
-        resp = client.post("/v1/prune", params={"foreground": rule},
-                           files={"file": ("a.png", data, "image/png")})
+        resp = client.post(
+            "/v1/prune", params={"foreground": rule}, files={"file": ("a.png", data, "image/png")}
+        )
         assert resp.status_code == 200, resp.text
         assert resp.json()["components"][0]["area"] == area
         assert resp.json()["foreground"]["rule"] == rule
     # an option as a multipart field is honoured like the query's
-    resp = client.post("/v1/prune", data={"foreground": "zero"},
-                       files={"file": ("a.png", data, "image/png")})
+    resp = client.post(
+        "/v1/prune", data={"foreground": "zero"}, files={"file": ("a.png", data, "image/png")}
+    )
     assert resp.status_code == 200, resp.text
     assert resp.json()["foreground"]["rule"] == "zero"
     assert resp.json()["components"][0]["area"] == 420
-    resp = client.post("/v1/prune", params={"foreground": "black"}, content=data,
-                       headers={"content-type": "image/png"})
+    resp = client.post(
+        "/v1/prune",
+        params={"foreground": "black"},
+        content=data,
+        headers={"content-type": "image/png"},
+    )
     assert resp.status_code == 422 and "foreground" in resp.text
 
 
@@ -186,9 +202,15 @@ def test_service_polygon_reports_its_interior(client: TestClient) -> None:
     poly = {"type": "Polygon", "coordinates": [[[0, 0], [40, 0], [40, 20], [0, 20], [0, 0]]]}
     resp = client.post("/v1/prune", json=poly)
     assert resp.status_code == 200, resp.text
-    assert resp.json()["foreground"] == {"rule": None, "shape": "polygon", "threshold": None,
-                                         "border": None}
-    for kwargs in ({"json": poly, "params": {"foreground": "zero"}},
-                   {"json": {"geojson": poly, "foreground": "nonzero"}}):
+    assert resp.json()["foreground"] == {
+        "rule": None,
+        "shape": "polygon",
+        "threshold": None,
+        "border": None,
+    }
+    for kwargs in (
+        {"json": poly, "params": {"foreground": "zero"}},
+        {"json": {"geojson": poly, "foreground": "nonzero"}},
+    ):
         resp = client.post("/v1/prune", **kwargs)
         assert resp.status_code == 422 and "only apply to PNG input" in resp.json()["detail"]

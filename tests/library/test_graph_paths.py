@@ -132,7 +132,8 @@ def test_to_networkx_is_the_documented_graph() -> None:
         cycles = sub.number_of_edges() - sub.number_of_nodes() + 1
         assert cycles == graphcheck.holes(components(mask)[ci][0])
     assert sum(d for _, _, d in g.edges(data="length")) == pytest.approx(
-        sum(c["skeleton"]["length"] for c in doc["components"]))
+        sum(c["skeleton"]["length"] for c in doc["components"])
+    )
     endpoints = [n for n, kind in g.nodes(data="kind") if kind == "endpoint"]
     assert all(g.degree(n) == 1 for n in endpoints)
 

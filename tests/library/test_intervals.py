@@ -35,8 +35,9 @@ def random_disks(rng: np.random.Generator, n: int, walk: bool):
         steps = rng.integers(-1, 2, size=(n, 2))
         pts = np.cumsum(steps, axis=0) + np.array(SHAPE) // 2
     else:
-        pts = np.stack([rng.integers(12, SHAPE[0] - 12, n),
-                        rng.integers(12, SHAPE[1] - 12, n)], axis=1)
+        pts = np.stack(
+            [rng.integers(12, SHAPE[0] - 12, n), rng.integers(12, SHAPE[1] - 12, n)], axis=1
+        )
     pts = np.clip(pts, 12, [SHAPE[0] - 13, SHAPE[1] - 13]).astype(np.int64)
     r2 = rng.integers(1, 120, n).astype(np.int64)
     return pts[:, 0].copy(), pts[:, 1].copy(), r2
@@ -59,17 +60,19 @@ def test_disk_runs_equal_painted_union(seed):
     runs = disk_runs(rows, cols, r2, pts)
     np.testing.assert_array_equal(runs, to_runs(reconstruction(SHAPE, rows, cols, r2)))
     some = pts[::3]
-    np.testing.assert_array_equal(disk_runs(rows, cols, r2, some),
-                                  to_runs(reconstruction(SHAPE, rows[some], cols[some],
-                                                         r2[some])))
+    np.testing.assert_array_equal(
+        disk_runs(rows, cols, r2, some),
+        to_runs(reconstruction(SHAPE, rows[some], cols[some], r2[some])),
+    )
 
 
 def test_disk_runs_match_the_oracle_disks():
     rows, cols, r2 = np.array([20]), np.array([20]), np.array([50])
     flat = np.zeros(SHAPE[0] * SHAPE[1], bool)
     flat[disk_pixels(rows, cols, r2, SHAPE)[0]] = True
-    np.testing.assert_array_equal(to_mask(disk_runs(rows, cols, r2, np.arange(1))),
-                                  flat.reshape(SHAPE))
+    np.testing.assert_array_equal(
+        to_mask(disk_runs(rows, cols, r2, np.arange(1))), flat.reshape(SHAPE)
+    )
 
 
 @pytest.mark.parametrize("seed", range(10))
@@ -82,8 +85,8 @@ def test_owner_runs_one_union_per_label(seed):
     for b in range(7):
         sel = labels == b
         np.testing.assert_array_equal(
-            runs[off[b]:off[b + 1]],
-            to_runs(reconstruction(SHAPE, rows[sel], cols[sel], r2[sel])))
+            runs[off[b] : off[b + 1]], to_runs(reconstruction(SHAPE, rows[sel], cols[sel], r2[sel]))
+        )
 
 
 @pytest.mark.parametrize("seed", range(20))

@@ -20,8 +20,11 @@ from testkit import DATA
 
 
 def _chunk(kind: bytes, payload: bytes) -> bytes:
-    return struct.pack(">I", len(payload)) + kind + payload + struct.pack(
-        ">I", zlib.crc32(kind + payload)
+    return (
+        struct.pack(">I", len(payload))
+        + kind
+        + payload
+        + struct.pack(">I", zlib.crc32(kind + payload))
     )
 
 
@@ -234,16 +237,21 @@ def test_arrays() -> None:
 )
 def test_round_trip_any_mode(mask: np.ndarray, mode: str) -> None:
     grey = np.where(mask, 255, 0).astype(np.uint8)
-    im = Image.fromarray(grey).convert(mode) if mode != "I;16" else Image.fromarray(
-        mask.astype(np.uint16) * 300
+    im = (
+        Image.fromarray(grey).convert(mode)
+        if mode != "I;16"
+        else Image.fromarray(mask.astype(np.uint16) * 300)
     )
     data = pil_png(im)
     assert np.array_equal(read_mask(data, foreground="nonzero"), mask)
     assert np.array_equal(read_mask(data, foreground="zero"), ~mask)
     # auto: the side holding most of the border is the background (a tie: the light side
     # is the shape); an image of one level keeps its non-zero pixels
-    border = np.concatenate([mask[0], mask[-1], mask[1:-1, 0], mask[1:-1, -1]]) \
-        if min(mask.shape) > 2 else mask.ravel()
+    border = (
+        np.concatenate([mask[0], mask[-1], mask[1:-1, 0], mask[1:-1, -1]])
+        if min(mask.shape) > 2
+        else mask.ravel()
+    )
     uniform = mask.all() or not mask.any()
     expected = mask if uniform or border.sum() <= border.size - border.sum() else ~mask
     shape, taken = read_shape(data)

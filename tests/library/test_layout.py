@@ -36,8 +36,9 @@ def _imports(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
                 anchor = anchor[: len(anchor) - node.level + 1]
                 base = ".".join([*anchor, base] if base else anchor)
             # `from pkg import mod` imports the submodule when there is one
-            targets = [f"{base}.{a.name}" if f"{base}.{a.name}" in modules else base
-                       for a in node.names]
+            targets = [
+                f"{base}.{a.name}" if f"{base}.{a.name}" in modules else base for a in node.names
+            ]
         else:
             continue
         found.update(t for t in targets if t.split(".")[0] in PACKAGES or t in HTTP)
@@ -60,7 +61,7 @@ def _cycle(graph: dict[str, set[str]]) -> list[str] | None:
             if v not in graph:
                 continue
             if state.get(v) == 1:
-                return [*stack[stack.index(v):], v]
+                return [*stack[stack.index(v) :], v]
             if v not in state and (found := visit(v)):
                 return found
         stack.pop()
@@ -81,9 +82,7 @@ def test_the_cycle_finder_finds_a_cycle() -> None:
 def test_no_import_cycles() -> None:
     # A package's __init__ re-exports its submodules, and a submodule importing a sibling
     # goes through the package, so edges into a package's own __init__ are not cycles.
-    graph = {
-        u: {v for v in vs if not u.startswith(v + ".")} for u, vs in _graph().items()
-    }
+    graph = {u: {v for v in vs if not u.startswith(v + ".")} for u, vs in _graph().items()}
     assert _cycle(graph) is None
 
 

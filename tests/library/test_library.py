@@ -38,6 +38,7 @@ def skeleton_mask(res: skelprune.PruneResult) -> np.ndarray:
 
 # -- medial axis ------------------------------------------------------------------------
 
+
 def test_medial_axis_reconstructs_datasets():
     """SPEC §5: median AR(M) <= 0.3 % on kimia216 (and on both sets together)."""
     ars: dict[str, list[float]] = {"kimia216": [], "kimia99": []}
@@ -52,8 +53,16 @@ def test_medial_axis_reconstructs_datasets():
     assert np.median(ars["kimia99"]) <= 0.005
 
 
-@pytest.mark.parametrize("make", [rectangle_with_holes, touching_border, two_components,
-                                  lambda: blobs(7, holes=3), lambda: load(dataset("kimia216")[0])])
+@pytest.mark.parametrize(
+    "make",
+    [
+        rectangle_with_holes,
+        touching_border,
+        two_components,
+        lambda: blobs(7, holes=3),
+        lambda: load(dataset("kimia216")[0]),
+    ],
+)
 def test_medial_axis_is_thin_homotopic_and_exact_radii(make):
     for crop, _ in components(make()):
         r2 = squared_distance(crop)
@@ -64,9 +73,13 @@ def test_medial_axis_is_thin_homotopic_and_exact_radii(make):
         assert skel[crop].sum() == skel.sum()  # inside the shape
         # one pixel thin: every simple point is an endpoint
         for r, c in zip(ma.rows, ma.cols, strict=True):
-            code = sum(1 << i for i, (dr, dc) in enumerate(
-                [(-1, -1), (-1, 0), (-1, 1), (0, 1), (1, 1), (1, 0), (1, -1), (0, -1)])
-                if skel[r + dr, c + dc])
+            code = sum(
+                1 << i
+                for i, (dr, dc) in enumerate(
+                    [(-1, -1), (-1, 0), (-1, 1), (0, 1), (1, 1), (1, 0), (1, -1), (0, -1)]
+                )
+                if skel[r + dr, c + dc]
+            )
             assert not (SIMPLE[code] and DEGREE[code] >= 2)
         # radii are exact squared distances to the nearest background pixel
         bg = np.argwhere(~crop)
@@ -99,6 +112,7 @@ def test_disks_of_all_shape_pixels_reconstruct_the_shape():
 
 # -- results ----------------------------------------------------------------------------
 
+
 def test_one_pixel_end_branches_keep_their_endpoint_nodes():
     m = np.zeros((12, 12), bool)
     m[5, 2:10] = True  # a plus: four one-pixel arms around a junction
@@ -128,7 +142,8 @@ def test_document_is_plain_json_and_consistent():
         ids = {n["id"] for n in sk["nodes"]}
         assert all(b["source"] in ids and b["target"] in ids for b in sk["branches"])
         assert comp["curve"][comp["chosen_step"]]["objective"] == min(
-            c["objective"] for c in comp["curve"])
+            c["objective"] for c in comp["curve"]
+        )
         assert abs(sum(b["length"] for b in sk["branches"]) - sk["length"]) < 1e-6
         # every point in exactly one branch or junction node
         pts = [tuple(p[:2]) for b in sk["branches"] for p in b["points"] + b["off_path"]]
@@ -162,14 +177,18 @@ def test_geojson_and_overlay():
 
 # -- degenerate shapes and options ------------------------------------------------------
 
-@pytest.mark.parametrize("name,mask", [
-    ("one pixel", np.pad(np.ones((1, 1), bool), 3)),
-    ("one-pixel line", np.pad(np.ones((1, 20), bool), 3)),
-    ("two pixels", np.pad(np.ones((1, 2), bool), 3)),
-    ("disk", np.hypot(*np.mgrid[-15:16, -15:16]) < 12),
-    ("all foreground", np.ones((25, 40), bool)),
-    ("single pixel image", np.ones((1, 1), bool)),
-])
+
+@pytest.mark.parametrize(
+    "name,mask",
+    [
+        ("one pixel", np.pad(np.ones((1, 1), bool), 3)),
+        ("one-pixel line", np.pad(np.ones((1, 20), bool), 3)),
+        ("two pixels", np.pad(np.ones((1, 2), bool), 3)),
+        ("disk", np.hypot(*np.mgrid[-15:16, -15:16]) < 12),
+        ("all foreground", np.ones((25, 40), bool)),
+        ("single pixel image", np.ones((1, 1), bool)),
+    ],
+)
 def test_degenerate_shapes_never_raise(name, mask):
     res = skelprune.prune(mask)
     doc = res.to_dict()
@@ -186,9 +205,17 @@ def test_empty_mask_is_a_clear_error():
         skelprune.prune(np.zeros((10, 10), bool))
 
 
-@pytest.mark.parametrize("kwargs", [{"beta": 0}, {"beta": -1.0}, {"beta": float("nan")},
-                                    {"beta": float("inf")}, {"method": "magic"},
-                                    {"coarse": "wavelet"}])
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"beta": 0},
+        {"beta": -1.0},
+        {"beta": float("nan")},
+        {"beta": float("inf")},
+        {"method": "magic"},
+        {"coarse": "wavelet"},
+    ],
+)
 def test_bad_options_are_clear_errors(kwargs):
     with pytest.raises(skelprune.InvalidOptionError):
         skelprune.prune(np.ones((5, 5), bool), **kwargs)
@@ -196,8 +223,13 @@ def test_bad_options_are_clear_errors(kwargs):
 
 # -- properties on random shapes --------------------------------------------------------
 
-shapes = st.builds(blobs, seed=st.integers(0, 10_000), size=st.integers(20, 48),
-                   n=st.integers(1, 5), holes=st.integers(0, 2))
+shapes = st.builds(
+    blobs,
+    seed=st.integers(0, 10_000),
+    size=st.integers(20, 48),
+    n=st.integers(1, 5),
+    holes=st.integers(0, 2),
+)
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])

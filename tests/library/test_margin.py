@@ -25,8 +25,9 @@ CLI = [sys.executable, "-m", "skelprune.cli"]
 
 def shapes() -> list[np.ndarray]:
     masks = [load(p) for p in dataset("kimia216")[::8]] + [load(p) for p in dataset("kimia99")[::8]]
-    return masks + [rectangle_with_holes(), two_components()] + [blobs(s, 72, 5, 3)
-                                                                 for s in range(6)]
+    return (
+        masks + [rectangle_with_holes(), two_components()] + [blobs(s, 72, 5, 3) for s in range(6)]
+    )
 
 
 def naive_lambda(comp, crop: np.ndarray, graph) -> float:
@@ -46,8 +47,9 @@ def test_margins_follow_their_definition(coarse: str | None) -> None:
     for mask in shapes():
         res = skelprune.prune(mask, coarse=coarse)
         doc = res.to_dict()
-        for comp, cdoc, (crop, _) in zip(res.components, doc["components"], components(mask),
-                                         strict=True):
+        for comp, cdoc, (crop, _) in zip(
+            res.components, doc["components"], components(mask), strict=True
+        ):
             crop, _ = oriented(crop)
             g, k, lam = comp.graph, comp.chosen_step, comp.sequence.objective
             alive = [b for b, br in enumerate(g.branches) if br.alive]
@@ -69,7 +71,8 @@ def test_margins_follow_their_definition(coarse: str | None) -> None:
                     h = g.copy()
                     h.remove_end_branch(b)
                     assert bdoc["margin"] == pytest.approx(
-                        naive_lambda(comp, crop, h) - lam[k], abs=1e-12)
+                        naive_lambda(comp, crop, h) - lam[k], abs=1e-12
+                    )
                     checked["end"] += 1
                 elif gone:
                     assert bdoc["margin"] == lam[k + gone[0]] - lam[k] > 0
@@ -91,12 +94,14 @@ def test_end_margins_are_non_negative_but_for_a_dissolved_junctions_path() -> No
     margins = []
     for path in dataset("kimia216"):
         res = skelprune.prune(load(path))
-        for comp, cdoc in zip(res.components, res.to_dict(curve=False)["components"],
-                              strict=True):
+        for comp, cdoc in zip(res.components, res.to_dict(curve=False)["components"], strict=True):
             g = comp.graph
             alive = [b for b, br in enumerate(g.branches) if br.alive]
-            margins += [d["margin"] for b, d in zip(alive, cdoc["skeleton"]["branches"],
-                                                     strict=True) if g.is_end_branch(b)]
+            margins += [
+                d["margin"]
+                for b, d in zip(alive, cdoc["skeleton"]["branches"], strict=True)
+                if g.is_end_branch(b)
+            ]
     margins = np.array(margins)
     assert (margins < 0).mean() < 0.01 and margins.min() > -0.01
 
@@ -105,10 +110,12 @@ def test_margin_in_geojson_and_none_for_dce() -> None:
     mask = rectangle_with_holes()
     res = skelprune.prune(mask)
     doc = res.to_dict(curve=False)["components"][0]["skeleton"]["branches"]
-    gj = [f["properties"] for f in res.to_geojson()["features"]
-          if f["properties"]["kind"] == "branch"]
+    gj = [
+        f["properties"] for f in res.to_geojson()["features"] if f["properties"]["kind"] == "branch"
+    ]
     assert [(p["margin"], p["removed_at"]) for p in gj] == [
-        (b["margin"], b["removed_at"]) for b in doc]
+        (b["margin"], b["removed_at"]) for b in doc
+    ]
     dce = skelprune.prune(mask, method="dce").to_dict()["components"][0]["skeleton"]
     assert all(b["margin"] is None for b in dce["branches"])
 
@@ -139,26 +146,42 @@ def test_min_margin_continues_the_sequence() -> None:
 def test_min_margin_in_cli_and_service(tmp_path) -> None:
     png = dataset("kimia216")[0]
     base = skelprune.prune(load(png), min_margin=0.5).to_dict(curve=False)
-    run = subprocess.run([*CLI, "prune", str(png), "--min-margin", "0.5", "--no-curve"],
-                         capture_output=True, text=True, timeout=300, check=True)
+    run = subprocess.run(
+        [*CLI, "prune", str(png), "--min-margin", "0.5", "--no-curve"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=True,
+    )
     assert json.loads(run.stdout)["components"] == base["components"]
-    bad = subprocess.run([*CLI, "prune", str(png), "--min-margin", "0.5", "--method", "dce"],
-                         capture_output=True, text=True, timeout=120)
+    bad = subprocess.run(
+        [*CLI, "prune", str(png), "--min-margin", "0.5", "--method", "dce"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert bad.returncode == 2 and "bayesian" in bad.stderr and "Traceback" not in bad.stderr
     data = png.read_bytes()
     with TestClient(create_app(Settings(workers=1)), raise_server_exceptions=False) as client:
-        resp = client.post("/v1/prune", params={"min_margin": "0.5", "curve": "false"},
-                           content=data, headers={"content-type": "image/png"})
+        resp = client.post(
+            "/v1/prune",
+            params={"min_margin": "0.5", "curve": "false"},
+            content=data,
+            headers={"content-type": "image/png"},
+        )
         assert resp.status_code == 200, resp.text
         assert resp.json()["components"] == base["components"]
-        poly = {"type": "Polygon", "coordinates": [[[0, 0], [40, 0], [40, 20], [0, 20],
-                                                    [0, 0]]]}
+        poly = {"type": "Polygon", "coordinates": [[[0, 0], [40, 0], [40, 20], [0, 20], [0, 0]]]}
         resp = client.post("/v1/prune", json={"geojson": poly, "min_margin": 0.5})
         assert resp.status_code == 200, resp.text
-        for kwargs in ({"params": {"min_margin": "-1"}}, {"params": {"min_margin": "x"}},
-                       {"params": {"min_margin": "0.5", "method": "dce"}}):
-            resp = client.post("/v1/prune", content=data,
-                               headers={"content-type": "image/png"}, **kwargs)
+        for kwargs in (
+            {"params": {"min_margin": "-1"}},
+            {"params": {"min_margin": "x"}},
+            {"params": {"min_margin": "0.5", "method": "dce"}},
+        ):
+            resp = client.post(
+                "/v1/prune", content=data, headers={"content-type": "image/png"}, **kwargs
+            )
             assert resp.status_code == 422 and "min_margin" in resp.text
 
 

@@ -50,9 +50,13 @@ def shapes() -> list[np.ndarray]:
     """Kimia shapes (several with exact moment ties), holes, two components, the border,
     boundary noise."""
     out = kimia(17) + [load(p) for p in dataset("kimia99")[::33]]
-    out += [rectangle_with_holes(), two_components(), touching_border(),
-            blobs(3, holes=2), boundary_noise(load(dataset("kimia216")[5]), "gaussian", 1.0,
-                                              rng=1)]
+    out += [
+        rectangle_with_holes(),
+        two_components(),
+        touching_border(),
+        blobs(3, holes=2),
+        boundary_noise(load(dataset("kimia216")[5]), "gaussian", 1.0, rng=1),
+    ]
     square = np.zeros((30, 30), bool)
     square[5:25, 5:25] = True  # every symmetry maps it to itself
     return [*out, square]
@@ -100,7 +104,8 @@ def test_medial_axis_follows_the_shape(name):
         t = medial_axis(turned(padded, name))
         np.testing.assert_array_equal(
             point_image(turned(padded, name).shape, t.rows, t.cols),
-            turned(point_image(padded.shape, ma.rows, ma.cols), name))
+            turned(point_image(padded.shape, ma.rows, ma.cols), name),
+        )
 
 
 def symmetric(mask: np.ndarray) -> bool:
@@ -114,8 +119,10 @@ def symmetric(mask: np.ndarray) -> bool:
 
 
 def invariants(res: skelprune.PruneResult) -> list[tuple]:
-    return sorted((c.area, c.graph.n_endpoints(), c.chosen_step, c.rer, round(c.ss, 12))
-                  for c in res.components)
+    return sorted(
+        (c.area, c.graph.n_endpoints(), c.chosen_step, c.rer, round(c.ss, 12))
+        for c in res.components
+    )
 
 
 @pytest.mark.parametrize("kw", [{}, {"coarse": None}, {"method": "dce"}])
@@ -131,8 +138,10 @@ def test_pruned_skeleton_follows_the_shape(name, kw):
             continue
         rows, cols, r2 = res.skeleton_points()
         trows, tcols, tr2 = t.skeleton_points()
-        np.testing.assert_array_equal(point_image(t.mask.shape, trows, tcols),
-                                      turned(point_image(mask.shape, rows, cols), name))
+        np.testing.assert_array_equal(
+            point_image(t.mask.shape, trows, tcols),
+            turned(point_image(mask.shape, rows, cols), name),
+        )
         assert sorted(r2.tolist()) == sorted(tr2.tolist())
         checked += 1
     assert checked >= 12
@@ -150,7 +159,7 @@ def test_document_points_are_in_the_image_frame():
     points += [[n["x"], n["y"], n["radius"]] for n in doc["nodes"]]
     for x, y, radius in points:
         assert mask[int(y), int(x)]
-        assert radius ** 2 == pytest.approx(r2[int(y), int(x)])
+        assert radius**2 == pytest.approx(r2[int(y), int(x)])
 
 
 def test_medial_axis_refuses_a_shape_on_the_border():

@@ -181,10 +181,13 @@ def test_pixels_are_exactly_the_centres_inside(
     ("obj", "kwargs", "error", "reason"),
     [
         (poly(SQUARE), {"pixel_size": 5e-324}, ImageTooLargeError, "too large"),
-        (poly([[x * 1e-320, y * 1e-320] for x, y in SQUARE]), {}, InvalidPolygonError,
-         "zero area"),
-        (poly([[-1e308, 0], [1e308, 0], [1e308, 1], [-1e308, 1], [-1e308, 0]]), {},
-         InvalidPolygonError, "too large a range"),
+        (poly([[x * 1e-320, y * 1e-320] for x, y in SQUARE]), {}, InvalidPolygonError, "zero area"),
+        (
+            poly([[-1e308, 0], [1e308, 0], [1e308, 1], [-1e308, 1], [-1e308, 0]]),
+            {},
+            InvalidPolygonError,
+            "too large a range",
+        ),
     ],
 )
 def test_extreme_scales_are_refused_cleanly(

@@ -47,8 +47,12 @@ def test_multipart_pngs_in_input_order_with_a_bad_one(client: TestClient) -> Non
     assert [(d.height, d.width) for d in docs] == sizes
     assert all(d.beta == 4.0 for d in docs)
     # each line is what POST /v1/prune gives for that shape alone
-    single = client.post("/v1/prune", params={"beta": "4"}, content=png(*sizes[0]),
-                         headers={"content-type": "image/png"}).json()
+    single = client.post(
+        "/v1/prune",
+        params={"beta": "4"},
+        content=png(*sizes[0]),
+        headers={"content-type": "image/png"},
+    ).json()
     assert got[0]["result"] == single
 
 
@@ -60,14 +64,17 @@ def test_json_list_of_polygons(client: TestClient) -> None:
     assert all("curve" not in g["result"]["components"][0] for g in (got[0], got[2]))
 
 
-@pytest.mark.parametrize(("kwargs", "status", "fragment"), [
-    ({"json": [rect(4, 2)] * (BATCH_MAX_ITEMS + 1)}, 413, f"at most {BATCH_MAX_ITEMS}"),
-    ({"json": []}, 422, "empty"),
-    ({"json": {"type": "Polygon"}}, 422, "JSON list"),
-    ({"json": [rect(4, 2)], "params": {"beta": "-1"}}, 422, "beta"),
-    ({"json": [rect(4, 2)], "params": {"foreground": "zero"}}, 422, "only apply to PNG"),
-    ({"content": b"x", "headers": {"content-type": "text/plain"}}, 415, "not supported"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "status", "fragment"),
+    [
+        ({"json": [rect(4, 2)] * (BATCH_MAX_ITEMS + 1)}, 413, f"at most {BATCH_MAX_ITEMS}"),
+        ({"json": []}, 422, "empty"),
+        ({"json": {"type": "Polygon"}}, 422, "JSON list"),
+        ({"json": [rect(4, 2)], "params": {"beta": "-1"}}, 422, "beta"),
+        ({"json": [rect(4, 2)], "params": {"foreground": "zero"}}, 422, "only apply to PNG"),
+        ({"content": b"x", "headers": {"content-type": "text/plain"}}, 415, "not supported"),
+    ],
+)
 def test_a_bad_batch_is_refused_whole(client: TestClient, kwargs, status, fragment) -> None:
     resp = client.post("/v1/prune/batch", **kwargs)
     assert resp.status_code == status, resp.text

@@ -34,8 +34,10 @@ def test_docs_pages_load_everything_from_the_service(client: TestClient, page: s
 
 def test_versions_in_healthz_and_v1_version(client: TestClient) -> None:
     health = Health.model_validate(client.get("/healthz").json())
-    assert (health.version, health.algorithm) == (skelprune.__version__,
-                                                  skelprune.ALGORITHM_VERSION)
+    assert (health.version, health.algorithm) == (
+        skelprune.__version__,
+        skelprune.ALGORITHM_VERSION,
+    )
     version = Version.model_validate(client.get("/v1/version").json())
     assert version.service == version.library == skelprune.__version__
     assert version.algorithm == skelprune.ALGORITHM_VERSION

@@ -18,8 +18,13 @@ CLIENT = REPO / "examples" / "client.py"
 
 def test_the_client_runs_against_the_real_server(real_server, tmp_path) -> None:
     with real_server(workers="1") as (_, base):
-        run = subprocess.run([sys.executable, str(CLIENT), base], cwd=tmp_path,
-                             capture_output=True, text=True, timeout=120)
+        run = subprocess.run(
+            [sys.executable, str(CLIENT), base],
+            cwd=tmp_path,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
     assert run.returncode == 0, run.stderr
     lines = run.stdout.splitlines()
     assert lines[0].startswith("shape.png: RER ") and "endpoints" in lines[0]

@@ -41,10 +41,18 @@ def boxes(n: int) -> bytes:
     """``n`` × ``n`` small rectangles as one MultiPolygon rasterised at 4000 px: as many
     components, each pruned on its own, so the job's time is mostly per-component work
     rather than compiled kernels."""
-    polygons = [[[[j, i], [j + 0.7, i], [j + 0.7, i + 0.5], [j, i + 0.5], [j, i]]]
-                for i in range(n) for j in range(n)]
-    return json.dumps({"geojson": {"type": "MultiPolygon", "coordinates": polygons},
-                       "longest_side": 4000, "curve": False}).encode()
+    polygons = [
+        [[[j, i], [j + 0.7, i], [j + 0.7, i + 0.5], [j, i + 0.5], [j, i]]]
+        for i in range(n)
+        for j in range(n)
+    ]
+    return json.dumps(
+        {
+            "geojson": {"type": "MultiPolygon", "coordinates": polygons},
+            "longest_side": 4000,
+            "curve": False,
+        }
+    ).encode()
 
 
 #: Long enough to outlast a 3 s time limit on any machine: 19,600 components (98,000
@@ -87,8 +95,9 @@ class Call(threading.Thread):
     def run(self) -> None:
         base, content, headers = self.args_
         try:
-            self.response = httpx.post(f"{base}/v1/prune", content=content, headers=headers,
-                                       timeout=240)
+            self.response = httpx.post(
+                f"{base}/v1/prune", content=content, headers=headers, timeout=240
+            )
         except BaseException as exc:
             self.error = exc
 
@@ -117,17 +126,20 @@ def problem(resp: httpx.Response, status: int, slug: str) -> dict:
 
 
 def test_worker_killed_from_outside_mid_job(real_server: Callable[..., Any]) -> None:
-    with real_server(workers="1", queue_size="4",
-                        job_timeout="200") as (proc, base):
+    with real_server(workers="1", queue_size="4", job_timeout="200") as (proc, base):
         before = worker_pids(proc.pid)
         assert len(before) == 1, before
         (victim,) = before
         long_job = Call(base, LONG_JOB, {"content-type": "application/json"})
-        wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).json()["busy"] == 1,
-                 "the long job to start")
+        wait_for(
+            lambda: httpx.get(f"{base}/readyz", timeout=5).json()["busy"] == 1,
+            "the long job to start",
+        )
         queued = [Call(base, BIRD, PNG) for _ in range(2)]
-        wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).json()["queued"] == 2,
-                 "two requests waiting behind it")
+        wait_for(
+            lambda: httpx.get(f"{base}/readyz", timeout=5).json()["queued"] == 2,
+            "two requests waiting behind it",
+        )
         os.kill(victim, signal.SIGKILL)
 
         body = problem(long_job.result(), 500, "worker-crashed")
@@ -140,8 +152,9 @@ def test_worker_killed_from_outside_mid_job(real_server: Callable[..., Any]) -> 
         assert len(after) == 1 and victim not in after
         ready = httpx.get(f"{base}/readyz", timeout=5).json()
         assert ready["workers"] == 1 and ready["busy"] == 0 and ready["queued"] == 0
-        assert httpx.post(f"{base}/v1/prune", content=BIRD, headers=PNG,
-                          timeout=60).status_code == 200
+        assert (
+            httpx.post(f"{base}/v1/prune", content=BIRD, headers=PNG, timeout=60).status_code == 200
+        )
         metrics = httpx.get(f"{base}/metrics", timeout=5).text
         assert "skelprune_worker_restarts 1.0" in metrics
         assert proc.poll() is None
@@ -150,13 +163,14 @@ def test_worker_killed_from_outside_mid_job(real_server: Callable[..., Any]) -> 
 def test_time_limit_and_full_queue(real_server: Callable[..., Any]) -> None:
     # The long job runs for about 20 s on the reference machine: a time limit of 3 s
     # stops it whatever the machine, and leaves the 503 checks (milliseconds) ample time.
-    with real_server(workers="1", queue_size="0", job_timeout="3",
-                retry_after="3") as (proc, base):
+    with real_server(workers="1", queue_size="0", job_timeout="3", retry_after="3") as (proc, base):
         (first_worker,) = worker_pids(proc.pid)
         long_job = Call(base, LONG_JOB, {"content-type": "application/json"})
         # The only worker is busy and nothing may wait: readiness and new jobs say 503.
-        wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).status_code == 503,
-                 "the worker to be taken")
+        wait_for(
+            lambda: httpx.get(f"{base}/readyz", timeout=5).status_code == 503,
+            "the worker to be taken",
+        )
         ready = httpx.get(f"{base}/readyz", timeout=5)
         problem(ready, 503, "queue-full")
         assert ready.headers["retry-after"] == "3"
@@ -168,8 +182,10 @@ def test_time_limit_and_full_queue(real_server: Callable[..., Any]) -> None:
         body = problem(long_job.result(), 504, "job-timeout")
         assert "time limit of 3 s" in body["detail"]
         # The slot is free again: a fresh worker, ready, and a normal job succeeds.
-        wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).status_code == 200,
-                 "readiness after the timeout")
+        wait_for(
+            lambda: httpx.get(f"{base}/readyz", timeout=5).status_code == 200,
+            "readiness after the timeout",
+        )
         resp = httpx.post(f"{base}/v1/prune", content=BIRD, headers=PNG, timeout=60)
         assert resp.status_code == 200, resp.text
         assert first_worker not in worker_pids(proc.pid)
@@ -179,14 +195,20 @@ def test_time_limit_and_full_queue(real_server: Callable[..., Any]) -> None:
 def test_drain_is_bounded_by_the_shutdown_timeout(real_server: Callable[..., Any]) -> None:
     """SIGTERM with a job that would run for many seconds: after SKELPRUNE_SHUTDOWN_TIMEOUT the
     running and the queued request both get a 503 problem, and the server exits 0."""
-    with real_server(workers="1", queue_size="4", job_timeout="300",
-                shutdown_timeout="2") as (proc, base):
+    with real_server(workers="1", queue_size="4", job_timeout="300", shutdown_timeout="2") as (
+        proc,
+        base,
+    ):
         long_job = Call(base, LONG_JOB, {"content-type": "application/json"})
-        wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).json()["busy"] == 1,
-                 "the long job to start")
+        wait_for(
+            lambda: httpx.get(f"{base}/readyz", timeout=5).json()["busy"] == 1,
+            "the long job to start",
+        )
         queued = Call(base, BIRD, PNG)
-        wait_for(lambda: httpx.get(f"{base}/readyz", timeout=5).json()["queued"] == 1,
-                 "a request waiting behind it")
+        wait_for(
+            lambda: httpx.get(f"{base}/readyz", timeout=5).json()["queued"] == 1,
+            "a request waiting behind it",
+        )
         proc.send_signal(signal.SIGTERM)
         for call in (long_job, queued):
             resp = call.result()

@@ -42,15 +42,22 @@ pytestmark = pytest.mark.timeout(600)
 FUZZ_EXAMPLES = int(os.environ.get("SKELPRUNE_FUZZ_EXAMPLES", "150"))
 MAX_PIXELS = 1 << 18
 FUZZ = settings(
-    max_examples=FUZZ_EXAMPLES, deadline=None, derandomize=True, database=None,
+    max_examples=FUZZ_EXAMPLES,
+    deadline=None,
+    derandomize=True,
+    database=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
 )
 
 
 # ------------------------------------------------------------------- seed PNGs
 def _chunk(kind: bytes, payload: bytes) -> bytes:
-    return struct.pack(">I", len(payload)) + kind + payload + struct.pack(
-        ">I", zlib.crc32(kind + payload))
+    return (
+        struct.pack(">I", len(payload))
+        + kind
+        + payload
+        + struct.pack(">I", zlib.crc32(kind + payload))
+    )
 
 
 def _save(im: Image.Image, **kw: Any) -> bytes:
@@ -73,9 +80,14 @@ def _seeds() -> list[bytes]:
     rows = np.zeros((6, 5, 3), ">u2")
     rows[1:5, 1:4] = 40000
     raw = zlib.compress(b"".join(b"\x00" + r.tobytes() for r in rows))
-    hand = (PNG_SIGNATURE + _chunk(b"IHDR", struct.pack(">IIBBBBB", 5, 6, 16, 2, 0, 0, 0))
-            + _chunk(b"tRNS", b"\x00\x00" * 3) + _chunk(b"IDAT", raw[:10])
-            + _chunk(b"IDAT", raw[10:]) + _chunk(b"IEND", b""))
+    hand = (
+        PNG_SIGNATURE
+        + _chunk(b"IHDR", struct.pack(">IIBBBBB", 5, 6, 16, 2, 0, 0, 0))
+        + _chunk(b"tRNS", b"\x00\x00" * 3)
+        + _chunk(b"IDAT", raw[:10])
+        + _chunk(b"IDAT", raw[10:])
+        + _chunk(b"IEND", b"")
+    )
     return [
         _save(Image.fromarray(mask * 255)),
         _save(Image.fromarray(mask.astype(bool))),
@@ -96,7 +108,7 @@ def chunk_spans(data: bytes) -> list[tuple[int, int]]:
     """(start, end) of each complete chunk of a well-formed PNG."""
     spans, pos = [], 8
     while pos + 12 <= len(data):
-        (length,) = struct.unpack(">I", data[pos:pos + 4])
+        (length,) = struct.unpack(">I", data[pos : pos + 4])
         end = pos + 12 + length
         if end > len(data):
             break
@@ -109,7 +121,7 @@ def fix_crcs(data: bytes) -> bytes:
     """Recompute every CRC, so a mutation reaches the decoder instead of the CRC check."""
     out = bytearray(data)
     for start, end in chunk_spans(data):
-        out[end - 4:end] = struct.pack(">I", zlib.crc32(bytes(out[start + 4:end - 4])))
+        out[end - 4 : end] = struct.pack(">I", zlib.crc32(bytes(out[start + 4 : end - 4])))
     return bytes(out)
 
 
@@ -118,8 +130,22 @@ def mutated_pngs(draw: st.DrawFn) -> bytes:
     data = bytearray(draw(st.sampled_from(SEEDS)))
     spans = chunk_spans(bytes(data))
     for _ in range(draw(st.integers(1, 4))):
-        op = draw(st.sampled_from(["flip", "byte", "truncate", "length", "crc", "insert",
-                                   "delete", "dup-chunk", "drop-chunk", "ihdr"]))
+        op = draw(
+            st.sampled_from(
+                [
+                    "flip",
+                    "byte",
+                    "truncate",
+                    "length",
+                    "crc",
+                    "insert",
+                    "delete",
+                    "dup-chunk",
+                    "drop-chunk",
+                    "ihdr",
+                ]
+            )
+        )
         if not data:
             break
         pos = draw(st.integers(0, len(data) - 1))
@@ -132,27 +158,37 @@ def mutated_pngs(draw: st.DrawFn) -> bytes:
         elif op == "insert":
             data[pos:pos] = draw(st.binary(min_size=1, max_size=16))
         elif op == "delete":
-            del data[pos:pos + draw(st.integers(1, 16))]
+            del data[pos : pos + draw(st.integers(1, 16))]
         elif spans:
             start, end = draw(st.sampled_from(spans))
             if end > len(data):
                 continue
             if op == "length":
-                value = draw(st.one_of(st.integers(0, 64), st.sampled_from(
-                    [0x7FFFFFFF, 0x80000000, 0xFFFFFFFF, end - start - 12 + 1])))
-                data[start:start + 4] = struct.pack(">I", value)
+                value = draw(
+                    st.one_of(
+                        st.integers(0, 64),
+                        st.sampled_from([0x7FFFFFFF, 0x80000000, 0xFFFFFFFF, end - start - 12 + 1]),
+                    )
+                )
+                data[start : start + 4] = struct.pack(">I", value)
             elif op == "crc":
-                data[end - 4:end] = draw(st.binary(min_size=4, max_size=4))
+                data[end - 4 : end] = draw(st.binary(min_size=4, max_size=4))
             elif op == "dup-chunk":
                 data[end:end] = data[start:end]
             elif op == "drop-chunk":
                 del data[start:end]
             elif op == "ihdr":  # any IHDR field: size, depth, colour type, interlace ...
                 w, h = draw(st.integers(0, 70_000)), draw(st.integers(0, 70_000))
-                fields = struct.pack(">IIBBBBB", w, h, draw(st.sampled_from([1, 2, 4, 8, 16, 3])),
-                                     draw(st.sampled_from([0, 2, 3, 4, 6, 1, 7])),
-                                     draw(st.integers(0, 1)), draw(st.integers(0, 1)),
-                                     draw(st.integers(0, 2)))
+                fields = struct.pack(
+                    ">IIBBBBB",
+                    w,
+                    h,
+                    draw(st.sampled_from([1, 2, 4, 8, 16, 3])),
+                    draw(st.sampled_from([0, 2, 3, 4, 6, 1, 7])),
+                    draw(st.integers(0, 1)),
+                    draw(st.integers(0, 1)),
+                    draw(st.integers(0, 2)),
+                )
                 if len(data) >= 29:
                     data[16:29] = fields
     if draw(st.booleans()):
@@ -245,24 +281,26 @@ NUMBERS = st.one_of(
     st.integers(),  # arbitrary precision: 10**400 cannot be converted to a float
     st.floats(allow_nan=True, allow_infinity=True),
     st.floats(-1e3, 1e3),
-    st.sampled_from([0, 1, -1, 1e308, -1e308, 5e-324, 2**53 + 1, 10**400, -(10**400), True,
-                     None, "1"]),
+    st.sampled_from(
+        [0, 1, -1, 1e308, -1e308, 5e-324, 2**53 + 1, 10**400, -(10**400), True, None, "1"]
+    ),
 )
 POSITIONS = st.lists(NUMBERS, min_size=0, max_size=4)
 SMALL = st.floats(-100, 100, allow_nan=False)
 RINGS = st.one_of(
     st.lists(POSITIONS, max_size=8),
     # closed rings of plausible coordinates: these reach shapely and the rasteriser
-    st.lists(st.tuples(SMALL, SMALL).map(list), min_size=3, max_size=12)
-    .map(lambda r: [*r, r[0]]),
-    st.lists(st.tuples(st.integers(-3, 3), st.integers(-3, 3)).map(list), min_size=3,
-             max_size=8).map(lambda r: [*r, r[0]]),
+    st.lists(st.tuples(SMALL, SMALL).map(list), min_size=3, max_size=12).map(lambda r: [*r, r[0]]),
+    st.lists(
+        st.tuples(st.integers(-3, 3), st.integers(-3, 3)).map(list), min_size=3, max_size=8
+    ).map(lambda r: [*r, r[0]]),
 )
 POLYGON_COORDS = st.lists(RINGS, max_size=3)
 JSONISH = st.recursive(
     st.none() | st.booleans() | NUMBERS | st.text(max_size=8),
-    lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=6), inner,
-                                                                   max_size=4),
+    lambda inner: (
+        st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=6), inner, max_size=4)
+    ),
     max_leaves=12,
 )
 
@@ -282,15 +320,20 @@ def valid_polygons(draw: st.DrawFn) -> dict[str, Any]:
 
 @st.composite
 def geojsonish(draw: st.DrawFn, depth: int = 0) -> Any:
-    kind = draw(st.sampled_from(
-        ["Polygon", "MultiPolygon", "Feature", "FeatureCollection", "junk", "Point", "valid"]))
+    kind = draw(
+        st.sampled_from(
+            ["Polygon", "MultiPolygon", "Feature", "FeatureCollection", "junk", "Point", "valid"]
+        )
+    )
     if kind == "valid":
         return draw(valid_polygons())
     if kind == "Polygon":
         obj: Any = {"type": "Polygon", "coordinates": draw(POLYGON_COORDS | JSONISH)}
     elif kind == "MultiPolygon":
-        obj = {"type": "MultiPolygon",
-               "coordinates": draw(st.lists(POLYGON_COORDS, max_size=3) | JSONISH)}
+        obj = {
+            "type": "MultiPolygon",
+            "coordinates": draw(st.lists(POLYGON_COORDS, max_size=3) | JSONISH),
+        }
     elif kind in ("Feature", "FeatureCollection") and depth < 2:
         inner = st.deferred(lambda: geojsonish(depth + 1))
         if kind == "Feature":
@@ -310,8 +353,9 @@ RASTER = st.one_of(
     st.fixed_dictionaries({"longest_side": st.integers(1, 96)}),
     st.fixed_dictionaries({"pixel_size": st.floats(1e-3, 50)}),
     st.fixed_dictionaries({"pixel_size": st.floats(allow_nan=True, allow_infinity=True)}),
-    st.fixed_dictionaries({"longest_side": st.one_of(st.integers(), st.floats(),
-                                                     st.booleans(), st.none())}),
+    st.fixed_dictionaries(
+        {"longest_side": st.one_of(st.integers(), st.floats(), st.booleans(), st.none())}
+    ),
 )
 
 
@@ -340,8 +384,9 @@ def test_polygon_mask() -> None:
     @given(st.one_of(valid_polygons(), geojsonish()), RASTER, st.booleans())
     def prop(obj: Any, raster: dict[str, Any], repair: bool) -> None:
         try:
-            mask, frame = polygon_mask(obj, max_vertices=200, max_pixels=MAX_PIXELS,
-                                       repair=repair, **raster)
+            mask, frame = polygon_mask(
+                obj, max_vertices=200, max_pixels=MAX_PIXELS, repair=repair, **raster
+            )
         except SkelpruneError as exc:
             seen[rejected(exc)] += 1
             return
@@ -354,7 +399,8 @@ def test_polygon_mask() -> None:
 
 
 @pytest.mark.parametrize(
-    "value", [10**400, -(10**400), math.nan, math.inf, "1", None, True, [1.0], {"x": 1}],
+    "value",
+    [10**400, -(10**400), math.nan, math.inf, "1", None, True, [1.0], {"x": 1}],
     ids=["huge-int", "huge-negative-int", "nan", "inf", "str", "null", "bool", "list", "dict"],
 )
 def test_nasty_coordinate_in_a_ring(value: Any) -> None:
@@ -368,8 +414,11 @@ def test_nasty_coordinate_in_a_ring(value: Any) -> None:
 @pytest.mark.parametrize("raster", [{}, {"longest_side": 10**5000}])
 def test_huge_int_type_and_option_are_reported(raster: dict[str, Any]) -> None:
     """``repr`` of an int past 4300 digits raises ValueError: messages must not use it."""
-    obj = {"type": 10**5000} if not raster else {
-        "type": "Polygon", "coordinates": [[[0, 0], [4, 0], [4, 3], [0, 0]]]}
+    obj = (
+        {"type": 10**5000}
+        if not raster
+        else {"type": "Polygon", "coordinates": [[[0, 0], [4, 0], [4, 3], [0, 0]]]}
+    )
     with pytest.raises(SkelpruneError, match="<integer of 16610 bits>"):
         polygon_mask(obj, **raster)
 
@@ -379,8 +428,10 @@ def test_ring_collapsed_to_a_point_with_holes(repair: bool) -> None:
     """Found by the fuzzer: shapely's make_valid raised GEOSException ("Overlay input is
     mixed-dimension") on an exterior collapsed to one point, with holes."""
     point = [[0.0, 0.0]] * 9
-    obj = {"type": "Polygon",
-           "coordinates": [point, [[1, -3], [1, -3], [2, 3], [1, -1], [1, -3]], point]}
+    obj = {
+        "type": "Polygon",
+        "coordinates": [point, [[1, -3], [1, -3], [2, 3], [1, -1], [1, -3]], point],
+    }
     with pytest.raises(SkelpruneError, match="zero area" if repair else "Too few points"):
         parse_geojson(obj, repair=repair)
 
@@ -398,15 +449,36 @@ def test_second_ihdr_cannot_smuggle_a_size() -> None:
 
 
 # -------------------------------------------------------------------- HTTP fuzz
-SETTINGS = {"workers": 1, "queue_size": 8, "max_pixels": MAX_PIXELS, "max_vertices": 200,
-            "max_body_bytes": 64 * 1024}
+SETTINGS = {
+    "workers": 1,
+    "queue_size": 8,
+    "max_pixels": MAX_PIXELS,
+    "max_vertices": 200,
+    "max_body_bytes": 64 * 1024,
+}
 
 
 QUERY = st.dictionaries(
-    st.sampled_from(["beta", "method", "coarse", "curve", "overlay", "pixel_size",
-                     "longest_side", "repair", "dce_threshold", "x"]),
-    st.one_of(st.text(max_size=6), st.sampled_from(
-        ["0", "-1", "nan", "inf", "1e309", "9", "0.5", "true", "false", "dce", "none", "64"])),
+    st.sampled_from(
+        [
+            "beta",
+            "method",
+            "coarse",
+            "curve",
+            "overlay",
+            "pixel_size",
+            "longest_side",
+            "repair",
+            "dce_threshold",
+            "x",
+        ]
+    ),
+    st.one_of(
+        st.text(max_size=6),
+        st.sampled_from(
+            ["0", "-1", "nan", "inf", "1e309", "9", "0.5", "true", "false", "dce", "none", "64"]
+        ),
+    ),
     max_size=3,
 )
 #: Queries with valid values only, beside the arbitrary ones, so that some requests succeed.
@@ -414,10 +486,12 @@ VALID_QUERY = st.dictionaries(
     st.sampled_from(["beta", "method", "coarse", "curve"]),
     st.sampled_from(["9", "0.5", "true", "false"]),
     max_size=1,
-).filter(lambda q: all(
-    (k in ("beta",) and v in ("9", "0.5")) or (k == "curve" and v in ("true", "false"))
-    for k, v in q.items()
-))
+).filter(
+    lambda q: all(
+        (k in ("beta",) and v in ("9", "0.5")) or (k == "curve" and v in ("true", "false"))
+        for k, v in q.items()
+    )
+)
 HTTP = settings(FUZZ, max_examples=max(10, FUZZ_EXAMPLES // 3))
 
 
@@ -434,15 +508,20 @@ def test_http_png_bodies(client: TestClient) -> None:
     seen: Counter[str] = Counter()
 
     @HTTP
-    @given(st.one_of(st.sampled_from(SEEDS), mutated_pngs(), st.binary(max_size=200)),
-           st.one_of(VALID_QUERY, QUERY), st.sampled_from(["image/png", "multipart"]))
+    @given(
+        st.one_of(st.sampled_from(SEEDS), mutated_pngs(), st.binary(max_size=200)),
+        st.one_of(VALID_QUERY, QUERY),
+        st.sampled_from(["image/png", "multipart"]),
+    )
     def prop(data: bytes, query: dict[str, str], how: str) -> None:
         if how == "multipart":
-            resp = client.post("/v1/prune", files={"file": ("f.png", data, "image/png")},
-                               params=query)
+            resp = client.post(
+                "/v1/prune", files={"file": ("f.png", data, "image/png")}, params=query
+            )
         else:
-            resp = client.post("/v1/prune", content=data, params=query,
-                               headers={"content-type": "image/png"})
+            resp = client.post(
+                "/v1/prune", content=data, params=query, headers={"content-type": "image/png"}
+            )
         seen[assert_no_5xx(resp)] += 1
 
     prop()
@@ -453,18 +532,25 @@ def test_http_polygon_bodies(client: TestClient) -> None:
     seen: Counter[str] = Counter()
 
     @HTTP
-    @given(st.one_of(valid_polygons(), geojsonish(),
-                     st.fixed_dictionaries({"geojson": geojsonish()},
-                                           optional={"beta": NUMBERS, "longest_side": NUMBERS})),
-           st.one_of(VALID_QUERY, QUERY))
+    @given(
+        st.one_of(
+            valid_polygons(),
+            geojsonish(),
+            st.fixed_dictionaries(
+                {"geojson": geojsonish()}, optional={"beta": NUMBERS, "longest_side": NUMBERS}
+            ),
+        ),
+        st.one_of(VALID_QUERY, QUERY),
+    )
     def prop(obj: Any, query: dict[str, str]) -> None:
         try:
             body = json.dumps(obj)  # NaN / Infinity become the JSON5-ish literals on purpose
         except (ValueError, OverflowError):
             seen[outcome("not JSON")] += 1
             return
-        resp = client.post("/v1/prune", content=body, params=query,
-                           headers={"content-type": "application/json"})
+        resp = client.post(
+            "/v1/prune", content=body, params=query, headers={"content-type": "application/json"}
+        )
         seen[assert_no_5xx(resp)] += 1
 
     prop()

@@ -102,11 +102,21 @@ def test_no_key_configured_means_open(open_client: TestClient) -> None:
         ({"authorization": "Bearer "}, "API key required", None),
         ({"x-api-key": ""}, "API key required", None),
     ],
-    ids=["missing", "wrong-bearer", "wrong-x-api-key", "prefix", "longer", "basic-scheme",
-         "no-scheme", "empty-bearer", "empty-x-api-key"],
+    ids=[
+        "missing",
+        "wrong-bearer",
+        "wrong-x-api-key",
+        "prefix",
+        "longer",
+        "basic-scheme",
+        "no-scheme",
+        "empty-bearer",
+        "empty-x-api-key",
+    ],
 )
-def test_missing_or_wrong_key_is_401(locked: TestClient, headers: dict[str, str],
-                                     fragment: str, error: str | None) -> None:
+def test_missing_or_wrong_key_is_401(
+    locked: TestClient, headers: dict[str, str], fragment: str, error: str | None
+) -> None:
     resp = locked.post("/v1/prune", content=BIRD, headers={**PNG, **headers})
     body = assert_problem(resp, 401, fragment)
     assert body["type"] == "urn:skelprune:problem:unauthorized"
@@ -118,8 +128,12 @@ def test_missing_or_wrong_key_is_401(locked: TestClient, headers: dict[str, str]
 
 @pytest.mark.parametrize(
     "headers",
-    [{"authorization": f"Bearer {KEY}"}, {"authorization": f"bearer  {KEY} "},
-     {"x-api-key": KEY}, {"authorization": "Bearer nope", "x-api-key": KEY}],
+    [
+        {"authorization": f"Bearer {KEY}"},
+        {"authorization": f"bearer  {KEY} "},
+        {"x-api-key": KEY},
+        {"authorization": "Bearer nope", "x-api-key": KEY},
+    ],
     ids=["bearer", "bearer-case-and-spaces", "x-api-key", "either-header"],
 )
 def test_right_key_is_let_in(locked: TestClient, headers: dict[str, str]) -> None:
@@ -142,8 +156,9 @@ def test_which_paths_need_the_key(locked: TestClient) -> None:
     assert locked.get("/v1/prune", headers=auth()).status_code == 405
 
 
-def test_key_is_compared_in_constant_time(locked: TestClient,
-                                          monkeypatch: pytest.MonkeyPatch) -> None:
+def test_key_is_compared_in_constant_time(
+    locked: TestClient, monkeypatch: pytest.MonkeyPatch
+) -> None:
     calls: list[tuple[bytes, bytes]] = []
     real = service.security.hmac.compare_digest
 
@@ -174,9 +189,14 @@ def test_key_from_the_environment(monkeypatch: pytest.MonkeyPatch) -> None:
 
 # --------------------------------------------------------------------------- CORS
 def preflight(client: TestClient, origin: str) -> httpx.Response:
-    return client.options("/v1/prune", headers={
-        "origin": origin, "access-control-request-method": "POST",
-        "access-control-request-headers": "authorization, content-type"})
+    return client.options(
+        "/v1/prune",
+        headers={
+            "origin": origin,
+            "access-control-request-method": "POST",
+            "access-control-request-headers": "authorization, content-type",
+        },
+    )
 
 
 def test_cors_is_off_by_default(open_client: TestClient) -> None:
@@ -200,8 +220,9 @@ def test_cors_for_configured_origins_only(locked: TestClient) -> None:
     assert resp.status_code == 200
     assert resp.headers["access-control-allow-origin"] == ORIGIN
     assert "x-request-id" in resp.headers["access-control-expose-headers"].lower()
-    resp = locked.post("/v1/prune", content=BIRD,
-                       headers={**PNG, **auth(), "origin": "https://evil.example"})
+    resp = locked.post(
+        "/v1/prune", content=BIRD, headers={**PNG, **auth(), "origin": "https://evil.example"}
+    )
     assert "access-control-allow-origin" not in resp.headers
 
 
@@ -229,8 +250,9 @@ def test_path_as_a_png_body_is_just_bytes(open_client: TestClient, path: str) ->
     assert resp.status_code == 200
     resp = open_client.post("/v1/prune", files={"file": (path, path.encode(), "image/png")})
     assert_problem(resp, 400, "not a PNG")
-    resp = open_client.post("/v1/prune", content=BIRD, headers=PNG,
-                            params={"file": path, "path": path})
+    resp = open_client.post(
+        "/v1/prune", content=BIRD, headers=PNG, params={"file": path, "path": path}
+    )
     assert_problem(resp, 422, "file")
 
 
@@ -251,8 +273,9 @@ def test_request_id_generated_and_echoed(open_client: TestClient) -> None:
     assert HEX_ID.match(open_client.get("/healthz").headers["x-request-id"])
 
 
-@pytest.mark.parametrize("rid", ["abc-123", "7b0e6c2e-5a4f-4f57-9d4b-1d1a5b8f8c11",
-                                 "trace:01HXYZ.span_9", "x" * 128])
+@pytest.mark.parametrize(
+    "rid", ["abc-123", "7b0e6c2e-5a4f-4f57-9d4b-1d1a5b8f8c11", "trace:01HXYZ.span_9", "x" * 128]
+)
 def test_request_id_taken_from_the_client(open_client: TestClient, rid: str) -> None:
     ok = open_client.post("/v1/prune", content=BIRD, headers={**PNG, "x-request-id": rid})
     assert ok.headers["x-request-id"] == rid
@@ -260,8 +283,9 @@ def test_request_id_taken_from_the_client(open_client: TestClient, rid: str) -> 
     assert assert_problem(bad, 400)["request_id"] == rid
 
 
-@pytest.mark.parametrize("rid", ["", "has space", "x" * 129, "semi;colon", "quote\"",
-                                 "é-accent", "a\tb"])
+@pytest.mark.parametrize(
+    "rid", ["", "has space", "x" * 129, "semi;colon", 'quote"', "é-accent", "a\tb"]
+)
 def test_unusable_request_id_is_replaced(open_client: TestClient, rid: str) -> None:
     resp = open_client.get("/healthz", headers={"x-request-id": rid.encode("utf-8")})
     assert HEX_ID.match(resp.headers["x-request-id"])
@@ -271,13 +295,32 @@ def test_request_id_on_every_kind_of_error(locked: TestClient) -> None:
     rid = "req-42"
     for resp, status in (
         (locked.post("/v1/prune", content=BIRD, headers={**PNG, "x-request-id": rid}), 401),
-        (locked.post("/v1/prune", content=b"\0" * (17 * 2**20),
-                     headers={**PNG, **auth(), "x-request-id": rid}), 413),
+        (
+            locked.post(
+                "/v1/prune",
+                content=b"\0" * (17 * 2**20),
+                headers={**PNG, **auth(), "x-request-id": rid},
+            ),
+            413,
+        ),
         (locked.get("/nothing", headers={**auth(), "x-request-id": rid}), 404),
-        (locked.post("/v1/prune", content=b"x", headers={**auth(), "x-request-id": rid,
-                                                           "content-type": "text/plain"}), 415),
-        (locked.post("/v1/prune", content=BIRD, params={"beta": "0"},
-                     headers={**PNG, **auth(), "x-request-id": rid}), 422),
+        (
+            locked.post(
+                "/v1/prune",
+                content=b"x",
+                headers={**auth(), "x-request-id": rid, "content-type": "text/plain"},
+            ),
+            415,
+        ),
+        (
+            locked.post(
+                "/v1/prune",
+                content=BIRD,
+                params={"beta": "0"},
+                headers={**PNG, **auth(), "x-request-id": rid},
+            ),
+            422,
+        ),
     ):
         assert resp.headers["x-request-id"] == rid
         assert assert_problem(resp, status)["request_id"] == rid
@@ -293,8 +336,9 @@ def test_unexpected_error_has_reference_but_no_internals(
     locked_app.dependency_overrides[job_function] = boom
     try:
         with caplog.at_level(logging.INFO):
-            resp = locked.post("/v1/prune", content=BIRD,
-                               headers={**PNG, **auth(), "x-request-id": "boom-1"})
+            resp = locked.post(
+                "/v1/prune", content=BIRD, headers={**PNG, **auth(), "x-request-id": "boom-1"}
+            )
     finally:
         locked_app.dependency_overrides.clear()
     body = assert_problem(resp, 500, "internal error (reference")
@@ -307,18 +351,24 @@ def test_unexpected_error_has_reference_but_no_internals(
 
 
 # --------------------------------------------------------------------------- logs
-def test_one_json_log_line_per_request(locked: TestClient,
-                                       caplog: pytest.LogCaptureFixture) -> None:
+def test_one_json_log_line_per_request(
+    locked: TestClient, caplog: pytest.LogCaptureFixture
+) -> None:
     with caplog.at_level(logging.INFO, logger="service.access"):
         locked.post("/v1/prune", content=BIRD, headers={**PNG, **auth(), "x-request-id": "r1"})
-        locked.post("/v1/prune", content=BIRD,
-                    headers={**PNG, "authorization": "Bearer not-the-key", "x-request-id": "r2"})
+        locked.post(
+            "/v1/prune",
+            content=BIRD,
+            headers={**PNG, "authorization": "Bearer not-the-key", "x-request-id": "r2"},
+        )
         locked.get("/healthz", headers={"x-request-id": "r3"})
     records = [r for r in caplog.records if r.name == "service.access"]
     lines = [json.loads(JsonFormatter().format(r)) for r in records]
     assert [(d["request_id"], d["method"], d["path"], d["status"]) for d in lines] == [
-        ("r1", "POST", "/v1/prune", 200), ("r2", "POST", "/v1/prune", 401),
-        ("r3", "GET", "/healthz", 200)]
+        ("r1", "POST", "/v1/prune", 200),
+        ("r2", "POST", "/v1/prune", 401),
+        ("r3", "GET", "/healthz", 200),
+    ]
     for d in lines:
         assert d["duration_ms"] >= 0 and d["level"] == "INFO" and d["time"]
     text = "\n".join(JsonFormatter().format(r) for r in caplog.records)
@@ -329,8 +379,9 @@ def test_json_formatter_is_one_line_without_tracebacks() -> None:
     try:
         raise ValueError("multi\nline")
     except ValueError as exc:
-        record = logging.LogRecord("service.x", logging.ERROR, __file__, 1, "failed: %s",
-                                   (exc,), sys.exc_info())
+        record = logging.LogRecord(
+            "service.x", logging.ERROR, __file__, 1, "failed: %s", (exc,), sys.exc_info()
+        )
     record.request_id = "abc"
     line = JsonFormatter().format(record)
     assert "\n" not in line
@@ -343,11 +394,19 @@ def test_json_formatter_is_one_line_without_tracebacks() -> None:
 def test_real_server_logs_json_lines_without_the_key(tmp_path: Path) -> None:
     log_path = tmp_path / "server.log"
     with running_server(log_path, workers="1", api_key=KEY, log_level="info") as (proc, base):
-        ok = httpx.post(f"{base}/v1/prune", content=BIRD, timeout=60,
-                        headers={**PNG, "x-api-key": KEY, "x-request-id": "real-1"})
+        ok = httpx.post(
+            f"{base}/v1/prune",
+            content=BIRD,
+            timeout=60,
+            headers={**PNG, "x-api-key": KEY, "x-request-id": "real-1"},
+        )
         assert ok.status_code == 200 and ok.headers["x-request-id"] == "real-1"
-        denied = httpx.post(f"{base}/v1/prune", content=BIRD, timeout=60,
-                            headers={**PNG, "authorization": "Bearer guessed-key"})
+        denied = httpx.post(
+            f"{base}/v1/prune",
+            content=BIRD,
+            timeout=60,
+            headers={**PNG, "authorization": "Bearer guessed-key"},
+        )
         assert_problem(denied, 401)
         assert denied.headers["www-authenticate"].startswith("Bearer")
         code = stop(proc)
@@ -359,7 +418,8 @@ def test_real_server_logs_json_lines_without_the_key(tmp_path: Path) -> None:
     by_id = {d["request_id"]: d for d in requests}
     assert by_id["real-1"]["status"] == 200 and by_id["real-1"]["path"] == "/v1/prune"
     assert by_id[denied.headers["x-request-id"]]["status"] == 401
-    assert all({"method", "path", "status", "duration_ms", "request_id"} <= set(d)
-               for d in requests)
+    assert all(
+        {"method", "path", "status", "duration_ms", "request_id"} <= set(d) for d in requests
+    )
     # uvicorn's own lines are JSON too, and its plain-text access log is off
     assert any(d.get("logger", "").startswith("uvicorn") for d in lines)

@@ -38,8 +38,9 @@ def png_bytes(arr: np.ndarray, mode: str | None = None) -> bytes:
 
 
 def post_png(client: TestClient, data: bytes, params: dict | None = None, **headers: str):
-    return client.post("/v1/prune", content=data, params=params,
-                       headers={"content-type": "image/png", **headers})
+    return client.post(
+        "/v1/prune", content=data, params=params, headers={"content-type": "image/png", **headers}
+    )
 
 
 def assert_problem(resp, status: int, *fragments: str) -> dict:
@@ -101,10 +102,21 @@ def test_png_colour_modes(client: TestClient, mode: str) -> None:
     "geojson",
     [
         {"type": "Polygon", "coordinates": [RECT, HOLE]},
-        {"type": "Feature", "properties": {"name": "r"}, "geometry":
-            {"type": "Polygon", "coordinates": [RECT, HOLE]}},
-        {"type": "FeatureCollection", "features": [{"type": "Feature", "properties": None,
-         "geometry": {"type": "MultiPolygon", "coordinates": [[RECT, HOLE]]}}]},
+        {
+            "type": "Feature",
+            "properties": {"name": "r"},
+            "geometry": {"type": "Polygon", "coordinates": [RECT, HOLE]},
+        },
+        {
+            "type": "FeatureCollection",
+            "features": [
+                {
+                    "type": "Feature",
+                    "properties": None,
+                    "geometry": {"type": "MultiPolygon", "coordinates": [[RECT, HOLE]]},
+                }
+            ],
+        },
     ],
     ids=["polygon", "feature", "collection"],
 )
@@ -113,8 +125,11 @@ def test_polygon_forms_give_the_same_answer(client: TestClient, geojson: dict) -
     assert resp.status_code == 200, resp.text
     doc = resp.json()
     PruneDocument.model_validate(doc)
-    reference = client.post("/v1/prune", json={"type": "Polygon", "coordinates": [RECT, HOLE]},
-                            params={"longest_side": 80}).json()
+    reference = client.post(
+        "/v1/prune",
+        json={"type": "Polygon", "coordinates": [RECT, HOLE]},
+        params={"longest_side": 80},
+    ).json()
     assert doc == reference
     assert (doc["width"], doc["height"]) == (84, 44)  # 80 px across + 2 px margins
     comp = doc["components"][0]
@@ -128,7 +143,8 @@ def test_polygon_answer_is_in_polygon_units(client: TestClient) -> None:
     big = [[x * scale + dx, y * scale + dy] for x, y in RECT]
     small_doc = client.post("/v1/prune", json={"type": "Polygon", "coordinates": [RECT]}).json()
     big_doc = client.post(
-        "/v1/prune", content=json.dumps({"type": "Polygon", "coordinates": [big]}),
+        "/v1/prune",
+        content=json.dumps({"type": "Polygon", "coordinates": [big]}),
         headers={"content-type": "application/geo+json"},
     ).json()
     a, b = small_doc["components"][0], big_doc["components"][0]
@@ -146,8 +162,12 @@ def test_polygon_answer_is_in_polygon_units(client: TestClient) -> None:
 
 
 def test_polygon_pixel_size_and_envelope_options(client: TestClient) -> None:
-    body = {"geojson": {"type": "Polygon", "coordinates": [RECT]}, "pixel_size": 0.5,
-            "beta": 4.5, "curve": False}
+    body = {
+        "geojson": {"type": "Polygon", "coordinates": [RECT]},
+        "pixel_size": 0.5,
+        "beta": 4.5,
+        "curve": False,
+    }
     resp = client.post("/v1/prune", json=body)
     assert resp.status_code == 200, resp.text
     doc = resp.json()
@@ -174,8 +194,11 @@ def test_png_output_is_the_overlay(client: TestClient) -> None:
 
 
 def test_geojson_output(client: TestClient) -> None:
-    resp = client.post("/v1/prune", json={"type": "Polygon", "coordinates": [RECT]},
-                       headers={"accept": "application/geo+json"})
+    resp = client.post(
+        "/v1/prune",
+        json={"type": "Polygon", "coordinates": [RECT]},
+        headers={"accept": "application/geo+json"},
+    )
     assert resp.status_code == 200
     assert resp.headers["content-type"] == "application/geo+json"
     fc = resp.json()
@@ -294,15 +317,27 @@ def test_chunked_body_over_the_limit(client: TestClient) -> None:
         ({"type": "Polygon", "coordinates": [RECT[:3]]}, {}, "at least 4 items"),
         ({"type": "Point", "coordinates": [0, 0]}, {}, "'Point'"),
         ({"type": "Polygon", "coordinates": [RECT], "extra": 1}, {}, "extra"),
-        ({"type": "Polygon", "coordinates": [[[0, 0], [1, "a"], [1, 1], [0, 0]]]}, {},
-         "valid number"),
-        ({"geojson": {"type": "Polygon", "coordinates": [RECT]}, "beta": 2}, {"beta": "3"},
-         "both in the query and the body"),
-        ({"type": "Polygon", "coordinates": [RECT]}, {"pixel_size": "1", "longest_side": "64"},
-         "not both"),
+        (
+            {"type": "Polygon", "coordinates": [[[0, 0], [1, "a"], [1, 1], [0, 0]]]},
+            {},
+            "valid number",
+        ),
+        (
+            {"geojson": {"type": "Polygon", "coordinates": [RECT]}, "beta": 2},
+            {"beta": "3"},
+            "both in the query and the body",
+        ),
+        (
+            {"type": "Polygon", "coordinates": [RECT]},
+            {"pixel_size": "1", "longest_side": "64"},
+            "not both",
+        ),
         ({"type": "Polygon", "coordinates": [RECT]}, {"longest_side": "4"}, "longest_side"),
-        ({"type": "Polygon", "coordinates": [[[i % 7, i // 7] for i in range(2500)]]}, {},
-         "2500 positions, more than 2000 allowed"),
+        (
+            {"type": "Polygon", "coordinates": [[[i % 7, i // 7] for i in range(2500)]]},
+            {},
+            "2500 positions, more than 2000 allowed",
+        ),
     ],
 )
 def test_polygon_errors(client: TestClient, body: dict, params: dict, fragment: str) -> None:
@@ -311,14 +346,16 @@ def test_polygon_errors(client: TestClient, body: dict, params: dict, fragment: 
 
 
 def test_polygon_raster_too_large(client: TestClient) -> None:
-    resp = client.post("/v1/prune", json={"type": "Polygon", "coordinates": [RECT]},
-                       params={"pixel_size": "0.01"})
+    resp = client.post(
+        "/v1/prune", json={"type": "Polygon", "coordinates": [RECT]}, params={"pixel_size": "0.01"}
+    )
     assert_problem(resp, 413, "exceeds the limit of 1000000")
 
 
 def test_malformed_json(client: TestClient) -> None:
-    resp = client.post("/v1/prune", content=b'{"type": "Polygon", ',
-                       headers={"content-type": "application/json"})
+    resp = client.post(
+        "/v1/prune", content=b'{"type": "Polygon", ', headers={"content-type": "application/json"}
+    )
     assert_problem(resp, 422, "JSON")
 
 
@@ -341,12 +378,16 @@ def test_health_ready_metrics(client: TestClient) -> None:
     assert ready.workers == 2 and ready.queue_size == 8 and ready.queued == 0
     post_png(client, BIRD)
     text = client.get("/metrics").text
-    for name in ("http_requests_total", "http_request_duration_seconds",
-                 "skelprune_prune_seconds_count", "skelprune_queue_depth",
-                 "skelprune_workers_busy", "skelprune_job_seconds_bucket"):
+    for name in (
+        "http_requests_total",
+        "http_request_duration_seconds",
+        "skelprune_prune_seconds_count",
+        "skelprune_queue_depth",
+        "skelprune_workers_busy",
+        "skelprune_job_seconds_bucket",
+    ):
         assert name in text, name
-    count = [line for line in text.splitlines()
-             if line.startswith("skelprune_prune_seconds_count")]
+    count = [line for line in text.splitlines() if line.startswith("skelprune_prune_seconds_count")]
     assert float(count[0].split()[-1]) >= 1
 
 
@@ -354,9 +395,23 @@ def test_openapi_lists_every_response_with_examples(client: TestClient) -> None:
     schema = client.get("/openapi.json").json()
     op = schema["paths"]["/v1/prune"]["post"]
     assert set(op["requestBody"]["content"]) == {
-        "image/png", "multipart/form-data", "application/json", "application/geo+json"}
-    assert set(op["responses"]) == {"200", "400", "401", "406", "413", "415", "422", "500",
-                                    "503", "504"}
+        "image/png",
+        "multipart/form-data",
+        "application/json",
+        "application/geo+json",
+    }
+    assert set(op["responses"]) == {
+        "200",
+        "400",
+        "401",
+        "406",
+        "413",
+        "415",
+        "422",
+        "500",
+        "503",
+        "504",
+    }
     for path, ops in schema["paths"].items():
         for method, operation in ops.items():
             for status, resp in operation["responses"].items():
@@ -364,17 +419,22 @@ def test_openapi_lists_every_response_with_examples(client: TestClient) -> None:
                     where = (method, path, status, media)
                     assert media == "image/png" or "example" in content, where
     assert set(op["responses"]["200"]["content"]) == {
-        "application/json", "image/png", "application/geo+json"}
+        "application/json",
+        "image/png",
+        "application/geo+json",
+    }
     # The documented examples satisfy the documented models.
     PruneDocument.model_validate(op["responses"]["200"]["content"]["application/json"]["example"])
     for status in ("400", "401", "413", "422", "503", "504"):
         Problem.model_validate(
-            op["responses"][status]["content"]["application/problem+json"]["example"])
+            op["responses"][status]["content"]["application/problem+json"]["example"]
+        )
 
 
 def test_malformed_multipart_is_a_400_problem(client: TestClient) -> None:
-    resp = client.post("/v1/prune", content=b"--x\r\nnot a part",
-                       headers={"content-type": "multipart/form-data"})
+    resp = client.post(
+        "/v1/prune", content=b"--x\r\nnot a part", headers={"content-type": "multipart/form-data"}
+    )
     body = assert_problem(resp, 400)
     assert "boundary" in body["detail"].lower()
 
@@ -387,10 +447,15 @@ def test_errors_are_problems_whatever_the_accept_header(client: TestClient) -> N
 def test_big_polygon_body(client: TestClient) -> None:
     """A polygon large enough to be validated off the event loop (> 256 KiB of JSON)."""
     t = np.linspace(0, 2 * np.pi, 1999, endpoint=False)
-    ring = [[float(100 * np.cos(a)) + 0.123456789, float(50 * np.sin(a)) + 0.123456789]
-            for a in t]
-    body = json.dumps({"geojson": {"type": "Polygon", "coordinates": [[*ring, ring[0]]]},
-                       "longest_side": 64, "curve": False}, indent=8)
+    ring = [[float(100 * np.cos(a)) + 0.123456789, float(50 * np.sin(a)) + 0.123456789] for a in t]
+    body = json.dumps(
+        {
+            "geojson": {"type": "Polygon", "coordinates": [[*ring, ring[0]]]},
+            "longest_side": 64,
+            "curve": False,
+        },
+        indent=8,
+    )
     assert 256 * 1024 < len(body) < 400_000
     resp = client.post("/v1/prune", content=body, headers={"content-type": "application/json"})
     assert resp.status_code == 200, resp.text

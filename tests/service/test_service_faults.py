@@ -133,7 +133,9 @@ def test_full_queue_gives_503_with_retry_after(setup) -> None:
     results: list[int] = []
     first = threading.Thread(
         target=lambda: results.append(
-            client.post("/v1/prune", content=BIRD, headers=PNG).status_code))
+            client.post("/v1/prune", content=BIRD, headers=PNG).status_code
+        )
+    )
     first.start()
     deadline = time.monotonic() + 30
     while pool.busy == 0 and time.monotonic() < deadline:

@@ -30,19 +30,24 @@ def test_real_server_round_trip(real_server: Callable[..., Any]) -> None:
                 assert ready.json()["type"] == "urn:skelprune:problem:starting", ready.text
                 time.sleep(0.1)
             assert ready.json()["workers"] == 1
-            doc = client.post("/v1/prune", content=BIRD,
-                              headers={"content-type": "image/png"}).json()
+            doc = client.post(
+                "/v1/prune", content=BIRD, headers={"content-type": "image/png"}
+            ).json()
             assert (doc["width"], doc["height"]) == (116, 103)
             assert len(doc["components"]) == 1
-            png = client.post("/v1/prune", files={"file": ("b.png", BIRD, "image/png")},
-                              headers={"accept": "image/png"})
+            png = client.post(
+                "/v1/prune",
+                files={"file": ("b.png", BIRD, "image/png")},
+                headers={"accept": "image/png"},
+            )
             assert png.status_code == 200 and png.content.startswith(b"\x89PNG")
-            poly = client.post("/v1/prune", json={"type": "Polygon", "coordinates": [
-                [[0, 0], [4, 0], [4, 2], [0, 2], [0, 0]]]},
-                headers={"accept": "application/geo+json"})
+            poly = client.post(
+                "/v1/prune",
+                json={"type": "Polygon", "coordinates": [[[0, 0], [4, 0], [4, 2], [0, 2], [0, 0]]]},
+                headers={"accept": "application/geo+json"},
+            )
             assert poly.headers["content-type"] == "application/geo+json"
-            bad = client.post("/v1/prune", content=b"nope",
-                              headers={"content-type": "image/png"})
+            bad = client.post("/v1/prune", content=b"nope", headers={"content-type": "image/png"})
             assert bad.status_code == 400
             assert bad.headers["content-type"] == "application/problem+json"
             assert "http_requests_total" in client.get("/metrics").text

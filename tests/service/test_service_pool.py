@@ -62,8 +62,12 @@ def run(coro_fn: Callable[[WorkerPool], Awaitable[Any]], **kw: Any) -> Any:
     """Start a pool, run ``coro_fn(pool)``, always close the pool."""
 
     async def main() -> Any:
-        pool = WorkerPool(kw.pop("size", 1), queue_size=kw.pop("queue_size", 4),
-                          job_timeout=kw.pop("job_timeout", 20.0), **kw)
+        pool = WorkerPool(
+            kw.pop("size", 1),
+            queue_size=kw.pop("queue_size", 4),
+            job_timeout=kw.pop("job_timeout", 20.0),
+            **kw,
+        )
         await pool.start()
         try:
             return await coro_fn(pool)

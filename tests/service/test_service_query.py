@@ -42,8 +42,10 @@ def _reference_app() -> FastAPI:
 
 def _shown(exc: RequestValidationError) -> list[dict[str, Any]]:
     # what the problem+json handler puts in a 422 answer (service/errors.py)
-    return [{"loc": [str(p) for p in e["loc"]], "msg": e["msg"], "type": e["type"]}
-            for e in exc.errors()]
+    return [
+        {"loc": [str(p) for p in e["loc"]], "msg": e["msg"], "type": e["type"]}
+        for e in exc.errors()
+    ]
 
 
 @pytest.fixture(scope="module")
@@ -85,8 +87,25 @@ def test_parse_query_matches_fastapi(reference: TestClient, query_string: str) -
 
 
 KEYS = st.sampled_from([*PruneQuery.model_fields, "betta", "Beta", "", "a b", "é"])
-VALUES = st.sampled_from(["", "0", "1", "-1", "2.5", "1e400", "nan", "true", "off", "dce",
-                          "none", "bayesian", "64", "x", " 9 "])
+VALUES = st.sampled_from(
+    [
+        "",
+        "0",
+        "1",
+        "-1",
+        "2.5",
+        "1e400",
+        "nan",
+        "true",
+        "off",
+        "dce",
+        "none",
+        "bayesian",
+        "64",
+        "x",
+        " 9 ",
+    ]
+)
 
 
 @settings(max_examples=150, deadline=None)
@@ -101,10 +120,12 @@ def test_parse_query_matches_fastapi_on_random_queries(
 def test_bad_options_are_refused_before_anything_else() -> None:
     # No worker pool is started (no lifespan): the answer comes before any job.
     client = TestClient(create_app(Settings(workers=1)), raise_server_exceptions=False)
-    for headers in ({"content-type": "text/plain"}, {"accept": "text/html"},
-                    {"content-type": "image/png", "content-encoding": "gzip"}):
+    for headers in (
+        {"content-type": "text/plain"},
+        {"accept": "text/html"},
+        {"content-type": "image/png", "content-encoding": "gzip"},
+    ):
         resp = client.post("/v1/prune?beta=0&betta=1", content=b"x", headers=headers)
         assert resp.status_code == 422, resp.text
         assert resp.headers["content-type"] == "application/problem+json"
-        assert [e["loc"] for e in resp.json()["errors"]] == [["query", "beta"],
-                                                             ["query", "betta"]]
+        assert [e["loc"] for e in resp.json()["errors"]] == [["query", "beta"], ["query", "betta"]]

@@ -37,16 +37,22 @@ def test_openapi_md_is_up_to_date() -> None:
 
 # Small limits so that generated inputs stay cheap to prune. Loaded from the dict, not
 # from the app, so the pool only starts (lazily, on the first call) when this test runs.
-APP = create_app(Settings(workers=2, queue_size=64, max_pixels=256 * 256,
-                          polygon_longest_side=64, job_timeout=60))
+APP = create_app(
+    Settings(
+        workers=2, queue_size=64, max_pixels=256 * 256, polygon_longest_side=64, job_timeout=60
+    )
+)
 schema = schemathesis.openapi.from_dict(APP.openapi())
 schema.app = APP
 
 
 @pytest.mark.timeout(600)
 @schema.parametrize()
-@settings(max_examples=30, deadline=None,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@settings(
+    max_examples=30,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much],
+)
 def test_api_conforms_to_its_schema(case) -> None:  # type: ignore[no-untyped-def]
     case.call_and_validate(checks=CHECKS)
 

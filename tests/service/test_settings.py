@@ -115,8 +115,9 @@ def test_deploy_files_bound_the_drain_below_their_grace_periods() -> None:
     drain = float(values["SKELPRUNE_SHUTDOWN_TIMEOUT"])
     pre_stop = container["lifecycle"]["preStop"]["exec"]["command"]
     pre_stop_s = float(pre_stop[-1]) if pre_stop[0] == "sleep" else 0.0
-    job_timeout = float(values.get("SKELPRUNE_JOB_TIMEOUT")
-                        or Settings.model_fields["job_timeout"].default)
+    job_timeout = float(
+        values.get("SKELPRUNE_JOB_TIMEOUT") or Settings.model_fields["job_timeout"].default
+    )
     assert job_timeout < drain < pod["terminationGracePeriodSeconds"] - pre_stop_s
 
 
@@ -143,8 +144,9 @@ def test_a_bad_setting_is_one_line_naming_the_variable() -> None:
     import sys
 
     env = {**os.environ, "SKELPRUNE_WORKERS": "abc", "SKELPRUNE_PORT": "0"}
-    proc = subprocess.run([sys.executable, "-m", "service"], env=env, capture_output=True,
-                          text=True, timeout=60)
+    proc = subprocess.run(
+        [sys.executable, "-m", "service"], env=env, capture_output=True, text=True, timeout=60
+    )
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1, proc.stderr

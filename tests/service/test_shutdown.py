@@ -59,9 +59,7 @@ def get(port: int, path: str, timeout: float = 2.0) -> int:
         conn.close()
 
 
-def post_png(
-    port: int, body: bytes, sent: threading.Event | None = None
-) -> tuple[int, bytes]:
+def post_png(port: int, body: bytes, sent: threading.Event | None = None) -> tuple[int, bytes]:
     conn = http.client.HTTPConnection("127.0.0.1", port, timeout=120)
     try:
         conn.request("POST", "/v1/prune", body=body, headers={"Content-Type": "image/png"})
@@ -143,8 +141,12 @@ def server(tmp_path):
     }
     log = (tmp_path / "server.log").open("w+b")
     proc = subprocess.Popen(
-        [sys.executable, "-m", "service"], cwd=REPO, env=env,
-        stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
+        [sys.executable, "-m", "service"],
+        cwd=REPO,
+        env=env,
+        stdout=log,
+        stderr=subprocess.STDOUT,
+        start_new_session=True,
     )
 
     def output() -> str:
@@ -212,7 +214,8 @@ def test_sigterm_drains_in_flight_requests_then_exits_cleanly(server):
     assert refused_at is not None or proc.poll() is not None, output()
     pending_when_refused = (
         sum(1 for r in requests if r.done_at is None or r.done_at > refused_at)
-        if refused_at is not None else 0
+        if refused_at is not None
+        else 0
     )
 
     # every accepted request gets its normal answer

@@ -29,19 +29,30 @@ pytestmark = [pytest.mark.slow, pytest.mark.timeout(400)]
 
 
 def server_env(port: int, **settings: str) -> dict[str, str]:
-    env = {**os.environ, "SKELPRUNE_HOST": "127.0.0.1", "SKELPRUNE_PORT": str(port),
-           "OMP_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
+    env = {
+        **os.environ,
+        "SKELPRUNE_HOST": "127.0.0.1",
+        "SKELPRUNE_PORT": str(port),
+        "OMP_NUM_THREADS": "1",
+        "NUMBA_NUM_THREADS": "1",
+    }
     env.pop("SKELPRUNE_API_KEY", None)
-    env.update({k if k.startswith("NUMBA_") else f"SKELPRUNE_{k.upper()}": v
-                for k, v in settings.items()})
+    env.update(
+        {k if k.startswith("NUMBA_") else f"SKELPRUNE_{k.upper()}": v for k, v in settings.items()}
+    )
     return env
 
 
 def start(port: int, log: Path, **settings: str) -> subprocess.Popen[bytes]:
     with log.open("wb") as out:
-        return subprocess.Popen([sys.executable, "-m", "service"], cwd=REPO,
-                                env=server_env(port, **settings), stdout=out,
-                                stderr=subprocess.STDOUT, start_new_session=True)
+        return subprocess.Popen(
+            [sys.executable, "-m", "service"],
+            cwd=REPO,
+            env=server_env(port, **settings),
+            stdout=out,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+        )
 
 
 def kill(proc: subprocess.Popen[bytes]) -> None:
@@ -85,8 +96,9 @@ def test_cold_cache_probes_tell_the_truth_and_one_worker_compiles(tmp_path: Path
         assert body["type"] == "urn:skelprune:problem:starting"
         assert body["status"] == 503
         assert "warming up (0 of 2 workers ready)" in body["detail"]
-        job = httpx.post(f"{base}/v1/prune", content=PNG,
-                         headers={"Content-Type": "image/png"}, timeout=10)
+        job = httpx.post(
+            f"{base}/v1/prune", content=PNG, headers={"Content-Type": "image/png"}, timeout=10
+        )
         assert job.status_code == 503
         assert job.json()["type"] == "urn:skelprune:problem:starting"
         deadline = time.monotonic() + 300
@@ -94,8 +106,9 @@ def test_cold_cache_probes_tell_the_truth_and_one_worker_compiles(tmp_path: Path
             assert proc.poll() is None, log.read_text()[-3000:]
             assert time.monotonic() < deadline, "not ready within 300 s"
             time.sleep(0.5)
-        job = httpx.post(f"{base}/v1/prune", content=PNG,
-                         headers={"Content-Type": "image/png"}, timeout=60)
+        job = httpx.post(
+            f"{base}/v1/prune", content=PNG, headers={"Content-Type": "image/png"}, timeout=60
+        )
         assert job.status_code == 200 and job.json()["components"]
     finally:
         kill(proc)
@@ -121,8 +134,10 @@ def test_port_in_use_fails_at_once_with_one_line(tmp_path: Path) -> None:
             kill(proc)
     lines = log.read_text().splitlines()
     assert code == 1
-    assert lines == [f"skelprune: cannot listen on 127.0.0.1:{port} (SKELPRUNE_HOST, "
-                     "SKELPRUNE_PORT): Address already in use"], lines
+    assert lines == [
+        f"skelprune: cannot listen on 127.0.0.1:{port} (SKELPRUNE_HOST, "
+        "SKELPRUNE_PORT): Address already in use"
+    ], lines
     # it failed before starting any worker: no warm-up to wait for
 
 
@@ -138,8 +153,10 @@ def test_worker_that_cannot_start_stops_the_server_with_one_line(tmp_path: Path)
     assert code == 1
     assert "Traceback" not in text
     last = text.splitlines()[-1]
-    assert last == ("skelprune: the worker pool failed to start: worker did not start "
-                    "within 0.001 s (SKELPRUNE_STARTUP_TIMEOUT)"), last
+    assert last == (
+        "skelprune: the worker pool failed to start: worker did not start "
+        "within 0.001 s (SKELPRUNE_STARTUP_TIMEOUT)"
+    ), last
     assert "the worker pool failed to start" in " ".join(messages(log)[:-1])  # logged too
 
 
@@ -159,8 +176,12 @@ def test_warm_start_serves_after_make_setup(tmp_path: Path) -> None:
                 pass
             assert time.monotonic() < deadline, "not ready within 120 s"
             time.sleep(0.1)
-        assert httpx.post(f"{base}/v1/prune", content=PNG,
-                          headers={"Content-Type": "image/png"}, timeout=60).status_code == 200
+        assert (
+            httpx.post(
+                f"{base}/v1/prune", content=PNG, headers={"Content-Type": "image/png"}, timeout=60
+            ).status_code
+            == 200
+        )
         proc.send_signal(signal.SIGTERM)
         assert proc.wait(60) == 0
     finally:

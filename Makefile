@@ -2,27 +2,33 @@
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
-STAMP  := $(VENV)/.installed
-# numba's cache is keyed on each source file's time stamp: compile again when one changes
-KERNELS := $(VENV)/.compiled
 
 .PHONY: setup run test lint bench eval openapi clean
 
-$(STAMP): pyproject.toml
+# One stamp per set of extras: `make run` installs only what serving needs, `make test`
+# and `make bench` add theirs to the same .venv (pip keeps what is already there).
+$(VENV)/.installed-%: pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[service,test,bench]'
-	touch $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[$(subst +,$(comma),$*)]'
+	touch $@
+
+comma := ,
+SERVE := $(VENV)/.installed-service
+TESTS := $(VENV)/.installed-service+test
+BENCH := $(VENV)/.installed-service+test+bench
+# numba's cache is keyed on each source file's time stamp: compile again when one changes
+KERNELS := $(VENV)/.compiled
 
 # Compile the numba kernels ahead (loaded in under a second afterwards), not on the
 # first request or in every worker.
-$(KERNELS): $(STAMP) $(shell find skelprune -name "*.py") service/jobs.py
+$(KERNELS): $(SERVE) $(shell find skelprune -name "*.py") service/jobs.py
 	$(BIN)/python -m service.compile
 	touch $(KERNELS)
 
-setup: $(KERNELS)
+setup: $(BENCH) $(KERNELS)
 
-run: $(KERNELS)
+run: $(SERVE) $(KERNELS)
 	$(BIN)/python -m service
 
 # the viewer page's browser test drives Debian's Chromium (installed once, with apt)
@@ -35,18 +41,18 @@ test: lint $(KERNELS) $(BROWSER)
 
 # ruff (lint and format) for the Python, shellcheck for the shell scripts CI runs
 PY_SOURCES := skelprune service tests testkit benchmarks
-lint: $(STAMP)
+lint: $(TESTS)
 	$(BIN)/ruff check $(PY_SOURCES)
 	$(BIN)/ruff format --check $(PY_SOURCES)
 	$(BIN)/shellcheck scripts/*.sh .ci/run
 
-bench: $(KERNELS)
+bench: $(BENCH) $(KERNELS)
 	$(BIN)/python -m benchmarks
 
-eval: $(KERNELS)
+eval: $(BENCH) $(KERNELS)
 	$(BIN)/skelprune eval --out docs
 
-openapi: $(STAMP)
+openapi: $(SERVE)
 	$(BIN)/python -m service.openapi_md > openapi.md
 
 clean:

@@ -10,7 +10,7 @@ from importlib.metadata import version
 
 __all__ = ["__version__"]
 
-#: The installed distribution's version (written once, in ``skelprune/__init__.py``).
+#: The installed distribution's version (written once, in ``skelprune/_version.py``).
 #: Read from the package metadata, not by importing skelprune: ``python -m service``
 #: binds its port and seeds the numba cache before the library is imported.
 __version__ = version("skelprune")

@@ -11,9 +11,11 @@ import sys
 from types import FrameType
 from typing import Any
 
+from pydantic import ValidationError
+
 from service.logs import logging_config
 from service.numba_seed import seed_numba_cache
-from service.settings import Settings
+from service.settings import Settings, settings_error
 
 
 def _exit_cleanly(signum: int, frame: FrameType | None) -> None:
@@ -51,7 +53,11 @@ def main() -> None:
     and clients can connect while the workers warm up (``/healthz`` 200, ``/readyz``
     503 until they are ready).
     """
-    settings = Settings()
+    try:
+        settings = Settings()
+    except ValidationError as exc:  # one line naming the variable, not a traceback
+        print(f"error: {settings_error(exc)}", file=sys.stderr)
+        sys.exit(2)
     logging.config.dictConfig(logging_config(settings.log_level))  # uvicorn sets it again
     sock = listen(settings.host, settings.port)
     host, port = sock.getsockname()[:2]

@@ -8,11 +8,15 @@ import logging
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from fastapi import FastAPI
 from fastapi.middleware.cors import CORSMiddleware
+from fastapi.openapi.docs import get_redoc_html, get_swagger_ui_html
 from fastapi.openapi.utils import get_openapi
+from fastapi.responses import HTMLResponse
+from fastapi.staticfiles import StaticFiles
 from prometheus_client import CollectorRegistry, Gauge, Histogram
 from prometheus_fastapi_instrumentator import Instrumentator
 from pydantic.json_schema import models_json_schema
@@ -37,6 +41,7 @@ from service.settings import Settings
 __all__ = ["BodyLimitMiddleware", "Metrics", "create_app"]
 
 REF_TEMPLATE = "#/components/schemas/{model}"
+DOCS_ASSETS = "/docs-assets"  # Swagger UI's and ReDoc's scripts
 
 log = logging.getLogger("service")
 
@@ -187,6 +192,35 @@ def _openapi(app: FastAPI) -> Callable[[], dict[str, Any]]:
     return build
 
 
+def _offline_docs(app: FastAPI) -> None:
+    """``/docs`` (Swagger UI) and ``/redoc`` with their scripts served by the service
+    itself, from the ``fastapi-offline`` package: they work with no network."""
+    import fastapi_offline
+
+    assets = Path(fastapi_offline.__file__).parent / "static"
+    app.mount(DOCS_ASSETS, StaticFiles(directory=assets), name="docs-assets")
+
+    @app.get("/docs", include_in_schema=False)
+    async def swagger_ui() -> HTMLResponse:
+        return get_swagger_ui_html(
+            openapi_url="/openapi.json",
+            title=f"{app.title} - Swagger UI",
+            swagger_js_url=f"{DOCS_ASSETS}/swagger-ui-bundle.js",
+            swagger_css_url=f"{DOCS_ASSETS}/swagger-ui.css",
+            swagger_favicon_url=f"{DOCS_ASSETS}/favicon.png",
+        )
+
+    @app.get("/redoc", include_in_schema=False)
+    async def redoc() -> HTMLResponse:
+        return get_redoc_html(
+            openapi_url="/openapi.json",
+            title=f"{app.title} - ReDoc",
+            redoc_js_url=f"{DOCS_ASSETS}/redoc.standalone.js",
+            redoc_favicon_url=f"{DOCS_ASSETS}/favicon.png",
+            with_google_fonts=False,
+        )
+
+
 def create_app(
     settings: Settings | None = None,
     *,
@@ -257,6 +291,8 @@ def create_app(
         description="Pruned skeletons of 2-D shapes (Bayesian skeleton pruning, "
         "Shen, Bai, Yang & Latecki 2013). Errors are RFC 9457 problem details.",
         lifespan=lifespan,
+        docs_url=None,
+        redoc_url=None,  # served below from installed assets, not a CDN
     )
     registry = CollectorRegistry()
     app.state.settings = settings
@@ -265,6 +301,7 @@ def create_app(
     app.state.metrics = _metrics(registry, pool)
     app.include_router(router)
     app.include_router(page_router)
+    _offline_docs(app)
     install_error_handlers(app, retry_after=settings.retry_after)
     Instrumentator(registry=registry, excluded_handlers=["/metrics"]).instrument(app)
     # Middlewares, innermost first (each add wraps the ones before it):

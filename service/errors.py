@@ -211,9 +211,10 @@ def install_error_handlers(app: FastAPI, *, retry_after: int) -> None:
     async def validation_error(request: Request, exc: Exception) -> JSONResponse:
         assert isinstance(exc, RequestValidationError)
         errors = [
+            # pydantic prefixes a validator's message with "Value error, ": not the user's
             {
                 "loc": [str(p) for p in e.get("loc", ())],
-                "msg": str(e.get("msg", "")),
+                "msg": str(e.get("msg", "")).removeprefix("Value error, "),
                 "type": str(e.get("type", "")),
             }
             for e in exc.errors()

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from skelprune import ALGORITHM_VERSION, __version__
+
 __all__ = [
     "METRICS_EXAMPLE",
     "PRUNE_REQUEST_BODY",
@@ -24,6 +26,7 @@ SQUARE_POLYGON = {
 }
 
 DOCUMENT_EXAMPLE: dict[str, Any] = {
+    "version": {"library": __version__, "algorithm": ALGORITHM_VERSION},
     "width": 60,
     "height": 30,
     "method": "bayesian",
@@ -84,6 +87,23 @@ DOCUMENT_EXAMPLE: dict[str, Any] = {
 
 GEOJSON_EXAMPLE: dict[str, Any] = {
     "type": "FeatureCollection",
+    "properties": {
+        "width": 64,
+        "height": 48,
+        "method": "bayesian",
+        "beta": 9.0,
+        "coarse": "dce",
+        "components": [
+            {
+                "component": 0,
+                "area": 1200,
+                "alpha": 9.48,
+                "rer": 0.0042,
+                "ss": 1.79,
+                "objective": 1.83,
+            }
+        ],
+    },
     "features": [
         {
             "type": "Feature",
@@ -110,12 +130,21 @@ GEOJSON_EXAMPLE: dict[str, Any] = {
                 "radii": [10.0, 9.0, 8.0, 7.0, 6.0, 5.0, 4.0, 3.0],
                 "margin": 0.046,
                 "removed_at": 1,
+                "rer": 0.0042,
+                "ss": 1.79,
             },
         },
         {
             "type": "Feature",
             "geometry": {"type": "Point", "coordinates": [7.0, 7.0]},
-            "properties": {"component": 0, "kind": "endpoint", "id": 1, "radius": 3.0},
+            "properties": {
+                "component": 0,
+                "kind": "endpoint",
+                "id": 1,
+                "radius": 3.0,
+                "rer": 0.0042,
+                "ss": 1.79,
+            },
         },
     ],
 }
@@ -176,6 +205,19 @@ UNAUTHORIZED["headers"] = {
 PRUNE_RESPONSES: dict[int | str, dict[str, Any]] = {
     200: {
         "description": "The pruned skeleton, in the format chosen by `Accept`.",
+        "headers": {
+            f"X-Skelprune-{name}": {
+                "description": f"`image/png` answers only: {what}, one value a component, "
+                "comma-separated, in the document's order.",
+                "schema": {"type": "string"},
+            }
+            for name, what in (
+                ("Components", "the number of components (one value)"),
+                ("RER", "each component's `rer`"),
+                ("SS", "each component's `ss`"),
+                ("Objective", "each component's `objective`"),
+            )
+        },
         "content": {
             "application/json": {
                 "schema": {"$ref": REF + "PruneDocument"},

@@ -6,6 +6,7 @@ the worker returns the response body already serialised.
 
 from __future__ import annotations
 
+import base64
 import json
 import sys
 import time
@@ -14,7 +15,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from skelprune.errors import InvalidImageError
+from skelprune.errors import InvalidImageError, SkelpruneError
 from skelprune.io import read_shape
 from skelprune.io.foreground import POLYGON_FOREGROUND, Foreground
 from skelprune.io.frame import PixelFrame
@@ -48,17 +49,29 @@ class Job:
     curve: bool = True
     overlay: bool = False
     sequence: bool = False
+    overlay_scale: int | None = None  # None: the library's readable default
+    overlay_legend: bool = False
     max_pixels: int | None = None
     foreground: str = "auto"
 
 
+#: Response headers of the PNG answer: one value a component, comma-separated, in the
+#: document's order (``repr`` of the float: it reads back exactly).
+PNG_HEADERS = {
+    "X-Skelprune-RER": "rer",
+    "X-Skelprune-SS": "ss",
+    "X-Skelprune-Objective": "objective",
+}
+
+
 @dataclass(frozen=True)
 class JobResult:
-    """Serialised response body and the time spent in the library."""
+    """Serialised response body, its headers and the time spent in the library."""
 
     body: bytes
     media_type: str
     prune_seconds: float
+    headers: dict[str, str] = field(default_factory=dict)
 
 
 def kernel_counts() -> tuple[int, int]:
@@ -135,17 +148,34 @@ def run_job(job: Job) -> JobResult:
     elapsed = time.perf_counter() - t0
     res.foreground = taken
     framing = {} if frame is None else {"frame": frame}  # None: the image's own pixel frame
+    headers: dict[str, str] = {}
     if job.output == "png":
-        body = res.overlay_png()
+        body = res.overlay_png(job.overlay_scale, job.overlay_legend)
+        headers = {
+            name: ",".join(repr(float(getattr(c, key))) for c in res.components)
+            for name, key in PNG_HEADERS.items()
+        }
+        headers["X-Skelprune-Components"] = str(len(res.components))
     elif job.output == "geojson":
         body = _dumps(res.to_geojson(**framing))
     else:
-        body = _dumps(
-            res.to_dict(curve=job.curve, overlay=job.overlay, sequence=job.sequence, **framing)
-        )
-    return JobResult(body=body, media_type=MEDIA_TYPES[job.output], prune_seconds=elapsed)
+        doc = res.to_dict(curve=job.curve, sequence=job.sequence, **framing)
+        if job.overlay:
+            png = res.overlay_png(job.overlay_scale, job.overlay_legend)
+            doc["overlay_png"] = base64.b64encode(png).decode("ascii")
+        body = _dumps(doc)
+    return JobResult(
+        body=body, media_type=MEDIA_TYPES[job.output], prune_seconds=elapsed, headers=headers
+    )
 
 
 def _dumps(doc: Any) -> bytes:
-    # allow_nan=False: a NaN would be invalid JSON; better a loud failure than a bad body.
-    return json.dumps(doc, separators=(",", ":"), allow_nan=False).encode()
+    # allow_nan=False: a NaN would be invalid JSON. The input checks keep every number
+    # finite; should one still overflow, the caller hears why (422), not "internal error".
+    try:
+        return json.dumps(doc, separators=(",", ":"), allow_nan=False).encode()
+    except ValueError:
+        raise SkelpruneError(
+            "the answer would hold a number JSON cannot write (an "
+            "overflow); scale the input coordinates down"
+        ) from None

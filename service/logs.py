@@ -58,6 +58,9 @@ class JsonFormatter(logging.Formatter):
         for key, value in vars(record).items():
             if key not in _STANDARD and key not in _DROP and not key.startswith("_"):
                 doc[key] = value
+        rid = request_id_var.get()
+        if rid is not None:  # any line logged while serving a request names it
+            doc.setdefault("request_id", rid)
         if record.exc_info and record.exc_info[0] is not None:
             doc["error"] = record.exc_info[0].__name__
             if self.tracebacks:

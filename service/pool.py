@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import contextvars
 import logging
 import multiprocessing as mp
 import signal
@@ -373,7 +374,9 @@ class WorkerPool:
             raise PoolClosedError("the worker pool shut down while this job was waiting")
         self.busy += 1
         assert self._executor is not None
-        fut = self._loop.run_in_executor(self._executor, self._run_on, worker, fn, args)
+        # in the caller's context: what the job thread logs carries the request's ID
+        ctx = contextvars.copy_context()
+        fut = self._loop.run_in_executor(self._executor, ctx.run, self._run_on, worker, fn, args)
         return await fut
 
     def _release(self, worker: _Worker) -> None:

@@ -1,7 +1,7 @@
 """Pydantic v2 models of everything the service reads and writes.
 
 Request bodies are validated strictly (no coercion; unknown fields refused). The
-response models describe the documents of SPEC §3 exactly (``extra="forbid"``), so the
+response models describe the output documents exactly (``extra="forbid"``), so the
 OpenAPI schema is a contract that tests and schemathesis check the answers against.
 """
 
@@ -37,6 +37,7 @@ __all__ = [
     "PruneQuery",
     "Readiness",
     "SkeletonGeoJSON",
+    "Version",
     "polygon_request_adapter",
     "query_parameters",
 ]
@@ -377,10 +378,22 @@ class ForegroundTaken(BaseModel):
     )
 
 
-class PruneDocument(BaseModel):
-    """The output document of SPEC §3."""
+class Versions(BaseModel):
+    """What made an answer."""
 
     model_config = STRICT
+    library: str = Field(description="The skelprune package version.")
+    algorithm: str = Field(
+        description="The results' version: it changes whenever the same "
+        "input and options may give a different skeleton or numbers."
+    )
+
+
+class PruneDocument(BaseModel):
+    """The output document."""
+
+    model_config = STRICT
+    version: Versions
     width: int
     height: int
     method: Literal["bayesian", "dce"]
@@ -417,6 +430,8 @@ class BranchProperties(BaseModel):
     radii: list[float]
     margin: float | None
     removed_at: int | None
+    rer: float = Field(description="RER of the feature's component.")
+    ss: float = Field(description="SS of the feature's component.")
 
 
 class NodeProperties(BaseModel):
@@ -425,6 +440,8 @@ class NodeProperties(BaseModel):
     kind: Literal["endpoint", "junction", "loop"]
     id: int
     radius: float
+    rer: float = Field(description="RER of the feature's component.")
+    ss: float = Field(description="SS of the feature's component.")
 
 
 class BranchFeature(BaseModel):
@@ -441,11 +458,34 @@ class NodeFeature(BaseModel):
     properties: NodeProperties
 
 
+class ComponentSummary(BaseModel):
+    model_config = STRICT
+    component: int
+    area: int
+    alpha: float | None
+    rer: float
+    ss: float
+    objective: float
+
+
+class CollectionProperties(BaseModel):
+    """The document's options and numbers (a foreign member of the collection)."""
+
+    model_config = STRICT
+    width: int
+    height: int
+    method: Literal["bayesian", "dce"]
+    beta: float
+    coarse: Literal["dce"] | None
+    components: list[ComponentSummary]
+
+
 class SkeletonGeoJSON(BaseModel):
     """The skeleton as GeoJSON: branches as LineStrings, nodes as Points."""
 
     model_config = STRICT
     type: Literal["FeatureCollection"]
+    properties: CollectionProperties
     features: list[BranchFeature | NodeFeature]
 
 
@@ -478,6 +518,19 @@ class Problem(BaseModel):
 class Health(BaseModel):
     model_config = STRICT
     status: Literal["ok"]
+    version: str = Field(description="The service version.")
+    algorithm: str = Field(description="The results' version (see GET /v1/version).")
+
+
+class Version(BaseModel):
+    model_config = STRICT
+    service: str = Field(description="The service version (the skelprune package's).")
+    library: str = Field(description="The skelprune library version.")
+    algorithm: str = Field(
+        description="The results' version: it changes whenever the same "
+        "input and options may give a different skeleton or numbers, "
+        "and only then."
+    )
 
 
 class Readiness(BaseModel):

@@ -7,10 +7,10 @@ import os
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import Field, SecretStr, field_validator
+from pydantic import Field, SecretStr, ValidationError, field_validator
 from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
 
-__all__ = ["Settings", "available_cores", "cgroup_cpu_limit"]
+__all__ = ["Settings", "available_cores", "cgroup_cpu_limit", "settings_error"]
 
 CGROUP = Path("/sys/fs/cgroup")
 
@@ -148,3 +148,21 @@ class Settings(BaseSettings):
         if isinstance(value, list | tuple):
             return [str(v).strip().rstrip("/") for v in value if str(v).strip()]
         return value
+
+
+def settings_error(exc: ValidationError) -> str:
+    """A settings error as the operator wrote it: the variable, its value and the rule.
+
+    >>> try:
+    ...     Settings(workers="abc")
+    ... except ValidationError as exc:
+    ...     print(settings_error(exc))
+    SKELPRUNE_WORKERS='abc': Input should be a valid integer, unable to parse string as an integer
+    """
+    parts = []
+    for e in exc.errors(include_url=False):
+        name = "SKELPRUNE_" + "_".join(str(p) for p in e["loc"]).upper()
+        value = e.get("input")
+        shown = "" if isinstance(value, dict) or name.endswith("API_KEY") else f"={value!r}"
+        parts.append(f"{name}{shown}: {e['msg'].removeprefix('Value error, ')}")
+    return "; ".join(parts)

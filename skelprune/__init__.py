@@ -7,9 +7,13 @@ simplicity and reconstruction error", Science China Information Sciences, 2013.
 >>> m = np.zeros((30, 60), bool); m[5:25, 5:55] = True
 >>> doc = skelprune.prune(m).to_dict()
 >>> sorted(doc)
-['beta', 'coarse', 'components', 'foreground', 'height', 'method', 'width']
+['beta', 'coarse', 'components', 'foreground', 'height', 'method', 'version', 'width']
+>>> doc["version"] == {"library": skelprune.__version__, "algorithm": ALGORITHM_VERSION}
+True
 """
 
+from ._version import ALGORITHM_VERSION
+from ._version import __version__ as __version__
 from .api import components, prune
 from .errors import (
     EmptyMaskError,
@@ -26,10 +30,8 @@ from .medial_axis import MedialAxis, medial_axis, squared_distance
 from .output.document import ComponentResult, PruneResult
 from .reconstruction import reconstruction, reconstruction_error
 
-#: The package version: the one place it is written (pyproject.toml reads it from here).
-__version__ = "0.1.0"
-
 __all__ = [
+    "ALGORITHM_VERSION",
     "BranchGraph",
     "ComponentResult",
     "EmptyMaskError",

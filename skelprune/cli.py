@@ -1,7 +1,9 @@
-"""Command line: ``skelprune prune FILE.png [--beta B] [--overlay OUT.png]``, ``skelprune
+"""Command line: ``skelprune prune FILE [--beta B] [--overlay OUT.png]``, ``skelprune
 match A.png B.png``, ``skelprune retrieve FOLDER``, ``skelprune eval``.
 
-One file prints the output document (SPEC §3) as JSON. Several files, or a folder,
+A FILE is a PNG mask or a GeoJSON polygon (``.geojson``/``.json``: a Polygon,
+MultiPolygon, Feature or FeatureCollection, rasterised as the service does it).
+One file prints the output document as JSON. Several files, or a folder,
 are pruned in a pool of worker processes with a progress bar on stderr and print one
 JSON line per file: ``{"file": ..., "result": {...}}`` or ``{"file": ..., "error": ...}``.
 
@@ -25,15 +27,17 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import numpy as np
 import typer
+import typer.core
 from typer.exceptions import TyperException
 
-from .errors import SkelpruneError
+from .errors import InvalidPolygonError, SkelpruneError
 from .options import (
     COARSE,
     FOREGROUND_RULES,
     METHODS,
     OutputOptions,
     PruneOptions,
+    RasterOptions,
     ReadOptions,
     option_fields,
 )
@@ -46,24 +50,73 @@ app = typer.Typer(
 )
 
 
-def _prune(path: str, read: ReadOptions, options: PruneOptions) -> PruneResult:
-    from .api import prune
-    from .io import read_shape
+def _print_version(value: bool) -> None:
+    if value:
+        from . import __version__
 
-    mask, taken = read_shape(path, foreground=read.foreground)
+        typer.echo(__version__)
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version", is_eager=True, callback=_print_version, help="Print the version and exit."
+        ),
+    ] = False,
+) -> None:
+    """Parameter-free Bayesian skeleton pruning."""
+
+
+#: File name endings read as GeoJSON polygons (any case); anything else is read as a PNG.
+GEOJSON_SUFFIXES = (".geojson", ".json")
+#: What a folder is searched for (any case).
+FOLDER_SUFFIXES = (".png", ".geojson")
+
+
+def _prune(
+    path: str,
+    read: ReadOptions,
+    options: PruneOptions,
+    raster: RasterOptions,
+    curve: bool,
+    sequence: bool = False,
+) -> tuple[PruneResult, dict[str, Any]]:
+    """The result and its document (a polygon's in the polygon's own coordinates)."""
+    from .api import prune
+
+    framing: dict[str, Any] = {}
+    if path.lower().endswith(GEOJSON_SUFFIXES):
+        from .io.foreground import POLYGON_FOREGROUND
+        from .io.polygon import polygon_mask
+
+        try:
+            shape = json.loads(Path(path).read_bytes())
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise InvalidPolygonError(f"not a GeoJSON file: {exc}") from None
+        mask, framing["frame"] = polygon_mask(shape, **raster.kwargs())
+        taken = POLYGON_FOREGROUND
+    else:
+        from .io import read_shape
+
+        mask, taken = read_shape(path, foreground=read.foreground)
     res = prune(mask, **options.kwargs())
     res.foreground = taken
-    return res
+    return res, res.to_dict(curve=curve, sequence=sequence, **framing)
 
 
 def _prune_file(
-    path: str, read: ReadOptions, options: PruneOptions, curve: bool, sequence: bool = False
+    path: str,
+    read: ReadOptions,
+    options: PruneOptions,
+    raster: RasterOptions,
+    curve: bool,
+    sequence: bool = False,
 ) -> dict[str, Any]:
     try:
-        return {
-            "file": path,
-            "result": _prune(path, read, options).to_dict(curve=curve, sequence=sequence),
-        }
+        return {"file": path, "result": _prune(path, read, options, raster, curve, sequence)[1]}
     except (SkelpruneError, OSError) as exc:
         return {"file": path, "error": f"{type(exc).__name__}: {exc}"}
 
@@ -71,20 +124,71 @@ def _prune_file(
 def _expand(paths: list[Path]) -> list[Path]:
     files: list[Path] = []
     for p in paths:
-        files.extend(sorted(p.glob("*.png")) if p.is_dir() else [p])
+        if p.is_dir():  # shape.PNG counts as much as shape.png
+            files.extend(
+                sorted(
+                    f for f in p.iterdir() if f.suffix.lower() in FOLDER_SUFFIXES and f.is_file()
+                )
+            )
+        else:
+            files.append(p)
     return files
 
 
-HELP = {name: text for name, _, text, _ in option_fields(PruneOptions, OutputOptions, ReadOptions)}
+def _usage(message: str) -> typer.Exit:
+    """A usage error: one line on stderr, exit status 2."""
+    typer.echo(f"error: {message}", err=True)
+    return typer.Exit(2)
+
+
+class _CleanCommand(typer.core.TyperCommand):
+    """``--help`` without typer's type labels where they say nothing: none for flags and
+    for the file arguments (``<list[Path]>``), ``FILE...`` in the usage line."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        for param in self.params:
+            if isinstance(param, typer.core.TyperArgument):
+                param.display_type = lambda ctx: ""  # type: ignore[method-assign]
+                param._usage_display_name = lambda p=param: (  # type: ignore[method-assign]
+                    f"{p.metavar or p.name.upper()}..."
+                )
+            elif getattr(param, "is_flag", False):
+                param.display_type = lambda ctx: ""  # type: ignore[method-assign]
+
+    def get_help_option(self, ctx: Any) -> Any:
+        option = super().get_help_option(ctx)
+        if option is not None:
+            option.display_type = lambda ctx: ""
+        return option
+
+
+HELP = {
+    name: text
+    for name, _, text, _ in option_fields(PruneOptions, OutputOptions, ReadOptions, RasterOptions)
+}
+
+
+def _geojson_only(name: str) -> str:
+    return "GeoJSON input: " + HELP[name][0].lower() + HELP[name][1:]
+
+
 # the choices as typer shows them (it lists an Enum's values in --help)
 Method = enum.Enum("Method", {name: name for name in METHODS}, type=str)
 Coarse = enum.Enum("Coarse", {name: name for name in COARSE}, type=str)
 Rule = enum.Enum("Rule", {name: name for name in FOREGROUND_RULES}, type=str)
 
 
-@app.command("prune")
+@app.command("prune", cls=_CleanCommand)
 def prune_command(
-    files: Annotated[list[Path], typer.Argument(help="PNG masks, or folders of them.")],
+    files: Annotated[
+        list[Path],
+        typer.Argument(
+            metavar="FILE",
+            help="PNG masks or GeoJSON polygons (.geojson, .json), or folders "
+            "of them (*.png, *.geojson, any case).",
+        ),
+    ],
     beta: Annotated[float, typer.Option(help=HELP["beta"])] = PruneOptions.beta,
     method: Annotated[Method, typer.Option(help=HELP["method"])] = Method(PruneOptions.method),
     coarse: Annotated[Coarse, typer.Option(help=HELP["coarse"])] = Coarse("dce"),
@@ -96,9 +200,18 @@ def prune_command(
     overlay: Annotated[
         Path | None, typer.Option(help="Write the overlay PNG here (one input file only).")
     ] = None,
+    overlay_scale: Annotated[int | None, typer.Option(help=HELP["overlay_scale"])] = None,
+    overlay_legend: Annotated[
+        bool, typer.Option(help=HELP["overlay_legend"])
+    ] = OutputOptions.overlay_legend,
     curve: Annotated[bool, typer.Option(help=HELP["curve"])] = OutputOptions.curve,
     sequence: Annotated[bool, typer.Option(help=HELP["sequence"])] = OutputOptions.sequence,
-    workers: Annotated[int, typer.Option(help="Worker processes for several files.")] = 0,
+    pixel_size: Annotated[float | None, typer.Option(help=_geojson_only("pixel_size"))] = None,
+    longest_side: Annotated[int | None, typer.Option(help=_geojson_only("longest_side"))] = None,
+    repair: Annotated[bool, typer.Option(help=_geojson_only("repair"))] = RasterOptions.repair,
+    workers: Annotated[
+        int, typer.Option(help="Worker processes for several files, >= 0 (0: one a CPU core).")
+    ] = 0,
 ) -> None:
     """Prune the skeleton of each shape and print the result as JSON."""
     try:  # checked once, before any file is read
@@ -110,27 +223,34 @@ def prune_command(
             min_margin=min_margin,
         )
         read = ReadOptions(foreground=foreground.value)
+        raster = RasterOptions(pixel_size=pixel_size, longest_side=longest_side, repair=repair)
+        shown = OutputOptions(overlay_scale=overlay_scale, overlay_legend=overlay_legend)
     except SkelpruneError as exc:
-        typer.echo(f"error: {exc}", err=True)
-        raise typer.Exit(2) from None
+        raise _usage(str(exc)) from None
+    if workers < 0:
+        raise _usage(f"--workers must be >= 0 (0: one a CPU core), got {workers}")
+    if overlay is not None and not overlay.parent.is_dir():
+        raise _usage(f"--overlay: folder {str(overlay.parent)!r} does not exist")
     inputs = _expand(files)
     if not inputs:
-        typer.echo("error: no PNG file given", err=True)
-        raise typer.Exit(2)
+        raise _usage("no PNG or GeoJSON file given")
     if len(inputs) == 1 and not files[0].is_dir():
         try:
-            res = _prune(str(inputs[0]), read, options)
+            res, doc = _prune(str(inputs[0]), read, options, raster, curve, sequence)
         except (SkelpruneError, OSError) as exc:
             typer.echo(f"error: {inputs[0]}: {exc}", err=True)
             raise typer.Exit(1) from None
         if overlay is not None:
-            overlay.write_bytes(res.overlay_png())
-        json.dump(res.to_dict(curve=curve, sequence=sequence), sys.stdout)
+            try:
+                overlay.write_bytes(res.overlay_png(shown.overlay_scale, shown.overlay_legend))
+            except OSError as exc:
+                typer.echo(f"error: --overlay {overlay}: {exc.strerror or exc}", err=True)
+                raise typer.Exit(1) from None
+        json.dump(doc, sys.stdout)
         sys.stdout.write("\n")
         return
     if overlay is not None:
-        typer.echo("error: --overlay takes one input file", err=True)
-        raise typer.Exit(2)
+        raise _usage("--overlay takes one input file")
     from tqdm import tqdm
 
     n = workers or os.cpu_count() or 1
@@ -142,6 +262,7 @@ def prune_command(
             [str(p) for p in inputs],
             [read] * k,
             [options] * k,
+            [raster] * k,
             [curve] * k,
             [sequence] * k,
         )
@@ -156,7 +277,7 @@ def _describe_file(path: str, read: ReadOptions, options: PruneOptions) -> Any:
     from .matching import describe
 
     try:
-        return describe(_prune(path, read, options))
+        return describe(_prune(path, read, options, RasterOptions(), False)[0])
     except (SkelpruneError, OSError) as exc:
         return f"{type(exc).__name__}: {exc}"
 
@@ -204,7 +325,8 @@ def match_command(
 
     options, read = _options_or_exit(beta, method, coarse, dce_threshold, min_margin, foreground)
     try:
-        res = match(_prune(str(a), read, options), _prune(str(b), read, options))
+        shapes = [_prune(str(p), read, options, RasterOptions(), False)[0] for p in (a, b)]
+        res = match(*shapes)
     except (SkelpruneError, OSError) as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(1) from None

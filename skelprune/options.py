@@ -212,6 +212,15 @@ class OutputOptions:
         "viewer draws the skeleton of any step.",
         _flag,
     )
+    overlay_scale: int | None = _option(
+        None,
+        "Overlay image: each input pixel as N × N pixels, a whole number from 1 to "
+        "16 (default: the smallest that makes the longer side at least 512 px).",
+        _integer(1, 16),
+    )
+    overlay_legend: bool = _option(
+        False, "Overlay image: add a strip with the colour key, RER and SS.", _flag
+    )
 
     def __post_init__(self) -> None:
         _check_fields(self)
@@ -285,7 +294,7 @@ def option_fields(*groups: type) -> list[tuple[str, Any, str, tuple[str, ...] | 
     what the CLI and the service describe their options from.
 
     >>> [name for name, *_ in option_fields(OutputOptions)]
-    ['curve', 'overlay', 'sequence']
+    ['curve', 'overlay', 'sequence', 'overlay_scale', 'overlay_legend']
     """
     return [
         (f.name, f.default, f.metadata["help"], f.metadata["choices"])

@@ -48,6 +48,8 @@ __all__ = [
 DEFAULT_MARGIN = 2
 _SHIFT = 8  # fractional bits for cv2.fillPoly: sub-pixel vertex positions
 _MAX_SIDE = 1 << 20  # keeps fixed-point vertex coordinates inside int32
+#: Largest coordinate magnitude accepted: its square (an area) is still a finite float.
+MAX_COORDINATE = 1e150
 
 
 def _geometries(obj: Any, where: str) -> Iterator[tuple[str, Mapping[str, Any]]]:
@@ -186,10 +188,13 @@ def parse_geojson(
     for where, geometry in geometries:
         multi = geometry["type"] == "MultiPolygon"
         for pwhere, rings in _polygons(geometry.get("coordinates"), f"{where}.coordinates", multi):
-            spans = [r.max(axis=0) / 2 - r.min(axis=0) / 2 for r in rings]  # halves: no overflow
-            if not all(np.all(sp < np.finfo(float).max / 2) for sp in spans):
-                # Spans beyond float range: GEOS would overflow on them.
-                raise InvalidPolygonError("coordinates span too large a range to rasterise")
+            if max(float(np.abs(r).max()) for r in rings) > MAX_COORDINATE:
+                # Beyond it GEOS overflows on areas, and lengths in the answer would not
+                # be finite (JSON cannot write them).
+                raise InvalidPolygonError(
+                    "coordinates span too large a range to rasterise: every coordinate must "
+                    f"lie within ±{MAX_COORDINATE:.0e}"
+                )
             poly = Polygon(rings[0], rings[1:])
             if not poly.is_valid and not repair:
                 reason = shapely.is_valid_reason(poly)

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from .._orientation import Orientation
+from .._version import ALGORITHM_VERSION, __version__
 from ..graph import BranchGraph
 from ..io.foreground import Foreground
 from ..io.frame import IDENTITY, PixelFrame
@@ -20,7 +21,7 @@ from ..pruning.bayesian import PruningSequence
 from ..pruning.margin import Margins
 from ..reconstruction import reconstruction
 from ..skeleton import Skeleton
-from .render import encode_png, render_overlay
+from .render import auto_scale, encode_png, render_overlay
 
 __all__ = ["ComponentResult", "PruneResult", "branch_line"]
 
@@ -378,7 +379,7 @@ class PruneResult:
         self,
         curve: bool = True,
         overlay: bool = False,
-        frame: PixelFrame = IDENTITY,
+        frame: PixelFrame | None = IDENTITY,
         sequence: bool = False,
     ) -> dict[str, Any]:
         """The output document of SPEC §3 (plain JSON types).
@@ -391,6 +392,7 @@ class PruneResult:
         >>> doc["width"], len(doc["components"][0]["skeleton"]["endpoints"])
         (40, 4)
         """
+        frame = IDENTITY if frame is None else frame  # None: the image's own pixels
         doc: dict[str, Any] = {
             "width": self.width,
             "height": self.height,
@@ -401,16 +403,35 @@ class PruneResult:
             "components": [
                 c.to_dict(curve=curve, frame=frame, sequence=sequence) for c in self.components
             ],
+            "version": {"library": __version__, "algorithm": ALGORITHM_VERSION},
         }
         if overlay:
             doc["overlay_png"] = base64.b64encode(self.overlay_png()).decode("ascii")
         return doc
 
-    def to_geojson(self, frame: PixelFrame = IDENTITY) -> dict[str, Any]:
-        """GeoJSON FeatureCollection: branches as LineStrings, nodes as Points."""
+    def to_geojson(self, frame: PixelFrame | None = IDENTITY) -> dict[str, Any]:
+        """GeoJSON FeatureCollection: branches as LineStrings, nodes as Points.
+
+        Every feature's properties carry its component's ``rer`` and ``ss``; the
+        collection's ``properties`` (a foreign member) the document's options and each
+        component's ``area``, ``alpha``, ``rer``, ``ss`` and ``objective``.
+        """
         features: list[dict[str, Any]] = []
-        for ci, comp in enumerate(self.to_dict(curve=False, frame=frame)["components"]):
+        doc = self.to_dict(curve=False, frame=frame)
+        summaries = []
+        for ci, comp in enumerate(doc["components"]):
             sk = comp["skeleton"]
+            # on every feature too: GIS tools show a feature's properties, not the collection's
+            numbers = {"rer": comp["rer"], "ss": comp["ss"]}
+            summaries.append(
+                {
+                    "component": ci,
+                    "area": comp["area"],
+                    "alpha": comp["alpha"],
+                    **numbers,
+                    "objective": comp["objective"],
+                }
+            )
             for br in sk["branches"]:
                 line = branch_line(sk, br)
                 features.append(
@@ -430,6 +451,7 @@ class PruneResult:
                             "radii": [r for *_, r in line],
                             "margin": br["margin"],
                             "removed_at": br["removed_at"],
+                            **numbers,
                         },
                     }
                 )
@@ -443,12 +465,19 @@ class PruneResult:
                             "kind": nd["kind"],
                             "id": nd["id"],
                             "radius": nd["radius"],
+                            **numbers,
                         },
                     }
                 )
-        return {"type": "FeatureCollection", "features": features}
+        # A foreign member of the collection (RFC 7946 §6.1): the document's numbers.
+        properties = {k: doc[k] for k in ("width", "height", "method", "beta", "coarse")}
+        return {
+            "type": "FeatureCollection",
+            "properties": {**properties, "components": summaries},
+            "features": features,
+        }
 
-    def to_networkx(self, frame: PixelFrame = IDENTITY) -> Any:
+    def to_networkx(self, frame: PixelFrame | None = IDENTITY) -> Any:
         """The skeleton as a ``networkx.MultiGraph`` (needs the optional ``networkx``).
 
         Nodes are ``(component, node id)`` with the document's node fields (``x``, ``y``,
@@ -490,8 +519,9 @@ class PruneResult:
                 )
         return g
 
-    def render_overlay(self) -> np.ndarray:
-        """RGB overlay (:func:`~skelprune.output.render.render_overlay`), the mask's size.
+    def render_overlay(self, scale: int = 1, legend: bool = False) -> np.ndarray:
+        """RGB overlay (:func:`~skelprune.output.render.render_overlay`), ``scale`` times
+        the mask's size; ``legend`` adds a strip with the colour key, RER and SS.
 
         Examples
         --------
@@ -506,6 +536,13 @@ class PruneResult:
             for n in comp.skeleton_table()[0]:
                 if n["kind"] in marks:
                     marks[n["kind"]].append((int(n["y"]), int(n["x"])))
+        text = None
+        if legend:
+            text = "   ".join(
+                (f"component {i}: " if len(self.components) > 1 else "")
+                + f"RER {100 * c.rer:.2f} %, SS {c.ss:.3f}"
+                for i, c in enumerate(self.components[:4])
+            )
         return render_overlay(
             self.mask,
             rows,
@@ -513,7 +550,14 @@ class PruneResult:
             r2,
             np.array(marks["endpoint"], int).reshape(-1, 2),
             np.array(marks["junction"], int).reshape(-1, 2),
+            scale=scale,
+            legend=text,
         )
 
-    def overlay_png(self) -> bytes:
-        return encode_png(self.render_overlay())
+    def overlay_png(self, scale: int | None = None, legend: bool = False) -> bytes:
+        """The overlay as PNG bytes; ``scale`` None: the smallest integer scale that
+        makes the longer side at least 512 px (:func:`~skelprune.output.render.auto_scale`).
+        """
+        return encode_png(
+            self.render_overlay(auto_scale(self.mask.shape) if scale is None else scale, legend)
+        )

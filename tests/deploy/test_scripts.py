@@ -70,3 +70,24 @@ def test_unknown_option_is_a_usage_error() -> None:
     # root check comes after it, so both give the usage line.
     assert done.returncode == 2, done.stderr
     assert "usage:" in done.stderr
+
+
+def test_make_run_installs_only_the_serving_extras() -> None:
+    """``make run`` sets up with the service extra alone; ``make test`` adds the test one."""
+
+    def installs(target: str) -> list[str]:
+        out = subprocess.run(
+            ["make", "-n", "-W", "pyproject.toml", target],
+            cwd=REPO,
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=True,
+        ).stdout
+        return [line for line in out.splitlines() if "pip install" in line and " -e " in line]
+
+    assert installs("run") == [".venv/bin/python -m pip install --quiet -e '.[service]'"]
+    test = installs("test")  # (and the service extra alone, which the kernels' stamp needs)
+    assert ".venv/bin/python -m pip install --quiet -e '.[service,test]'" in test
+    assert not [line for line in test if "bench" in line]
+    assert "bench" in installs("bench")[0]

@@ -182,11 +182,13 @@ def test_service_option_raw_and_multipart(client: TestClient) -> None:
         assert resp.status_code == 200, resp.text
         assert resp.json()["components"][0]["area"] == area
         assert resp.json()["foreground"]["rule"] == rule
-    # an option as a multipart field would be ignored: refused instead
+    # an option as a multipart field is honoured like the query's
     resp = client.post(
         "/v1/prune", data={"foreground": "zero"}, files={"file": ("a.png", data, "image/png")}
     )
-    assert resp.status_code == 422 and "options go in the query string" in resp.json()["detail"]
+    assert resp.status_code == 200, resp.text
+    assert resp.json()["foreground"]["rule"] == "zero"
+    assert resp.json()["components"][0]["area"] == 420
     resp = client.post(
         "/v1/prune",
         params={"foreground": "black"},

@@ -267,3 +267,28 @@ def test_pruned_skeleton_properties(mask):
         cmask[1:-1, 1:-1] = comp_pixels == k
         ar = (cmask & ~rec).sum() / cmask.sum()
         assert ar == pytest.approx(cdoc["rer"], abs=1e-12)
+
+
+def test_overlay_scale_keeps_the_mask_crisp_and_grows_the_marks():
+    from skelprune.output.render import COLOURS
+
+    res = skelprune.prune(rectangle_with_holes())
+    plain = res.render_overlay()
+    big = res.render_overlay(scale=4)
+    assert big.shape == (plain.shape[0] * 4, plain.shape[1] * 4, 3)
+    # nearest neighbour: every input pixel that is not a node is a 4 × 4 block of its colour
+    blocks = big.reshape(plain.shape[0], 4, plain.shape[1], 4, 3)
+    uniform = (blocks == blocks[:, :1, :, :1]).all(axis=(1, 3, 4))
+    assert uniform.mean() > 0.97
+    endpoint = np.array(COLOURS["endpoint"], np.uint8)
+    # markers scale with the picture (a disc 1.5 input pixels in radius, not a 3 × 3 dot)
+    assert (big == endpoint).all(-1).sum() > 10 * (plain == endpoint).all(-1).sum()
+    legend = res.render_overlay(scale=4, legend=True)
+    assert legend.shape[1] == big.shape[1] and legend.shape[0] > big.shape[0]
+    assert res.overlay_png()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_frame_none_is_the_image_frame():
+    res = skelprune.prune(rectangle_with_holes())
+    assert res.to_dict(frame=None) == res.to_dict()
+    assert res.to_geojson(frame=None) == res.to_geojson()

@@ -277,6 +277,26 @@ CASES = [
         ("too large a range",),
     ),
     Case(
+        "coordinates-near-float-max",  # lengths in the answer would overflow JSON
+        js(polygon([[0, 0], [1e308, 0], [1e308, 1e308], [0, 0]])),
+        "application/json",
+        422,
+        ("too large a range", "within ±1e+150"),
+    ),
+    Case(
+        "coordinates-area-overflows",
+        js(polygon([[0, 0], [1e200, 0], [1e200, 1e200], [0, 0]])),
+        "application/json",
+        422,
+        ("too large a range",),
+    ),
+    Case(
+        "far-from-origin-but-small",
+        js(polygon([[1e140, 1e140], [1.001e140, 1e140], [1e140, 1.001e140], [1e140, 1e140]])),
+        "application/json",
+        200,
+    ),
+    Case(
         "tiny-extent",
         js(polygon([[0, 0], [1e-300, 0], [1e-300, 1e-300], [0, 0]])),
         "application/json",
@@ -536,3 +556,15 @@ def test_valid_odd_pngs_give_the_same_shape(client: TestClient) -> None:
     assert taken == ["light", "light", "opaque", "opaque"]
     assert all(d == docs[0] for d in docs[1:])
     assert docs[0]["components"][0]["area"] == int(shape().sum())
+
+
+def test_a_number_json_cannot_write_is_the_callers_error() -> None:
+    """Should a non-finite number still reach the encoder, the answer is a 4xx, not a 500."""
+    from service.errors import lookup
+    from service.jobs import _dumps
+
+    for value in (float("inf"), float("nan")):
+        with pytest.raises(ValueError, match="JSON cannot write") as info:
+            _dumps({"length": value})
+        row = lookup(info.value)
+        assert row is not None and row.status == 422

@@ -174,7 +174,9 @@ def test_a_shape_and_its_pruning_sequence(server: Running, browser, downloads: P
     _wait(browser, lambda d: all((downloads / n).is_file() for n in names), 30)
     assert "sequence" in json.loads((downloads / "bird-2.json").read_text())["components"][0]
     assert json.loads((downloads / "bird-2.geojson").read_text())["type"] == "FeatureCollection"
-    assert Image.open(downloads / "bird-2.overlay.png").size == Image.open(BIRD).size
+    # the overlay is scaled for reading: a whole multiple of the mask, >= 512 px long
+    (w, h), (mw, mh) = Image.open(downloads / "bird-2.overlay.png").size, Image.open(BIRD).size
+    assert w % mw == 0 and w // mw == h // mh and h % mh == 0 and max(w, h) >= 512
 
     # to the medial axis end (step 0) and back with the keyboard, then the slider
     _press(browser, Keys.HOME)

@@ -189,7 +189,7 @@ def test_png_output_is_the_overlay(client: TestClient) -> None:
     resp = post_png(client, BIRD, accept="image/png")
     assert resp.status_code == 200 and resp.headers["content-type"] == "image/png"
     im = Image.open(io.BytesIO(resp.content))
-    assert im.size == (116, 103)
+    assert im.size == (116 * 5, 103 * 5)  # the default scale: longer side >= 512 px
     assert resp.content == skelprune.prune(read_mask(BIRD)).overlay_png()
 
 
@@ -218,7 +218,7 @@ def test_geojson_output(client: TestClient) -> None:
 def test_overlay_and_curve_options(client: TestClient) -> None:
     doc = post_png(client, BIRD, {"overlay": "true", "curve": "false"}).json()
     raw = base64.b64decode(doc["overlay_png"])
-    assert Image.open(io.BytesIO(raw)).size == (116, 103)
+    assert Image.open(io.BytesIO(raw)).size == (116 * 5, 103 * 5)
     assert "curve" not in doc["components"][0]
     full = post_png(client, BIRD).json()
     curve = full["components"][0]["curve"]
@@ -373,7 +373,7 @@ def test_framework_errors_are_problems(client: TestClient) -> None:
 
 # --------------------------------------------------------------------------- ops
 def test_health_ready_metrics(client: TestClient) -> None:
-    assert client.get("/healthz").json() == {"status": "ok"}
+    assert client.get("/healthz").json()["status"] == "ok"
     ready = Readiness.model_validate(client.get("/readyz").json())
     assert ready.workers == 2 and ready.queue_size == 8 and ready.queued == 0
     post_png(client, BIRD)

@@ -7,6 +7,8 @@ still serves.
 
 from __future__ import annotations
 
+import json
+import logging
 import os
 import threading
 import time
@@ -17,6 +19,7 @@ from fastapi.testclient import TestClient
 
 from service.app import create_app
 from service.jobs import Job, JobResult, run_job
+from service.logs import JsonFormatter
 from service.routes import job_function
 from service.settings import Settings
 from testkit import DATA
@@ -101,6 +104,26 @@ def test_unexpected_error_is_a_500_without_internals(setup) -> None:
     assert "secret" not in resp.text and "KeyError" not in resp.text
     assert body["detail"] == "the job failed with an internal error"
     use(app, run_job)
+
+
+def test_every_log_line_of_a_failed_job_names_its_request(setup) -> None:
+    """The pool logs from its job thread: those lines carry the request's ID too."""
+    client, app = setup
+    lines: list[str] = []
+    handler = logging.Handler()
+    handler.emit = lambda record: lines.append(JsonFormatter().format(record))  # type: ignore
+    logger = logging.getLogger("service")
+    logger.addHandler(handler)
+    try:
+        use(app, buggy)
+        resp = client.post("/v1/prune", content=BIRD, headers=PNG)
+    finally:
+        logger.removeHandler(handler)
+        use(app, run_job)
+    rid = problem(resp, 500, "internal-error")["request_id"]
+    docs = [json.loads(line) for line in lines]
+    assert any("job failed in worker" in d["message"] for d in docs), docs
+    assert all(d.get("request_id") == rid for d in docs), docs
 
 
 def test_full_queue_gives_503_with_retry_after(setup) -> None:

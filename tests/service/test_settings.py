@@ -136,3 +136,19 @@ def test_numba_cache_seed_is_copied_once_into_an_empty_cache(tmp_path) -> None:
     assert (target / "skelprune" / "a.nbc").read_bytes() == b"newer"
     assert seed_numba_cache(tmp_path / "missing", tmp_path / "other") == 0
     assert not (tmp_path / "other").exists()
+
+
+def test_a_bad_setting_is_one_line_naming_the_variable() -> None:
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "SKELPRUNE_WORKERS": "abc", "SKELPRUNE_PORT": "0"}
+    proc = subprocess.run(
+        [sys.executable, "-m", "service"], env=env, capture_output=True, text=True, timeout=60
+    )
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1, proc.stderr
+    assert lines[0].startswith("error: SKELPRUNE_WORKERS='abc'") and "integer" in lines[0]
+    assert "Traceback" not in proc.stderr

@@ -269,16 +269,10 @@ class CurveStep(BaseModel):
 Point2 = Annotated[list[float], Field(min_length=2, max_length=2, description="[x, y]")]
 
 
-class SequenceNode(BaseModel):
-    """A node of the sequence's starting skeleton S(0)."""
+class SequenceNode(Node):
+    """A node of the sequence's starting skeleton S(0): a document node, and what the
+    sequence does to it."""
 
-    model_config = STRICT
-    id: int
-    x: float
-    y: float
-    radius: float
-    kind: Literal["endpoint", "junction", "loop"]
-    points: list[Point3] = Field(description="Pixels of a junction cluster; empty otherwise.")
     removed_at: int | None = Field(
         None,
         description="Junctions only: step whose removal takes the cluster's pixels (null: never).",

@@ -270,8 +270,7 @@ Point2 = Annotated[list[float], Field(min_length=2, max_length=2, description="[
 
 
 class SequenceNode(Node):
-    """A node of the sequence's starting skeleton S(0): a document node, and what the
-    sequence does to it."""
+    """A node of the sequence's starting skeleton S(0), and what the sequence does to it."""
 
     removed_at: int | None = Field(
         None,

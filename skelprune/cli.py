@@ -177,6 +177,13 @@ def _geojson_only(name: str) -> str:
 Method = enum.Enum("Method", {name: name for name in METHODS}, type=str)
 Coarse = enum.Enum("Coarse", {name: name for name in COARSE}, type=str)
 Rule = enum.Enum("Rule", {name: name for name in FOREGROUND_RULES}, type=str)
+# the options every pruning command takes, declared once
+BetaOption = Annotated[float, typer.Option(help=HELP["beta"])]
+MethodOption = Annotated[Method, typer.Option(help=HELP["method"])]
+CoarseOption = Annotated[Coarse, typer.Option(help=HELP["coarse"])]
+ThresholdOption = Annotated[float | None, typer.Option(help=HELP["dce_threshold"])]
+MarginOption = Annotated[float | None, typer.Option(help=HELP["min_margin"])]
+ForegroundOption = Annotated[Rule, typer.Option(help=HELP["foreground"])]
 
 
 @app.command("prune", cls=_CleanCommand)
@@ -189,14 +196,12 @@ def prune_command(
             "of them (*.png, *.geojson, any case).",
         ),
     ],
-    beta: Annotated[float, typer.Option(help=HELP["beta"])] = PruneOptions.beta,
-    method: Annotated[Method, typer.Option(help=HELP["method"])] = Method(PruneOptions.method),
-    coarse: Annotated[Coarse, typer.Option(help=HELP["coarse"])] = Coarse("dce"),
-    dce_threshold: Annotated[float | None, typer.Option(help=HELP["dce_threshold"])] = None,
-    min_margin: Annotated[float | None, typer.Option(help=HELP["min_margin"])] = None,
-    foreground: Annotated[Rule, typer.Option(help=HELP["foreground"])] = Rule(
-        ReadOptions.foreground
-    ),
+    beta: BetaOption = PruneOptions.beta,
+    method: MethodOption = Method(PruneOptions.method),
+    coarse: CoarseOption = Coarse("dce"),
+    dce_threshold: ThresholdOption = None,
+    min_margin: MarginOption = None,
+    foreground: ForegroundOption = Rule(ReadOptions.foreground),
     overlay: Annotated[
         Path | None, typer.Option(help="Write the overlay PNG here (one input file only).")
     ] = None,
@@ -214,15 +219,9 @@ def prune_command(
     ] = 0,
 ) -> None:
     """Prune the skeleton of each shape and print the result as JSON."""
-    try:  # checked once, before any file is read
-        options = PruneOptions(
-            beta=beta,
-            method=method.value,
-            coarse=coarse.value,
-            dce_threshold=dce_threshold,
-            min_margin=min_margin,
-        )
-        read = ReadOptions(foreground=foreground.value)
+    # checked once, before any file is read
+    options, read = _options_or_exit(beta, method, coarse, dce_threshold, min_margin, foreground)
+    try:
         raster = RasterOptions(pixel_size=pixel_size, longest_side=longest_side, repair=repair)
         shown = OutputOptions(overlay_scale=overlay_scale, overlay_legend=overlay_legend)
     except SkelpruneError as exc:
@@ -302,22 +301,19 @@ def _options_or_exit(
             ReadOptions(foreground=foreground.value),
         )
     except SkelpruneError as exc:
-        typer.echo(f"error: {exc}", err=True)
-        raise typer.Exit(2) from None
+        raise _usage(str(exc)) from None
 
 
 @app.command("match")
 def match_command(
     a: Annotated[Path, typer.Argument(help="PNG mask a.")],
     b: Annotated[Path, typer.Argument(help="PNG mask b.")],
-    beta: Annotated[float, typer.Option(help=HELP["beta"])] = PruneOptions.beta,
-    method: Annotated[Method, typer.Option(help=HELP["method"])] = Method(PruneOptions.method),
-    coarse: Annotated[Coarse, typer.Option(help=HELP["coarse"])] = Coarse("dce"),
-    dce_threshold: Annotated[float | None, typer.Option(help=HELP["dce_threshold"])] = None,
-    min_margin: Annotated[float | None, typer.Option(help=HELP["min_margin"])] = None,
-    foreground: Annotated[Rule, typer.Option(help=HELP["foreground"])] = Rule(
-        ReadOptions.foreground
-    ),
+    beta: BetaOption = PruneOptions.beta,
+    method: MethodOption = Method(PruneOptions.method),
+    coarse: CoarseOption = Coarse("dce"),
+    dce_threshold: ThresholdOption = None,
+    min_margin: MarginOption = None,
+    foreground: ForegroundOption = Rule(ReadOptions.foreground),
 ) -> None:
     """Match the skeletons of two shapes (path similarity) and print distance and
     endpoint correspondence as JSON."""
@@ -338,14 +334,12 @@ def match_command(
 def retrieve_command(
     folder: Annotated[list[Path], typer.Argument(help="Folders of PNG masks, or PNG files.")],
     top: Annotated[int, typer.Option(min=1, help="Closest shapes listed per shape.")] = 10,
-    beta: Annotated[float, typer.Option(help=HELP["beta"])] = PruneOptions.beta,
-    method: Annotated[Method, typer.Option(help=HELP["method"])] = Method(PruneOptions.method),
-    coarse: Annotated[Coarse, typer.Option(help=HELP["coarse"])] = Coarse("dce"),
-    dce_threshold: Annotated[float | None, typer.Option(help=HELP["dce_threshold"])] = None,
-    min_margin: Annotated[float | None, typer.Option(help=HELP["min_margin"])] = None,
-    foreground: Annotated[Rule, typer.Option(help=HELP["foreground"])] = Rule(
-        ReadOptions.foreground
-    ),
+    beta: BetaOption = PruneOptions.beta,
+    method: MethodOption = Method(PruneOptions.method),
+    coarse: CoarseOption = Coarse("dce"),
+    dce_threshold: ThresholdOption = None,
+    min_margin: MarginOption = None,
+    foreground: ForegroundOption = Rule(ReadOptions.foreground),
     workers: Annotated[int, typer.Option(help="Worker processes (0: one a core).")] = 0,
 ) -> None:
     """Match every shape with every other and print, per shape, its closest ones as JSON

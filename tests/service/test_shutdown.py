@@ -11,11 +11,9 @@ import http.client
 import io
 import json
 import math
-import os
 import signal
 import socket
 import subprocess
-import sys
 import threading
 import time
 from pathlib import Path
@@ -24,15 +22,10 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from testkit import DATA, REPO
+from testkit import DATA
+from testkit.realserver import running_server
 
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(300)]
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def shape_png(longest_side: int) -> bytes:
@@ -48,15 +41,6 @@ def shape_png(longest_side: int) -> bytes:
     buf = io.BytesIO()
     big.save(buf, format="PNG")
     return buf.getvalue()
-
-
-def get(port: int, path: str, timeout: float = 2.0) -> int:
-    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=timeout)
-    try:
-        conn.request("GET", path)
-        return conn.getresponse().status
-    finally:
-        conn.close()
 
 
 def post_png(port: int, body: bytes, sent: threading.Event | None = None) -> tuple[int, bytes]:
@@ -129,47 +113,12 @@ class InFlight(threading.Thread):
 
 @pytest.fixture
 def server(tmp_path):
-    port = free_port()
-    env = {
-        **os.environ,
-        "SKELPRUNE_HOST": "127.0.0.1",
-        "SKELPRUNE_PORT": str(port),
-        # one worker: the requests queue up behind each other and stay in flight longer
-        "SKELPRUNE_WORKERS": "1",
-        "SKELPRUNE_QUEUE_SIZE": "32",
-        "SKELPRUNE_JOB_TIMEOUT": "120",
-    }
-    log = (tmp_path / "server.log").open("w+b")
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "service"],
-        cwd=REPO,
-        env=env,
-        stdout=log,
-        stderr=subprocess.STDOUT,
-        start_new_session=True,
-    )
-
-    def output() -> str:
-        log.flush()
-        return (tmp_path / "server.log").read_text(errors="replace")[-4000:]
-
-    try:
-        deadline = time.monotonic() + 120
-        while True:
-            assert proc.poll() is None, f"server exited with {proc.returncode}:\n{output()}"
-            try:
-                if get(port, "/healthz") == 200 and get(port, "/readyz") == 200:
-                    break
-            except OSError:
-                pass
-            assert time.monotonic() < deadline, f"server not ready in 120 s:\n{output()}"
-            time.sleep(0.2)
-        yield proc, port, output
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait(timeout=30)
-        log.close()
+    """The real server with one worker (the requests queue up behind each other and stay
+    in flight longer): its process, port, and a function giving the tail of its log."""
+    log = tmp_path / "server.log"
+    settings = {"workers": "1", "queue_size": "32", "job_timeout": "120"}
+    with running_server(log, **settings) as (proc, base):
+        yield proc, int(base.rsplit(":", 1)[1]), lambda: log.read_text(errors="replace")[-4000:]
 
 
 def test_sigterm_drains_in_flight_requests_then_exits_cleanly(server):

@@ -232,11 +232,12 @@ class _EndBranches:
         self.supported = np.zeros(n, np.bool_)
         self.first = np.full(n, -1, np.int64)
         self.vertex = np.full(n, -1, np.int64)
-        m = partition.n_segments
-        self.vertex_of = np.full((m, m), -2, np.int64)
-        ids = np.arange(len(after))
-        self.vertex_of[before, after] = ids
-        self.vertex_of[after, before] = ids
+        # The convex vertex each segment starts at (-1: none): two segments meet at a
+        # vertex only if one starts where the other ends, so this and ``before`` answer
+        # "where do a and b meet" in memory linear in the segments (a pair table would
+        # be quadratic, and a noisy boundary has as many segments as pixels).
+        self.starts_at = np.full(partition.n_segments, -1, np.int64)
+        self.starts_at[after] = np.arange(len(after))
         self.before, self.after, self.positions = before, after, positions
         self.cache: dict[int, tuple[int, bool, int, float]] = {}  # b -> (n, sup, v, d2)
 
@@ -263,7 +264,7 @@ class _EndBranches:
             self.first,
             self.supported,
             self.vertex,
-            self.vertex_of,
+            self.starts_at,
             self.before,
             self.after,
         )
@@ -309,7 +310,7 @@ def _branch_states(
     first: np.ndarray,
     supported: np.ndarray,
     vertex: np.ndarray,
-    vertex_of: np.ndarray,
+    starts_at: np.ndarray,
     before: np.ndarray,
     after: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -338,7 +339,7 @@ def _branch_states(
                 if labels[2] != -1:
                     vertex[p] = -2
                 elif labels[1] != -1:
-                    vertex[p] = vertex_of[labels[0], labels[1]]
+                    vertex[p] = _meeting_vertex(starts_at, before, labels[0], labels[1])
             sup[k] |= supported[p]
             if vertex[p] == -2 or (v >= 0 and vertex[p] >= 0 and vertex[p] != v):
                 can_claim = False
@@ -356,6 +357,18 @@ def _branch_states(
                 break
         claimed[k] = v
     return sup, claimed
+
+
+@numba.njit(cache=True)
+def _meeting_vertex(starts_at: np.ndarray, before: np.ndarray, a: int, b: int) -> int:
+    """The convex vertex between segments ``a`` and ``b`` (either order), or -2."""
+    v = starts_at[b]
+    if v >= 0 and before[v] == a:
+        return v
+    v = starts_at[a]
+    if v >= 0 and before[v] == b:
+        return v
+    return -2
 
 
 def coarse_dce(skeleton: Skeleton) -> Skeleton:

@@ -58,10 +58,10 @@ BYTES_PER_COMPONENT = 16 * 1024
 BYTES_PER_ANSWER_PIXEL = 16
 #: Seconds per input pixel (distance transform, medial axis: ~0.3 µs for 4096² blobs) ...
 SECONDS_PER_PIXEL = 0.5e-6
-#: ... per pixel that can be a skeleton point (pixel noise, checkerboards: 30–60 µs) ...
-SECONDS_PER_SKELETON_POINT = 40e-6
-#: ... and per component (isolated dots: 0.3–0.6 ms).
-SECONDS_PER_COMPONENT = 0.5e-3
+#: ... per pixel that can be a skeleton point (pixel noise, checkerboards: 25–60 µs) ...
+SECONDS_PER_SKELETON_POINT = 60e-6
+#: ... and per component (isolated dots: 0.3–0.7 ms).
+SECONDS_PER_COMPONENT = 0.7e-3
 _EIGHT = np.ones((3, 3), bool)
 
 

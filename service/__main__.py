@@ -98,7 +98,6 @@ def main() -> None:
             http=guarded_protocol(
                 Limits(settings.max_header_bytes, settings.max_headers, settings.header_timeout)
             ),
-            h11_max_incomplete_event_size=settings.max_header_bytes,
             timeout_keep_alive=settings.keep_alive_timeout,
             server_header=False,  # no software banner on every answer
             # a drain after SIGTERM is bounded: below the orchestrator's grace period

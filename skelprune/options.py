@@ -38,7 +38,7 @@ __all__ = [
 
 METHODS = ("bayesian", "dce")
 #: The largest β accepted: far past any useful weight, and far from a float overflow.
-MAX_BETA = 1e9
+MAX_BETA = 1_000_000_000
 #: The foreground rules (:mod:`skelprune.io.foreground`).
 FOREGROUND_RULES = ("auto", "nonzero", "zero")
 #: Spellings of ``coarse``: the name ``"none"`` is the full medial axis (``None``).

@@ -65,9 +65,7 @@ def _with_schema(check: Callable[[str, Any], Any], **schema: Any) -> Callable[[s
     return check
 
 
-def _number(
-    low: float, strict: bool, high: float | None = None
-) -> Callable[[str, Any], float]:
+def _number(low: float, strict: bool, high: float | None = None) -> Callable[[str, Any], float]:
     def check(name: str, value: Any) -> float:
         try:
             finite = (
@@ -167,8 +165,7 @@ class PruneOptions:
 
     beta: float = _option(
         9.0,
-        "Weight β of the reconstruction term, > 0 (at most 1e9): α = β·log(L(M)/ℓ̄). "
-        "The paper's 9.",
+        "Weight β of the reconstruction term, > 0 (at most 1e9): α = β·log(L(M)/ℓ̄). The paper's 9.",
         _number(0, strict=True, high=MAX_BETA),
     )
     method: str = _option(

@@ -160,7 +160,7 @@ class PruneOptions:
     >>> PruneOptions(beta=-1)
     Traceback (most recent call last):
     ...
-    skelprune.errors.InvalidOptionError: beta must be a finite number > 0, got -1
+    skelprune.errors.InvalidOptionError: beta must be a finite number > 0 and <= 1e+09, got -1
     """
 
     beta: float = _option(

@@ -1,11 +1,11 @@
 """Comparison with the authors' own implementation on the same masks (``data/anchors``).
 
 ``data/anchors`` holds 336 masks (24 kimia216 and 24 SkelNetOn shapes, each clean and under
-six perturbations made with :mod:`skelprune.evaluation.perturb`) with the endpoint count and RER of
+six perturbations made with :mod:`evaluation.perturb`) with the endpoint count and RER of
 the authors' MATLAB code on each (see its README). This module runs our variants on
 exactly those masks and reads both the same way: per perturbation, the share of shapes
 whose endpoint count equals the clean mask's (exact) or is within one of it (±1), and the
-median RER. SPEC §5's stability target is relative to these anchors.
+median RER. The stability target is relative to these anchors.
 """
 
 from __future__ import annotations
@@ -205,7 +205,7 @@ def anchors_markdown(run: AnchorRun) -> str:
         f"GNU Octave; counts and RER from `data/anchors`) beside {labels}, run here on "
         "the same saved masks. Exact / ±1: share of shapes whose endpoint count under the "
         "perturbation equals / is within one of the same method's count on the clean "
-        "mask; then the median RER. Target (SPEC §5): exact and ±1 at least the authors' "
+        "mask; then the median RER. Target: exact and ±1 at least the authors' "
         "under every perturbation.",
         "",
         "| method | meets the target (pooled and per batch) |",

@@ -1,4 +1,4 @@
-"""Figures of ``skelprune eval`` (the paper's Figs. 3, 6–7, 9 and 11).
+"""Figures of ``python -m evaluation`` (the paper's Figs. 3, 6–7, 9 and 11).
 
 matplotlib is an optional extra (``bench``): it is imported inside the functions, so that
 nothing else in the package (and never the service) needs it. Overlays are the library's
@@ -42,11 +42,12 @@ def overlay(variant: Variant, mask: np.ndarray) -> tuple[np.ndarray, int]:
     radii are painted with the same colours (endpoints are skeleton pixels of degree 1).
     """
     if variant.kind == "prune":
-        from ..api import prune
+        from skelprune.api import prune
 
         res = prune(mask, **variant.kwargs)
         return res.render_overlay(), res.n_endpoints()
-    from ..output.render import render_overlay
+    from skelprune.output.render import render_overlay
+
     from .baseline import skeletonize_cut
 
     sk = skeletonize_cut(mask, variant.kwargs["min_length"])
@@ -165,7 +166,7 @@ def rectangles_figure(
 
 def curves_figure(shapes: Sequence[tuple[str, np.ndarray]], path: Path) -> None:
     """Fig. 3: AR, LR and λ over the pruning steps (default settings), chosen step marked."""
-    from ..api import prune
+    from skelprune.api import prune
 
     plt = _plt()
     n = len(shapes)
@@ -208,7 +209,7 @@ def montage_figure(
     shapes: Sequence[tuple[str, np.ndarray]], path: Path, cell: int = 96, columns: int = 12
 ) -> None:
     """Fig. 11: every shape's default skeleton overlay, with its RER, in one grid."""
-    from ..api import prune
+    from skelprune.api import prune
 
     plt = _plt()
     n = len(shapes)

@@ -3,7 +3,7 @@
 A second external reference beside the authors' code: for every shape of the SkelNetOn
 training shapes kept in ``data/skelneton-dev`` (shape = grey ≥ 128; ground-truth skeleton
 = white pixels of ``skeletons/NAME.png``, same grid), and every variant of
-:data:`skelprune.evaluation.stability.VARIANTS`, the precision, recall and F1 of skeleton pixels
+:data:`evaluation.stability.VARIANTS`, the precision, recall and F1 of skeleton pixels
 within a tolerance of ``t`` pixels (Euclidean, ``t`` = 0, 1, 2, 3):
 
 * precision: share of our skeleton pixels at distance ``≤ t`` from a ground-truth pixel;
@@ -196,7 +196,7 @@ def groundtruth_markdown(
         f"The {len(run.scores)} shapes of `data/skelneton-dev` with their hand-checked "
         "skeletons. Per shape: precision (our skeleton pixels within t px of a ground-truth "
         "pixel), recall (ground-truth pixels within t px of ours) and F1; mean over shapes. "
-        "SPEC §5 asks for the default's F1 at 2 px to be at least every alternative's.",
+        "The project asks for the default's F1 at 2 px to be at least every alternative's.",
         "",
         markdown_table(
             ["variant (precision / recall / F1)", *(f"t = {t} px" for t in TOLERANCES)], rows

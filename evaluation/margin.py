@@ -1,7 +1,7 @@
 """What branch margins are worth: flips by margin quantile, and the ``min_margin`` option.
 
 Over the shapes and perturbations of the stability benchmark (the same seeded noise
-draws as :mod:`skelprune.evaluation.stability`), with the library's default pruning:
+draws as :mod:`evaluation.stability`), with the library's default pruning:
 
 * **Flip table.** A clean end branch is *lost* under a perturbation when no end branch of
   the perturbed skeleton ends near its endpoint; a perturbed end branch is *gained* when
@@ -104,7 +104,7 @@ def _rer(res) -> float:
 def _task(
     args: tuple[str, int, np.ndarray, int, tuple[Perturbation, ...], tuple[float, ...]],
 ) -> _ShapeResult:
-    from ..api import prune
+    from skelprune.api import prune
 
     dataset, index, mask, seed, perts, mins = args
     clean = prune(mask)
@@ -293,7 +293,7 @@ margin said nothing).
 ## `min_margin`
 
 Each row prunes the clean and the perturbed shapes with that `min_margin`; agreement is
-the share of shapes whose perturbed endpoint count equals the clean one (SPEC §5).
+the share of shapes whose perturbed endpoint count equals the clean one.
 
 {min_margin_table(run)}
 """

@@ -1,6 +1,6 @@
 """Shape perturbations and the rectangle ground truth of the stability benchmarks.
 
-SPEC §5 and the paper's Figs. 6-7 and Table 2: boundary noise (Gaussian or uniform,
+The stability benchmark and the paper's Figs. 6-7 and Table 2: boundary noise (Gaussian or uniform,
 along the normal), rotation and rescaling. Every perturbation works on the *contour*,
 not on the image: each boundary (outer and holes) is the closed crack curve between shape
 and background (vertices at the midpoints of 4-adjacent shape/background pixel pairs,
@@ -20,7 +20,7 @@ from typing import Literal
 import numpy as np
 from scipy import ndimage as ndi
 
-from .._contours import boundary_polygons
+from skelprune._contours import boundary_polygons
 
 __all__ = [
     "PERTURBATIONS",
@@ -468,7 +468,7 @@ def skeleton_error(points_rc: np.ndarray, segments: np.ndarray) -> float:
 
 @dataclass(frozen=True)
 class Perturbation:
-    """One named perturbation of the stability benchmark (SPEC §5).
+    """One named perturbation of the stability benchmark.
 
     ``kind`` is ``"gaussian"``/``"uniform"`` (boundary noise of that ``param``),
     ``"resampled"`` (:func:`resampled_noise`, σ = ``param``), ``"flips"``

@@ -5,7 +5,7 @@ distance (the query itself left out); column ``k`` of a table counts the queries
 ``k``-th closest shape is of the query's class (best possible: the number of queries).
 Skeletons come from each pruning variant and from the ``skeletonize`` + cut baseline.
 Under perturbation, each query is perturbed and matched against the clean database.
-``docs/retrieval.md`` is written by :func:`retrieval_markdown` (``skelprune eval``, or on its
+``docs/retrieval.md`` is written by :func:`retrieval_markdown` (``python -m evaluation``, or on its
 own ``python -m benchmarks.bench_match --write``).
 """
 
@@ -19,18 +19,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..api import prune
-from ..graph import BranchGraph
-from ..matching import (
+from skelprune.api import prune
+from skelprune.graph import BranchGraph
+from skelprune.matching import (
     SkeletonDescriptor,
     UnmatchableShapeError,
     describe,
     describe_skeleton,
     distance_matrix,
 )
-from ..medial_axis import squared_distance
-from ..output.document import ComponentResult
-from ..skeleton import Skeleton
+from skelprune.medial_axis import squared_distance
+from skelprune.output.document import ComponentResult
+from skelprune.skeleton import Skeleton
+
 from .baseline import cut_end_branches
 from .perturb import boundary_noise, rescale, rotate
 from .tables import markdown_table
@@ -51,7 +52,7 @@ __all__ = [
 #: Ranks counted per dataset: 11 on Kimia-216 (the paper's Table 3), 10 on Kimia-99 ([16]).
 TOP = {"kimia216": 11, "kimia99": 10}
 #: End-branch cut of the baseline, in pixels: the middle of the range the stability
-#: evaluation runs it at (``skelprune.evaluation.stability``).
+#: evaluation runs it at (``evaluation.stability``).
 BASELINE_CUT = 10.0
 #: Pruning variants (``prune`` keyword arguments) and the baseline.
 RETRIEVAL_VARIANTS: dict[str, dict[str, object] | None] = {
@@ -265,7 +266,7 @@ def retrieval_markdown(run: RetrievalRun, command: str) -> str:
         "than two endpoints cannot be matched and rank last (counted under *unmatchable*).",
         "",
         "**kimia216 here has 204 shapes, 17 classes × 12**: the `face` class is missing from",
-        "our copy (`/work/shared/data/README.md`), so its best possible column is 204, not the",
+        "our copy (`data/README.md`), so its best possible column is 204, not the",
         "paper's 216, and its figures cannot be compared one to one with the paper's.",
         "",
     ]

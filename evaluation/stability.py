@@ -1,9 +1,9 @@
-"""Stability measurements shared by ``benchmarks/bench_stability.py`` and ``skelprune eval``.
+"""Stability measurements shared by ``benchmarks/bench_stability.py`` and ``python -m evaluation``.
 
 One module computes, both report:
 
-* **Endpoint agreement** (SPEC §5, the paper's Figs. 6–7): for every shape of a dataset and
-  every perturbation of :data:`skelprune.evaluation.perturb.PERTURBATIONS`, is the number
+* **Endpoint agreement** (the paper's Figs. 6–7): for every shape of a dataset and
+  every perturbation of :data:`evaluation.perturb.PERTURBATIONS`, is the number
   of skeleton endpoints of the perturbed shape the clean shape's (same method)?
 * **Noisy rectangles** (the paper's Table 2 and Fig. 9): share of rectangles with 4
   endpoints, and the eq. 13 error of the skeleton against the exact medial axis.
@@ -84,7 +84,7 @@ class Variant:
         return dict(self.options)
 
 
-#: Every variant, in report order: the three pruning variants of SPEC §2.4–2.5 (the
+#: Every variant, in report order: the three pruning variants of docs/algorithm.md (the
 #: library's default first), then the baseline at each threshold.
 VARIANTS: dict[str, Variant] = {
     v.name: v
@@ -125,10 +125,10 @@ class Measurement:
 
 
 def _lbar(mask: np.ndarray) -> float:
-    """``ℓ̄`` of the largest component's medial axis: the length unit of SS (SPEC §2.3),
+    """``ℓ̄`` of the largest component's medial axis: the length unit of SS (docs/algorithm.md),
     measured on the axis the pruning itself starts from (the canonical frame)."""
-    from ..api import components
-    from ..skeleton import Skeleton
+    from skelprune.api import components
+    from skelprune.skeleton import Skeleton
 
     crop = max((c for c, _ in components(mask)), key=lambda c: int(c.sum()))
     return Skeleton.medial_axis(crop).normalisation(9.0).lbar
@@ -152,10 +152,10 @@ def measure(
     -------
     Measurement
     """
-    from ..reconstruction import reconstruction_error
+    from skelprune.reconstruction import reconstruction_error
 
     if variant.kind == "prune":
-        from ..api import prune
+        from skelprune.api import prune
 
         t = time.perf_counter()
         res = prune(mask, **variant.kwargs)
@@ -187,7 +187,7 @@ def measure(
 class ShapeRecord:
     """One (shape, perturbation, variant) result; ``perturbation`` is ``"clean"`` or a name.
 
-    ``distance`` is the skeleton distance (:func:`skelprune.evaluation.perturb.skeleton_distance`)
+    ``distance`` is the skeleton distance (:func:`evaluation.perturb.skeleton_distance`)
     between the clean shape's skeleton and this one mapped back to the clean frame
     (``None`` for the clean shape itself).
     """
@@ -301,7 +301,7 @@ class StabilityRun:
         """Share of shapes whose endpoint count under ``perturbation`` is the clean one's.
 
         With ``within > 0``, the share whose count is off by at most that many endpoints:
-        a looser reading, reported beside the SPEC §5 measure (``within=0``), never
+        a looser reading, reported beside the exact measure (``within=0``), never
         instead of it.
         """
         ref = {r.shape: r.endpoints for r in self.clean(dataset, variant)}
@@ -354,8 +354,8 @@ class StabilityRun:
         return list(dict.fromkeys(r.noise for r in self.rects))
 
     def meets_targets(self, variant: str) -> dict[str, bool]:
-        """SPEC §5 targets as this run can check them: the 90 % agreement reading (the target
-        itself is relative to the anchors, see :func:`~skelprune.evaluation.report.targets_table`),
+        """The targets as this run can check them: the 90 % agreement reading (the target
+        itself is relative to the anchors, see :func:`~evaluation.report.targets_table`),
         rectangles, median RER ≤ 1 %."""
         noisy = [n for n, _, _ in NOISE_KINDS if n in self.rect_noises()]
         return {
@@ -400,7 +400,7 @@ def run_stability(
     variants : iterable of str
         Keys of :data:`VARIANTS`.
     perturbations : iterable of Perturbation
-        Usually :data:`skelprune.evaluation.perturb.PERTURBATIONS`; tests pass an identity one.
+        Usually :data:`evaluation.perturb.PERTURBATIONS`; tests pass an identity one.
     rect_seeds : int
         Noisy rectangles per noise kind (0: skip the rectangles); one clean one besides.
     seed : int

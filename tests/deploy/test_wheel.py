@@ -21,13 +21,15 @@ from testkit.realserver import running_server
 
 pytestmark = pytest.mark.slow
 
+PIP = (sys.executable, "-m", "pip", "--quiet", "--disable-pip-version-check")
+PURELIB = "import sysconfig; print(sysconfig.get_path('purelib'))"
+
 
 @pytest.fixture(scope="module")
 def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("wheel")
     subprocess.run(
-        [sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "--no-build-isolation"]
-        + ["--disable-pip-version-check", "--wheel-dir", str(out), str(REPO)],
+        [*PIP, "wheel", "--no-deps", "--no-build-isolation", "--wheel-dir", str(out), str(REPO)],
         check=True,
         cwd=out,
     )
@@ -54,8 +56,7 @@ def venv(wheel: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     ).stdout.strip()
     Path(site, "test-venv-packages.pth").write_text(sysconfig.get_path("purelib") + "\n")
     subprocess.run(
-        [sys.executable, "-m", "pip", "--python", str(root / "bin" / "python"), "install"]
-        + ["--quiet", "--no-deps", "--no-index", "--disable-pip-version-check", str(wheel)],
+        [*PIP, "--python", str(root / "bin" / "python"), "install", "--no-deps", str(wheel)],
         check=True,
     )
     return root

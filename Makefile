@@ -39,7 +39,7 @@ run: $(SERVE) $(KERNELS)
 # examples/client.py against a running service (`make run` in another terminal)
 CLIENT := $(VENV)/.installed-service+client
 client: $(CLIENT)
-	$(BIN)/python examples/client.py
+	@$(BIN)/python examples/client.py http://$${SKELPRUNE_HOST:-127.0.0.1}:$${SKELPRUNE_PORT:-8000}
 
 # the viewer page's browser test drives Debian's Chromium (installed once, with apt)
 BROWSER := /usr/bin/chromedriver

@@ -96,8 +96,12 @@ class Settings(BaseSettings):
     max_vertices: int = Field(
         100_000, ge=4, description="Most positions in a polygon input, all rings together."
     )
-    polygon_longest_side: int = Field(
-        512, ge=8, le=16384, description="Default raster size of a polygon's longer side, px."
+    polygon_longest_side: int | None = Field(
+        None,
+        ge=8,
+        le=16384,
+        description="Default raster size of a polygon's longer side, px (unset: a pixel "
+        "size fitted to each polygon).",
     )
     mp_context: Literal["forkserver", "spawn"] = Field(
         "forkserver",

@@ -229,6 +229,18 @@ class OutputOptions:
     overlay_legend: bool = _option(
         False, "Overlay image: add a strip with the colour key, RER and SS.", _flag
     )
+    simplify: float = _option(
+        0.5,
+        "GeoJSON answer: simplify each line within this many pixels, >= 0, keeping its "
+        "nodes, keeping it inside the shape and off the other lines (0: every pixel).",
+        _number(0, strict=False),
+    )
+    cut_ends: bool = _option(
+        False,
+        "GeoJSON answer: end a reach cut straight across at the middle of the cut, not "
+        "in a fork to its two corners (the JSON document keeps the fork).",
+        _flag,
+    )
 
     def __post_init__(self) -> None:
         _check_fields(self)
@@ -318,7 +330,7 @@ def option_fields(*groups: type) -> list[tuple[str, Any, str, tuple[str, ...] | 
     what the CLI and the service describe their options from.
 
     >>> [name for name, *_ in option_fields(OutputOptions)]
-    ['curve', 'overlay', 'sequence', 'overlay_scale', 'overlay_legend']
+    ['curve', 'overlay', 'sequence', 'overlay_scale', 'overlay_legend', 'simplify', 'cut_ends']
     """
     return [
         (f.name, f.default, f.metadata["help"], f.metadata["choices"])

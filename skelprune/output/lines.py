@@ -11,8 +11,9 @@ line is kept).
 ``cut_ends``: a reach cut straight across (a river clipped at a map's edge) ends in a
 fork, two short branches running to the cut's two corners. Where a junction has two end
 branches whose tips lie on one straight stretch of the boundary about the junction's
-diameter apart, the two are replaced by one line from the junction to the middle of that
-stretch, and the junction's remaining branch runs on into it.
+diameter apart (the chord between them near the boundary all along), the two are replaced
+by one line from the junction to the middle of that stretch, and the junction's
+remaining branch runs on into it.
 """
 
 from __future__ import annotations
@@ -203,17 +204,25 @@ def cut_end_forks(
         r = float(node["radius"])
         span = float(np.hypot(*(c - a)))
         mid = (a + c) / 2
-        if r < 2 or not 1.4 * r <= span <= 2.8 * r:
+        if r < 2 or not 1.0 * r <= span <= 2.8 * r:
             continue
-        if not 0.6 * r <= float(np.hypot(*(mid - j))) <= 1.4 * r:
+        if not 0.5 * r <= float(np.hypot(*(mid - j))) <= 1.4 * r:
             continue
-        # the tips' chord runs along the boundary: every point of it near the background
+        # the tips' chord runs along the boundary (the tips themselves are cut back from
+        # the corners by a few pixels): every point of it near the background
         t = np.linspace(0, 1, max(int(span) * 2, 2))
         pts = a[None] + (c - a)[None] * t[:, None]
         cols = np.clip(np.rint(pts[:, 0]).astype(int), 0, w - 1)
         rows = np.clip(np.rint(pts[:, 1]).astype(int), 0, h - 1)
-        if float(edt[rows, cols].max()) > 2.0:
+        if float(edt[rows, cols].max()) > 2.0 + 0.25 * r:
             continue
+        # the line ends on the cut itself: from the chord's middle on to the background
+        ahead = (mid - j) / max(float(np.hypot(*(mid - j))), 1e-9)
+        for _ in range(int(4 * r)):
+            col, row = round(mid[0] + ahead[0] / 4), round(mid[1] + ahead[1] / 4)
+            if not (0 <= col < w and 0 <= row < h and mask[row, col]):
+                break
+            mid = mid + ahead / 4
         (rest,) = [b for b in degree[nid] if b not in (b1, b2)]
         if out[rest] is None or branches[rest]["source"] == branches[rest]["target"]:
             continue

@@ -180,7 +180,7 @@ def main() -> None:
                 rows.append([name, tool, "-", "-", "-", "-", "-", "-", "-", "skipped"])
                 continue
             try:
-                lines, secs, peak = _measure(lambda fn=fn: fn(geom))
+                lines, secs, peak = _measure(lambda fn=fn, geom=geom: fn(geom))
             except ImportError:
                 skipped.add(tool)
                 rows.append([name, tool, "-", "-", "-", "-", "-", "-", "-", "not installed"])
@@ -223,5 +223,51 @@ def main() -> None:
     print(table(header, rows))
 
 
+def figures(out: Path) -> list[Path]:
+    """The pictures of docs/gis.md: a stretch of the 50 km river and two countries, each
+    tool's lines over the polygon (``python -m benchmarks.bench_gis FOLDER``)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out.mkdir(parents=True, exist_ok=True)
+    r = river(50_000, 20, 200, seed=0)
+    cases = [
+        ("river", MultiPolygon([r.polygon]), (20_000, 26_000)),
+        ("gambia", parse_geojson(json.loads((DATA / "gambia.geojson").read_text())), None),
+        ("croatia", parse_geojson(json.loads((DATA / "croatia.geojson").read_text())), None),
+    ]
+    written = []
+    for name, geom, window in cases:
+        tools = {"skelprune": _skelprune(geom), "pygeoops": _pygeoops(geom)}
+        fig, axes = plt.subplots(len(tools), 1, figsize=(10, 3.2 * len(tools)), squeeze=False)
+        for ax, (tool, lines) in zip(axes[:, 0], tools.items(), strict=True):
+            for part in geom.geoms:
+                ax.fill(*part.exterior.xy, color="#cfe3f5", lw=0)
+                for hole in part.interiors:
+                    ax.fill(*hole.xy, color="white", lw=0)
+            if name == "river":
+                ax.plot(*r.centre.xy, color="#999", lw=3, alpha=0.6, label="true centre line")
+            for ln in lines:
+                ax.plot(*ln.xy, color="#c0392b", lw=1)
+                ax.plot(*ln.xy, ".", color="#c0392b", ms=2)
+            if window is not None:
+                ax.set_xlim(*window)
+            ax.set_aspect("equal", adjustable="datalim")
+            ax.set_title(f"{name}: {tool} ({sum(len(ln.coords) for ln in lines)} vertices)")
+            ax.set_xticks([])
+            ax.set_yticks([])
+        fig.tight_layout()
+        path = out / f"gis-{name}.png"
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        written.append(path)
+    return written
+
+
 if __name__ == "__main__":
-    main()
+    import sys
+
+    for p in figures(Path(sys.argv[1] if len(sys.argv) > 1 else "docs/figures")):
+        print(p)

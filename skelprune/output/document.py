@@ -25,7 +25,7 @@ from ..pruning.bayesian import PruningSequence
 from ..pruning.margin import Margins
 from ..reconstruction import reconstruction
 from ..skeleton import Skeleton
-from .lines import cut_end_forks, map_lines
+from .lines import cut_end_forks, map_lines, recentre
 from .render import auto_scale, encode_png, render_overlay
 
 __all__ = ["ComponentResult", "PruneResult", "branch_line"]
@@ -446,9 +446,10 @@ class PruneResult:
         ``frame`` as for :meth:`to_dict` (None: the result's own frame). Lines run from
         node to node, simplified within ``simplify`` pixels (0: every pixel of the path,
         as the document has it) without leaving the shape or crossing one another
-        (:mod:`skelprune.output.lines`); ``cut_ends`` ends a reach cut straight across at
-        the middle of the cut instead of in a fork to its corners. The document's points
-        stay exact: only this map output changes.
+        (:mod:`skelprune.output.lines`); for a polygon, their inner vertices first move to
+        the medial point across the line (sub-pixel, from the exact polygon). ``cut_ends``
+        ends a reach cut straight across at the middle of the cut instead of in a fork to
+        its corners. The document's points stay exact: only this map output changes.
 
         Every feature's properties carry its component's ``rer`` and ``ss``; the
         collection's ``properties`` (a foreign member) the document's options, each
@@ -490,7 +491,10 @@ class PruneResult:
             if cut_ends:
                 lines, ends_at, moved = cut_end_forks(nodes, branches, lines, self.mask)
             kept = [i for i, ln in enumerate(lines) if ln is not None]
-            simple = map_lines([lines[i] for i in kept], simplify, self.mask, polygon)
+            chosen = [lines[i] for i in kept]
+            if polygon is not None:  # the exact polygon: sub-pixel medial positions
+                chosen = recentre(chosen, polygon)
+            simple = map_lines(chosen, simplify, self.mask, polygon)
             used: set[int] = set()
             for i, line in zip(kept, simple, strict=True):
                 br = branches[i]

@@ -26,7 +26,7 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString
 
-__all__ = ["cut_end_forks", "douglas_peucker", "map_lines"]
+__all__ = ["cut_end_forks", "douglas_peucker", "map_lines", "recentre"]
 
 #: Halvings of the tolerance tried for a line that leaves the shape or crosses another.
 RETRIES = 3
@@ -63,6 +63,55 @@ def douglas_peucker(xy: np.ndarray, tolerance: float) -> np.ndarray:
             keep[m] = True
             stack += [(a, m), (m, b)]
     return np.flatnonzero(keep)
+
+
+def recentre(lines: list[np.ndarray], polygon: Any) -> list[np.ndarray]:
+    """Move each line's inner vertices to the polygon's medial point across the line.
+
+    A skeleton pixel lies up to about half a pixel off the true medial axis. Across the
+    line (along its normal ``n``) the distance to the boundary is a tent,
+    ``min(L + t, R - t)``; sampled at ``t = ±h`` on both slopes it gives the medial point
+    ``t* = (d(+h) - d(-h)) / 2`` between the two boundary points the disk touches, and
+    its radius. Ends (the nodes) stay, so that lines still meet there; a vertex whose
+    samples leave the polygon stays too.
+    """
+    rings = [r for part in shapely.get_parts(polygon) for r in (part.exterior, *part.interiors)]
+    coords = [shapely.get_coordinates(r) for r in rings]
+    segs = shapely.linestrings(
+        np.stack(
+            [np.concatenate([c[:-1] for c in coords]), np.concatenate([c[1:] for c in coords])], 1
+        )
+    )
+    tree = shapely.STRtree(segs)
+    shapely.prepare(polygon)
+    out = []
+    for ln in lines:
+        if len(ln) < 3:
+            out.append(ln)
+            continue
+        xy = ln[:, :2]
+        tangent = xy[2:] - xy[:-2]
+        norm = np.hypot(tangent[:, 0], tangent[:, 1])
+        ok = norm > 0
+        n = np.zeros_like(tangent)
+        n[ok] = np.stack([-tangent[ok, 1], tangent[ok, 0]], 1) / norm[ok, None]
+        h = np.clip(0.8 * ln[1:-1, 2], 0.25, 1.5)[:, None]
+        mid = xy[1:-1]
+        lo, hi = mid - n * h, mid + n * h
+        samples = np.concatenate([lo, hi])
+        inside = shapely.contains_xy(polygon, samples[:, 0], samples[:, 1])
+        _, dist = tree.query_nearest(
+            shapely.points(samples), return_distance=True, all_matches=False
+        )
+        d_lo, d_hi = dist[: len(mid)], dist[len(mid) :]
+        t = np.clip((d_hi - d_lo) / 2, -h[:, 0], h[:, 0])
+        good = ok & inside[: len(mid)] & inside[len(mid) :]
+        new = ln.copy()
+        new[1:-1][good, :2] = mid[good] + n[good] * t[good, None]
+        # the medial point's radius: the tent's top
+        new[1:-1][good, 2] = (d_lo[good] + d_hi[good]) / 2 + h[good, 0]
+        out.append(new)
+    return out
 
 
 def _inside_mask(mask: np.ndarray) -> Callable[[np.ndarray], bool]:

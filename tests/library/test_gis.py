@@ -125,9 +125,17 @@ def test_map_lines_are_simplified_inside_and_connected() -> None:
     for ln in lines:
         g.add_edge(ln.coords[0], ln.coords[-1])
     assert nx.is_connected(g)
-    # the simplified line stays within the tolerance of the exact one
+    # the simplified line stays within the tolerance of the medial line, which lies
+    # within a pixel of the pixel path; and as close to the true centre line as that path
     for a, b in zip(lines, exact_lines, strict=True):
-        assert a.hausdorff_distance(b) <= 0.5 * pixel + 1e-6
+        assert a.hausdorff_distance(b) <= 1.5 * pixel
+
+    def offset(ls: list[LineString]) -> float:
+        t = np.linspace(0, 1, 2000)
+        pts = shapely.line_interpolate_point(shapely.MultiLineString(ls), t, normalized=True)
+        return float(np.median(shapely.distance(pts, r.centre))) / pixel
+
+    assert offset(lines) <= min(0.25, offset(exact_lines) + 0.02)
 
 
 def test_simplified_lines_do_not_cross_and_keep_branch_ends() -> None:

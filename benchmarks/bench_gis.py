@@ -15,6 +15,9 @@ extra; a tool missing or over its time cap is shown as such). Per tool and polyg
 - ends: line ends (degree-1 nodes); vert/width: vertices per mean width of line length;
 - s, MB: wall time and peak memory (tracemalloc: Python and numpy allocations).
 
+First, where the answer stops changing: the rivers at 1.5 to 8 pixels across their
+narrowest width (``pixels_per_width``), median time of three runs (prune and GeoJSON).
+
 ``SKELPRUNE_BENCH_QUICK=1``: the generated rivers only. A reference tool that takes more
 than ``SKELPRUNE_BENCH_GIS_CAP`` seconds (default 60) on a polygon is skipped for the rest.
 """
@@ -169,9 +172,55 @@ def _polygons(quick: bool) -> list[tuple[str, MultiPolygon, River | None]]:
     return out
 
 
+def sweep() -> None:
+    """Where the answer stops changing: the rivers at 2 to 8 pixels per narrowest width."""
+    rows = []
+    rivers = [
+        ("river 50 km, 20-200 m", river(50_000, 20, 200, seed=0)),
+        ("river 10 km, 50 m", river(10_000, 50, 50, seed=1)),
+        ("river 10 km, 30-90 m", river(10_000, 30, 90, wavelength=1_500, amplitude=150, seed=2)),
+    ]
+    for name, r in rivers:
+        geom = MultiPolygon([r.polygon])
+        for k in (1.5, 2, 3, 4, 6, 8):
+            times = []
+            for _ in range(3):
+                t = time.perf_counter()
+                res = skelprune.prune(geom, pixels_per_width=k)
+                geo = res.to_geojson()
+                times.append(time.perf_counter() - t)
+            lines = [
+                LineString(f["geometry"]["coordinates"])
+                for f in geo["features"]
+                if f["geometry"]["type"] == "LineString"
+            ]
+            m = _network(lines, geom)
+            cover, off = _centred(lines, r)
+            rows.append(
+                [
+                    name,
+                    k,
+                    f"{res.frame.pixel_size:.2f}",
+                    res.mask.size,
+                    len(res.warnings),
+                    f"{m['pieces']:.0f}",
+                    m["ends"],
+                    f"{100 * cover:.0f} %",
+                    f"{off:.3f}",
+                    f"{m['vpw']:.1f}",
+                    f"{float(np.median(times)):.2f}",
+                ]
+            )
+            print(" | ".join(str(c) for c in rows[-1]), flush=True)
+    header = ["river", "px/width", "pixel m", "pixels", "warnings", "pieces", "ends"]
+    print()
+    print(table([*header, "cover", "off", "vert/width", "s (median of 3)"], rows))
+
+
 def main() -> None:
     quick = os.environ.get("SKELPRUNE_BENCH_QUICK") == "1"
     skelprune.prune(np.pad(np.ones((20, 40), bool), 5))  # kernels loaded before timing
+    sweep()
     rows = []
     skipped: set[str] = set()
     for name, geom, r in _polygons(quick):

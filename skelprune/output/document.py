@@ -25,7 +25,7 @@ from ..pruning.bayesian import PruningSequence
 from ..pruning.margin import Margins
 from ..reconstruction import reconstruction
 from ..skeleton import Skeleton
-from .lines import cut_end_forks, map_lines, recentre
+from .lines import boundary_index, cut_end_forks, map_lines, mask_distance, recentre
 from .render import auto_scale, encode_png, render_overlay
 
 __all__ = ["ComponentResult", "PruneResult", "branch_line"]
@@ -470,6 +470,8 @@ class PruneResult:
                     axis=1,
                 ),
             )
+        index = None if polygon is None else boundary_index(polygon)
+        distance = mask_distance(self.mask)
         summaries = []
         for ci, comp in enumerate(doc["components"]):
             sk = comp["skeleton"]
@@ -489,11 +491,11 @@ class PruneResult:
             ends_at: dict[tuple[int, str], int] = {}
             moved: dict[int, tuple[float, float]] = {}
             if cut_ends:
-                lines, ends_at, moved = cut_end_forks(nodes, branches, lines, self.mask)
+                lines, ends_at, moved = cut_end_forks(nodes, branches, lines, self.mask, distance)
             kept = [i for i, ln in enumerate(lines) if ln is not None]
             chosen = [lines[i] for i in kept]
-            if polygon is not None:  # the exact polygon: sub-pixel medial positions
-                chosen = recentre(chosen, polygon)
+            if index is not None:  # the exact polygon: sub-pixel medial positions
+                chosen = recentre(chosen, index)
             simple = map_lines(chosen, simplify, self.mask, polygon)
             used: set[int] = set()
             for i, line in zip(kept, simple, strict=True):

@@ -26,7 +26,14 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString
 
-__all__ = ["cut_end_forks", "douglas_peucker", "map_lines", "recentre"]
+__all__ = [
+    "boundary_index",
+    "cut_end_forks",
+    "douglas_peucker",
+    "map_lines",
+    "mask_distance",
+    "recentre",
+]
 
 #: Halvings of the tolerance tried for a line that leaves the shape or crosses another.
 RETRIES = 3
@@ -65,7 +72,17 @@ def douglas_peucker(xy: np.ndarray, tolerance: float) -> np.ndarray:
     return np.flatnonzero(keep)
 
 
-def recentre(lines: list[np.ndarray], polygon: Any) -> list[np.ndarray]:
+def boundary_index(polygon: Any) -> Any:
+    """The polygon's boundary segments in a tree, for :func:`recentre` (built once)."""
+    rings = [r for part in shapely.get_parts(polygon) for r in (part.exterior, *part.interiors)]
+    coords = [shapely.get_coordinates(r) for r in rings]
+    starts = np.concatenate([c[:-1] for c in coords])
+    ends = np.concatenate([c[1:] for c in coords])
+    shapely.prepare(polygon)
+    return polygon, shapely.STRtree(shapely.linestrings(np.stack([starts, ends], 1)))
+
+
+def recentre(lines: list[np.ndarray], index: Any) -> list[np.ndarray]:
     """Move each line's inner vertices to the polygon's medial point across the line.
 
     A skeleton pixel lies up to about half a pixel off the true medial axis. Across the
@@ -75,15 +92,7 @@ def recentre(lines: list[np.ndarray], polygon: Any) -> list[np.ndarray]:
     its radius. Ends (the nodes) stay, so that lines still meet there; a vertex whose
     samples leave the polygon stays too.
     """
-    rings = [r for part in shapely.get_parts(polygon) for r in (part.exterior, *part.interiors)]
-    coords = [shapely.get_coordinates(r) for r in rings]
-    segs = shapely.linestrings(
-        np.stack(
-            [np.concatenate([c[:-1] for c in coords]), np.concatenate([c[1:] for c in coords])], 1
-        )
-    )
-    tree = shapely.STRtree(segs)
-    shapely.prepare(polygon)
+    polygon, tree = index
     out = []
     for ln in lines:
         if len(ln) < 3:
@@ -112,6 +121,21 @@ def recentre(lines: list[np.ndarray], polygon: Any) -> list[np.ndarray]:
         new[1:-1][good, 2] = (d_lo[good] + d_hi[good]) / 2 + h[good, 0]
         out.append(new)
     return out
+
+
+def mask_distance(mask: np.ndarray) -> Callable[[], np.ndarray]:
+    """The mask's Euclidean distance transform, computed on the first call only."""
+    cache: list[np.ndarray] = []
+
+    def get() -> np.ndarray:
+        if not cache:
+            padded = np.pad(mask, 1).astype(np.uint8)
+            cache.append(
+                cv2.distanceTransform(padded, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)[1:-1, 1:-1]
+            )
+        return cache[0]
+
+    return get
 
 
 def _inside_mask(mask: np.ndarray) -> Callable[[np.ndarray], bool]:
@@ -215,6 +239,7 @@ def cut_end_forks(
     branches: list[dict[str, Any]],
     lines: list[np.ndarray],
     mask: np.ndarray,
+    distance: Callable[[], np.ndarray] | None = None,
 ) -> tuple[list[np.ndarray | None], dict[tuple[int, str], int], dict[int, tuple[float, float]]]:
     """End forks at straight cut ends, in pixel coordinates.
 
@@ -222,11 +247,10 @@ def cut_end_forks(
     the cut's middle), the ends of branches that now end at another node
     (``(branch, "source" | "target") -> node``), and the moved endpoints by node id (the
     first tip's id, moved to the middle of the cut; the junction and the other tip are
-    gone).
+    gone). ``distance()`` gives the mask's distance transform (computed once, on the
+    first fork that needs it, when shared by the caller).
     """
-    edt = cv2.distanceTransform(
-        np.pad(mask, 1).astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE
-    )[1:-1, 1:-1]
+    distance = distance or mask_distance(mask)
     h, w = mask.shape
     degree: dict[int, list[int]] = {}
     for b, br in enumerate(branches):
@@ -263,7 +287,7 @@ def cut_end_forks(
         pts = a[None] + (c - a)[None] * t[:, None]
         cols = np.clip(np.rint(pts[:, 0]).astype(int), 0, w - 1)
         rows = np.clip(np.rint(pts[:, 1]).astype(int), 0, h - 1)
-        if float(edt[rows, cols].max()) > 2.0 + 0.25 * r:
+        if float(distance()[rows, cols].max()) > 2.0 + 0.25 * r:
             continue
         # the line ends on the cut itself: from the chord's middle on to the background
         ahead = (mid - j) / max(float(np.hypot(*(mid - j))), 1e-9)

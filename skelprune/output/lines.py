@@ -268,6 +268,11 @@ def cut_end_forks(
             other = br["target"] if br["source"] == nid else br["source"]
             if nodes[other]["kind"] == "endpoint" and len(degree.get(other, [])) == 1:
                 tips.append((b, other))
+        if len(tips) == 3:  # a lone junction: the fork is its two short branches
+            tips.sort(key=lambda bt: branches[bt[0]]["length"])
+            if branches[tips[2][0]]["length"] < 3 * branches[tips[1][0]]["length"]:
+                continue
+            tips = tips[:2]
         if len(tips) != 2:
             continue
         (b1, t1), (b2, t2) = tips
@@ -287,7 +292,9 @@ def cut_end_forks(
         pts = a[None] + (c - a)[None] * t[:, None]
         cols = np.clip(np.rint(pts[:, 0]).astype(int), 0, w - 1)
         rows = np.clip(np.rint(pts[:, 1]).astype(int), 0, h - 1)
-        if float(distance()[rows, cols].max()) > 2.0 + 0.25 * r:
+        # (at most half the junction's radius inside: a chord across the interior runs a
+        # radius deep; and mostly on the shape: a notched end's chord runs outside it)
+        if float(distance()[rows, cols].max()) > 1.5 + 0.5 * r or mask[rows, cols].mean() < 0.8:
             continue
         # the line ends on the cut itself: from the chord's middle on to the background
         ahead = (mid - j) / max(float(np.hypot(*(mid - j))), 1e-9)

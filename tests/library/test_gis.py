@@ -188,9 +188,12 @@ def test_cut_ends_end_a_reach_at_the_middle_of_its_cut() -> None:
 def test_cut_ends_leave_a_pointed_end_alone() -> None:
     arrow = Polygon([(0, 0), (2000, 0), (2800, 400), (2000, 800), (0, 800)])
     res = skelprune.prune(arrow)
-    with_rule = endpoints_of(res.to_geojson(cut_ends=True))
-    assert len(with_rule) == 3  # the square end is cut, the pointed one stays
-    assert any(x > 2500 for x, _ in with_rule)
+    assert res.n_endpoints() == 3  # the square end's fork and the point
+    ends = sorted(endpoints_of(res.to_geojson(cut_ends=True)))
+    assert len(ends) == 2  # the square end is cut at its middle, the point stays
+    pixel = res.frame.pixel_size
+    assert ends[0][0] <= pixel and math.isclose(ends[0][1], 400, abs_tol=pixel)
+    assert ends[1][0] > 2700
 
 
 # ------------------------------------------------------------------ one call

@@ -89,8 +89,8 @@ def recentre(lines: list[np.ndarray], index: Any) -> list[np.ndarray]:
     line (along its normal ``n``) the distance to the boundary is a tent,
     ``min(L + t, R - t)``; sampled at ``t = ±h`` on both slopes it gives the medial point
     ``t* = (d(+h) - d(-h)) / 2`` between the two boundary points the disk touches, and
-    its radius. Ends (the nodes) stay, so that lines still meet there; a vertex whose
-    samples leave the polygon stays too.
+    its radius (distances are signed, negative outside, so a sample beyond a bank still
+    counts). Ends (the nodes) stay, so that lines still meet there.
     """
     polygon, tree = index
     out = []
@@ -112,13 +112,13 @@ def recentre(lines: list[np.ndarray], index: Any) -> list[np.ndarray]:
         _, dist = tree.query_nearest(
             shapely.points(samples), return_distance=True, all_matches=False
         )
+        dist = np.where(inside, dist, -dist)  # signed: the tent goes on below zero
         d_lo, d_hi = dist[: len(mid)], dist[len(mid) :]
         t = np.clip((d_hi - d_lo) / 2, -h[:, 0], h[:, 0])
-        good = ok & inside[: len(mid)] & inside[len(mid) :]
         new = ln.copy()
-        new[1:-1][good, :2] = mid[good] + n[good] * t[good, None]
+        new[1:-1][ok, :2] = mid[ok] + n[ok] * t[ok, None]
         # the medial point's radius: the tent's top
-        new[1:-1][good, 2] = (d_lo[good] + d_hi[good]) / 2 + h[good, 0]
+        new[1:-1][ok, 2] = (d_lo[ok] + d_hi[ok]) / 2 + h[ok, 0]
         out.append(new)
     return out
 

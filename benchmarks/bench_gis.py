@@ -142,7 +142,8 @@ def _network(lines: list[LineString], geom: MultiPolygon) -> dict[str, float]:
 
 def _centred(lines: list[LineString], r: River) -> tuple[float, float]:
     """Share of the true centre line within a quarter width of the lines; median offset
-    of the lines from the true centre line over the local width."""
+    of the lines (sampled evenly along them) from the true centre line over the local
+    width."""
     if not lines:
         return 0.0, float("nan")
     ml = MultiLineString(lines)
@@ -151,7 +152,9 @@ def _centred(lines: list[LineString], r: River) -> tuple[float, float]:
     # local width at the true centre line: twice the distance to the banks
     local = 2 * shapely.distance(true_pts, r.polygon.exterior)
     near = shapely.distance(true_pts, ml) <= local / 4
-    pts = shapely.points(np.concatenate([np.asarray(ln.coords)[:, :2] for ln in lines]))
+    # along the lines, evenly: a simplified line's straight stretches count, not only
+    # its vertices
+    pts = shapely.line_interpolate_point(ml, np.linspace(0, 1, 4000), normalized=True)
     offset = shapely.distance(pts, r.centre)
     width_there = 2 * shapely.distance(pts, r.polygon.exterior) + offset * 2
     return float(near.mean()), float(np.median(offset / np.maximum(width_there, 1e-9)))

@@ -3,7 +3,11 @@ for maps (simplified, inside, connected), the cut-end rule and the one-call prun
 
 from __future__ import annotations
 
+import json
 import math
+import subprocess
+import sys
+from pathlib import Path
 
 import networkx as nx
 import numpy as np
@@ -225,3 +229,27 @@ def test_polygon_options_are_checked() -> None:
         skelprune.prune(box(0, 0, 10, 10), pixel_size=1.0, longest_side=64)
     with pytest.raises(skelprune.InvalidPolygonError):
         skelprune.prune({"type": "Point", "coordinates": [0, 0]})
+
+
+# ------------------------------------------------------------------ command line
+def test_cli_prints_map_lines_and_warnings(tmp_path: Path) -> None:
+    path = tmp_path / "islands.geojson"
+    islands = MultiPolygon([box(0, 0, 1000, 1000), box(2000, 2000, 2001, 2001)])
+    path.write_text(json.dumps(mapping(islands)))
+    cmd = [sys.executable, "-m", "skelprune.cli", "prune", str(path)]
+    run = subprocess.run([*cmd, "--longest-side", "64"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    doc = json.loads(run.stdout)
+    assert [w["kind"] for w in doc["warnings"]] == ["vanished"]
+    assert run.stderr.startswith(f"warning: {path}: part 1 of 2 ")
+    reach = tmp_path / "reach.geojson"
+    reach.write_text(json.dumps(mapping(box(0, 0, 3000, 800))))
+    run = subprocess.run(
+        [sys.executable, "-m", "skelprune.cli", "prune", str(reach), "--geojson", "--cut-ends"],
+        capture_output=True,
+        text=True,
+    )
+    assert run.returncode == 0, run.stderr
+    geo = json.loads(run.stdout)
+    assert geo["type"] == "FeatureCollection" and len(endpoints_of(geo)) == 2
+    assert run.stderr == ""

@@ -37,7 +37,12 @@ import shapely
 from shapely.geometry import GeometryCollection, MultiPolygon, Polygon
 
 from skelprune.errors import ImageTooLargeError, InvalidPolygonError, shown
-from skelprune.io.fit import RasterWarning, check_topology, fitted_pixel_size
+from skelprune.io.fit import (
+    RasterWarning,
+    budget_pixel_size,
+    check_topology,
+    fitted_pixel_size,
+)
 from skelprune.io.frame import PixelFrame
 from skelprune.options import (
     DEFAULT_LONGEST_SIDE,
@@ -57,6 +62,8 @@ __all__ = [
 ]
 
 DEFAULT_MARGIN = 2
+#: Times a fitted pixel size is refined to the size the topology check names.
+REFITS = 2
 _SHIFT = 8  # fractional bits for cv2.fillPoly: sub-pixel vertex positions
 _MAX_SIDE = 1 << 20  # keeps fixed-point vertex coordinates inside int32
 #: Largest coordinate magnitude accepted: its square (an area) is still a finite float.
@@ -348,8 +355,8 @@ def polygon_raster(
         return _fill(g, size, margin, max_pixels)
 
     fitted = pixel_size is None and longest_side is None
+    budget = pixel_budget if max_pixels is None else min(pixel_budget, max_pixels)
     if fitted:
-        budget = pixel_budget if max_pixels is None else min(pixel_budget, max_pixels)
         if extent <= 0 or not math.isfinite(extent / DEFAULT_LONGEST_SIDE):
             raise InvalidPolygonError(f"polygon extent {extent:.3g} is too small to rasterise")
         size = fitted_pixel_size(geom, pixels_per_width, budget, DEFAULT_LONGEST_SIDE, margin)
@@ -364,6 +371,16 @@ def polygon_raster(
             pixel_size = extent / side
         mask, frame = fill(geom, pixel_size)
     warnings = check_topology(geom, mask, frame, margin, fill) if check else []
+    if fitted:
+        # A fitted size that loses a part: take the size that holds it, budget allowing
+        # (the size came from a measure; the check is the proof).
+        finest = budget_pixel_size(geom, budget, margin)
+        for _ in range(REFITS):
+            sizes = [w.pixel_size for w in warnings if w.pixel_size is not None]
+            if not sizes or min(sizes) < finest:
+                break
+            mask, frame = fill(geom, min(sizes))
+            warnings = check_topology(geom, mask, frame, margin, fill)
     return PolygonRaster(geom, mask, frame, fitted, warnings)
 
 

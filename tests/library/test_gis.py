@@ -111,6 +111,19 @@ def test_a_vanished_part_and_a_lost_hole_are_reported() -> None:
     assert res.to_dict()["warnings"] == res.to_geojson()["properties"]["warnings"]
 
 
+def test_a_fitted_size_that_closes_an_inlet_is_refined() -> None:
+    # a lagoon behind a mouth 1.5 wide: the width measure sees no narrow part (the mouth
+    # is a gap, outside), the 512-pixel raster closes it, the check asks for less
+    lagoon = box(0, 0, 1000, 1000).difference(
+        shapely.union_all([box(400, 400, 600, 600), box(499.25, 600, 500.75, 1001)])
+    )
+    coarse = skelprune.prune(lagoon, longest_side=512)
+    assert [w["kind"] for w in coarse.warnings] == ["holes"]
+    res = skelprune.prune(lagoon)
+    assert res.warnings == []
+    assert res.frame.pixel_size <= coarse.warnings[0]["pixel_size"]
+
+
 # ------------------------------------------------------------------ lines for maps
 def test_map_lines_are_simplified_inside_and_connected() -> None:
     r = river(6_000, 20, 80, seed=4)

@@ -335,7 +335,9 @@ def figures(out: Path) -> list[Path]:
                 ax.plot(*ln.xy, ".", color="#c0392b", ms=2)
             if window is not None:
                 ax.set_xlim(*window)
-            ax.set_aspect("equal", adjustable="datalim")
+                ax.set_aspect("equal", adjustable="box")
+            else:
+                ax.set_aspect("equal", adjustable="datalim")
             ax.set_title(f"{name}: {tool} ({sum(len(ln.coords) for ln in lines)} vertices)")
             ax.set_xticks([])
             ax.set_yticks([])

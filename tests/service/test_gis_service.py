@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import io
+
+import numpy as np
 from fastapi.testclient import TestClient
+from PIL import Image
 from shapely.geometry import box, mapping
 
 from service.schemas import PruneDocument, SkeletonGeoJSON
@@ -63,3 +67,37 @@ def test_map_options_shape_the_geojson_and_are_refused_elsewhere(client: TestCli
     assert resp.status_code == 422 and "GeoJSON answer" in resp.text
     resp = client.post("/v1/prune", json=reach, params={"simplify": -1}, headers=geo)
     assert resp.status_code == 422
+
+
+def test_map_options_in_the_body_and_for_png_input(client: TestClient) -> None:
+    geo = {"accept": "application/geo+json"}
+    reach = mapping(box(0, 0, 3000, 800))
+
+    def vertices(body: dict) -> int:
+        feats = body["features"]
+        return sum(
+            len(f["geometry"]["coordinates"])
+            for f in feats
+            if f["geometry"]["type"] == "LineString"
+        )
+
+    exact = client.post("/v1/prune", json={"geojson": reach, "simplify": 0}, headers=geo)
+    simple = client.post("/v1/prune", json={"geojson": reach}, headers=geo)
+    assert exact.status_code == simple.status_code == 200
+    assert vertices(simple.json()) < vertices(exact.json())
+    mask = np.zeros((60, 200), np.uint8)
+    mask[10:50, 10:190] = 255
+    buf = io.BytesIO()
+    Image.fromarray(mask).save(buf, "PNG")
+    forms = [
+        client.post(
+            "/v1/prune",
+            data=data,
+            files={"file": ("r.png", buf.getvalue(), "image/png")},
+            headers=geo,
+        )
+        for data in ({"simplify": "0"}, {})
+    ]
+    assert all(r.status_code == 200 for r in forms)
+    assert vertices(forms[1].json()) < vertices(forms[0].json())
+    assert "warnings" not in forms[1].json()["properties"]  # images have none to give

@@ -1,7 +1,7 @@
 """Centre lines for GIS users: skelprune against pygeoops.centerline and centerline.
 
 ``python -m benchmarks gis`` prunes real polygons (Natural Earth countries in
-``benchmarks/data/gis``, see its README) and generated rivers with a known centre line
+``data/gis``, see its README) and generated rivers with a known centre line
 (``testkit.rivers``, a 50 km one 20–200 m wide among them) at default options, and the
 same with ``pygeoops.centerline`` and ``centerline.geometry.Centerline`` (the ``bench``
 extra; a tool missing or over its time cap is shown as such). Per tool and polygon:
@@ -39,9 +39,10 @@ from shapely.geometry import LineString, MultiLineString, MultiPolygon
 import skelprune
 from benchmarks.common import table
 from skelprune.io.polygon import parse_geojson
+from testkit import DATA
 from testkit.rivers import River, river
 
-DATA = Path(__file__).with_name("data") / "gis"
+GIS = DATA / "gis"
 #: Seconds a reference tool may take on one polygon before it is skipped for the rest.
 CAP = float(os.environ.get("SKELPRUNE_BENCH_GIS_CAP", "60"))
 
@@ -169,7 +170,7 @@ def _polygons(quick: bool) -> list[tuple[str, MultiPolygon, River | None]]:
     ]
     out += [(name, MultiPolygon([r.polygon]), r) for name, r in rivers]
     if not quick:
-        for path in sorted(DATA.glob("*.geojson")):
+        for path in sorted(GIS.glob("*.geojson")):
             geom = parse_geojson(json.loads(path.read_text()))
             out.append((path.stem, geom, None))
     return out
@@ -316,8 +317,8 @@ def figures(out: Path) -> list[Path]:
     r = river(50_000, 20, 200, seed=0)
     cases = [
         ("river", MultiPolygon([r.polygon]), (20_000, 26_000)),
-        ("gambia", parse_geojson(json.loads((DATA / "gambia.geojson").read_text())), None),
-        ("croatia", parse_geojson(json.loads((DATA / "croatia.geojson").read_text())), None),
+        ("gambia", parse_geojson(json.loads((GIS / "gambia.geojson").read_text())), None),
+        ("croatia", parse_geojson(json.loads((GIS / "croatia.geojson").read_text())), None),
     ]
     written = []
     for name, geom, window in cases:

@@ -1,12 +1,12 @@
-"""Stability benchmark (SPEC §5): which pruning variant keeps its endpoints.
+"""Stability benchmark: which pruning variant keeps its endpoints.
 
-On kimia216 and kimia99, every perturbation of ``skelprune.evaluation.perturb.PERTURBATIONS``: share
+On kimia216 and kimia99, every perturbation of ``evaluation.perturb.PERTURBATIONS``: share
 of shapes whose endpoint count is unchanged, for ``coarse=None``, ``coarse="dce"``,
 ``method="dce"`` and the ``skeletonize`` + branch-cut baseline; the noisy rectangles of
 the paper's Table 2; median RER and ms a shape; how far the skeleton moves (skeleton
 distance); and the comparison with the authors' code on the masks of ``data/anchors``
-(``skelprune.evaluation.anchors``). The computation lives in
-``skelprune.evaluation.stability`` (``skelprune eval`` reports the same numbers).
+(``evaluation.anchors``). The computation lives in
+``evaluation.stability`` (``python -m evaluation`` reports the same numbers).
 
 ``python -m benchmarks stability`` runs everything (2 worker processes) and rewrites
 ``docs/stability.md``; ``python -m benchmarks.bench_stability --quick`` runs 20 shapes a
@@ -19,8 +19,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from skelprune.evaluation.anchors import anchors_markdown, run_anchors
-from skelprune.evaluation.report import (
+from evaluation.anchors import anchors_markdown, run_anchors
+from evaluation.report import (
     agreement_table,
     clean_table,
     distance_table,
@@ -28,7 +28,7 @@ from skelprune.evaluation.report import (
     stability_markdown,
     targets_table,
 )
-from skelprune.evaluation.stability import load_dataset, run_stability
+from evaluation.stability import load_dataset, run_stability
 
 from .common import DATA
 

@@ -1,11 +1,11 @@
 """Decoding of PNG files and arrays into boolean shape masks.
 
-Rules (SPEC §4): greyscale, RGB, RGBA, palette (with or without transparency) and
+Rules (docs/service.md): greyscale, RGB, RGBA, palette (with or without transparency) and
 16-bit PNGs are accepted. Which pixels are the shape is decided by the foreground rule
 of :mod:`skelprune.io.foreground` (``auto`` by default: the background is the grey level
 holding most of the border; ``nonzero`` and ``zero`` on request).
 
-Choices made where the SPEC is silent:
+Choices made where the PNG format leaves room:
 
 - An image uses transparency when at least one pixel is fully transparent: alpha 0 in
   an alpha channel, a palette entry with alpha 0 that some pixel uses, or a pixel equal

@@ -1,4 +1,4 @@
-"""Results of pruning and their serialisation (SPEC §3).
+"""Results of pruning and their serialisation (docs/graph.md).
 
 ``ComponentResult`` holds arrays (skan's "data" side); ``to_dict`` and
 ``to_geojson`` are the reporting side, producing plain JSON types.
@@ -400,7 +400,7 @@ class PruneResult:
         frame: PixelFrame | None = None,
         sequence: bool = False,
     ) -> dict[str, Any]:
-        """The output document (plain JSON types).
+        """The output document of docs/graph.md (plain JSON types).
 
         ``frame`` None: the result's own frame (a polygon's coordinates, an image's
         pixels); :data:`~skelprune.io.frame.IDENTITY` for the raster's pixels. A polygon's

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from evaluation.perturb import boundary_noise, noisy_rectangle
 from skelprune.api import components
-from skelprune.evaluation.perturb import boundary_noise, noisy_rectangle
 from skelprune.graph import BranchGraph
 from skelprune.medial_axis import medial_axis, squared_distance
 from skelprune.pruning.bayesian import remove_unsupported
@@ -57,7 +57,7 @@ def test_boundary_noise_raises_roughness_and_threshold(kind, scale):
 def test_the_vertex_budget_bounds_every_polygon():
     """A large boundary with many relevant bumps keeps at most the budget; a clean shape
     with few relevant vertices keeps few (the budget is a cap, not a target)."""
-    from skelprune.evaluation.perturb import resampled_noise
+    from evaluation.perturb import resampled_noise
 
     rr, cc = np.mgrid[:400, :400]
     radius = np.hypot(rr - 200, cc - 200)

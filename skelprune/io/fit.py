@@ -218,7 +218,7 @@ def check_topology(
     for i in failing[:SEARCHED_PARTS]:
         part = parts[i]
         count = int(comps_of[i])
-        where = f"part {i} of {len(parts)}" if len(parts) > 1 else "the polygon"
+        where = f"part #{i} of {len(parts)}" if len(parts) > 1 else "the polygon"
         fix = holding_size(part, size, margin, rasterize)
         advice = (
             f"; a pixel_size of {fix:.4g} or less holds it"

@@ -254,7 +254,7 @@ def test_cli_prints_map_lines_and_warnings(tmp_path: Path) -> None:
     assert run.returncode == 0, run.stderr
     doc = json.loads(run.stdout)
     assert [w["kind"] for w in doc["warnings"]] == ["vanished"]
-    assert run.stderr.startswith(f"warning: {path}: part 1 of 2 ")
+    assert run.stderr.startswith(f"warning: {path}: part #1 of 2 ")
     reach = tmp_path / "reach.geojson"
     reach.write_text(json.dumps(mapping(box(0, 0, 3000, 800))))
     run = subprocess.run(

@@ -493,10 +493,10 @@ class PruneResult:
             if cut_ends:
                 lines, ends_at, moved = cut_end_forks(nodes, branches, lines, self.mask, distance)
             kept = [i for i, ln in enumerate(lines) if ln is not None]
-            chosen = [lines[i] for i in kept]
-            if index is not None:  # the exact polygon: sub-pixel medial positions
-                chosen = recentre(chosen, index)
-            simple = map_lines(chosen, simplify, self.mask, polygon)
+            exact = [lines[i] for i in kept]
+            # the exact polygon gives sub-pixel medial positions
+            chosen = exact if index is None else recentre(exact, index)
+            simple = map_lines(chosen, simplify, self.mask, polygon, exact)
             used: set[int] = set()
             for i, line in zip(kept, simple, strict=True):
                 br = branches[i]

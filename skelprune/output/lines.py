@@ -183,14 +183,18 @@ def map_lines(
     tolerance: float,
     mask: np.ndarray,
     polygon: Any = None,
+    exact: list[np.ndarray] | None = None,
 ) -> list[np.ndarray]:
     """Simplify pixel-coordinate lines ``(x, y, radius)`` within ``tolerance`` pixels.
 
     ``polygon`` (in pixel coordinates), if given, is the shape the lines must stay in;
-    else the ``mask``'s pixels. Returns the kept rows of each line.
+    else the ``mask``'s pixels. ``exact``: the skeleton's own pixel paths, which never
+    cross, kept for a line that no tolerance keeps inside and uncrossed (default:
+    ``lines`` themselves). Returns the kept rows of each line.
     """
+    exact = lines if exact is None else exact
     if tolerance <= 0:
-        return lines
+        return exact
     inside = _inside_mask(mask) if polygon is None else _inside_geometry(polygon)
     tol = [float(tolerance)] * len(lines)
     out = list(lines)
@@ -200,14 +204,17 @@ def map_lines(
         for i in todo:
             ln = lines[i]
             out[i] = ln
-            if attempt == RETRIES or len(ln) <= 2:  # the last round keeps the exact line
+            if attempt == RETRIES:  # the last round keeps the exact path
+                out[i] = exact[i]
+                continue
+            if len(ln) <= 2:
                 continue
             cand = ln[douglas_peucker(ln[:, :2], tol[i])]
             if len(cand) < len(ln) and not inside(cand[:, :2]) and inside(ln[:, :2]):
                 again.add(i)
                 continue
             out[i] = cand
-        again |= _crossing(out, lines)
+        again |= _crossing(out, exact)
         for i in again:
             tol[i] /= 2
         todo = sorted(again)
@@ -217,8 +224,8 @@ def map_lines(
 
 
 def _crossing(out: list[np.ndarray], exact: list[np.ndarray]) -> set[int]:
-    """Lines that meet another anywhere but at an end they share (only simplified lines
-    are suspects: exact pixel paths never cross)."""
+    """Lines that meet another anywhere but at an end they share (the exact pixel paths
+    never cross: a pair of them is not tested)."""
     geoms = [LineString(o[:, :2]) if len(o) >= 2 else None for o in out]
     valid = [i for i, g in enumerate(geoms) if g is not None]
     if len(valid) < 2:

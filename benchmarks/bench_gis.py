@@ -249,8 +249,46 @@ def forks() -> None:
     )
 
 
+TARGET = """
+import resource, time, skelprune
+from testkit.rivers import river
+r = river(50_000, 20, 200, seed=0)
+skelprune.prune(r.polygon)  # the kernels loaded
+times = []
+for _ in range(5):
+    t = time.perf_counter()
+    res = skelprune.prune(r.polygon)
+    geo = res.to_geojson()
+    times.append(time.perf_counter() - t)
+lines = [f for f in geo["features"] if f["geometry"]["type"] == "LineString"]
+rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+print(sorted(times)[2], len(res.components), len(lines), res.n_endpoints(), rss)
+"""
+
+
+def target() -> None:
+    """The 50 km river at default options in a fresh process: prune and GeoJSON, median
+    of five, and the process's peak resident memory (imports included)."""
+    import subprocess
+    import sys
+
+    from testkit import REPO
+
+    run = subprocess.run(
+        [sys.executable, "-c", TARGET], capture_output=True, text=True, cwd=REPO, check=True
+    )
+    secs, comps, lines, ends, rss = run.stdout.split()
+    ok = float(secs) <= 1 and float(rss) <= 500 and comps == "1" and lines == "1"
+    print(
+        f"50 km river, default options: {comps} component, {lines} line, {ends} ends, "
+        f"{float(secs):.2f} s (median of 5), peak RSS {float(rss):.0f} MB; target "
+        f"(one connected line, <= 1 s, <= 500 MB) {'met' if ok else 'MISSED'}"
+    )
+
+
 def main() -> None:
     quick = os.environ.get("SKELPRUNE_BENCH_QUICK") == "1"
+    target()
     skelprune.prune(np.pad(np.ones((20, 40), bool), 5))  # kernels loaded before timing
     sweep()
     forks()

@@ -2,11 +2,11 @@
 
 The document lists every pixel of a branch; a map wants a few vertices per width. Each
 branch's line (from its source node to its target node, :func:`branch_line`) is
-simplified by Douglas–Peucker within ``tolerance`` pixels, keeping its two ends, so
-that lines still meet exactly at their nodes and the network stays connected. A
-simplified line that leaves the shape, or crosses another line anywhere but at a shared
-node, is simplified again at half the tolerance (three times at most, then the exact
-line is kept).
+simplified by Douglas–Peucker within ``tolerance`` pixels, keeping its two ends (a loop
+keeps three points round it), so that lines still meet exactly at their nodes and the
+network keeps its connections and its rings. A simplified line that leaves the shape,
+crosses itself, or crosses another line anywhere but at a shared node, is simplified
+again at half the tolerance (three times at most, then the exact path is kept).
 
 ``cut_ends``: a reach cut straight across (a river clipped at a map's edge) ends in a
 fork, two short branches running to the cut's two corners. Where a junction has two end
@@ -46,6 +46,9 @@ def douglas_peucker(xy: np.ndarray, tolerance: float) -> np.ndarray:
     >>> xy = np.array([[0, 0], [1, 0.1], [2, 0], [3, 2]], float)
     >>> douglas_peucker(xy, 0.5).tolist()
     [0, 2, 3]
+    >>> ring = np.array([[0, 0], [1, 0], [2, 0], [2, 1], [1, 1], [0, 1], [0, 0]], float)
+    >>> len(douglas_peucker(ring, 5.0))  # a loop keeps three corners and its closing point
+    4
     """
     n = len(xy)
     if n <= 2 or tolerance <= 0:
@@ -53,6 +56,10 @@ def douglas_peucker(xy: np.ndarray, tolerance: float) -> np.ndarray:
     keep = np.zeros(n, bool)
     keep[0] = keep[-1] = True
     stack = [(0, n - 1)]
+    if n >= 4 and np.array_equal(xy[0], xy[-1]):
+        # a closed loop stays a ring: a third and two thirds round are kept too
+        keep[n // 3] = keep[2 * n // 3] = True
+        stack = [(0, n // 3), (n // 3, 2 * n // 3), (2 * n // 3, n - 1)]
     while stack:
         a, b = stack.pop()
         if b - a < 2:
@@ -210,8 +217,11 @@ def map_lines(
             if len(ln) <= 2:
                 continue
             cand = ln[douglas_peucker(ln[:, :2], tol[i])]
-            if len(cand) < len(ln) and not inside(cand[:, :2]) and inside(ln[:, :2]):
-                again.add(i)
+            if len(cand) < len(ln) and (
+                not LineString(cand[:, :2]).is_simple
+                or (not inside(cand[:, :2]) and inside(ln[:, :2]))
+            ):
+                again.add(i)  # it folded onto itself, or left the shape
                 continue
             out[i] = cand
         again |= _crossing(out, exact)

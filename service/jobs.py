@@ -20,7 +20,7 @@ from skelprune.errors import ImageTooLargeError, InvalidImageError, SkelpruneErr
 from skelprune.io import read_shape
 from skelprune.io.foreground import POLYGON_FOREGROUND, Foreground
 from skelprune.io.frame import PixelFrame
-from skelprune.io.polygon import polygon_mask
+from skelprune.io.polygon import PolygonRaster, parse_geojson, polygon_raster
 from skelprune.output.render import auto_scale
 
 __all__ = ["Job", "JobResult", "answer_pixels", "dumps", "kernel_counts", "run_job", "warmup"]
@@ -53,6 +53,8 @@ class Job:
     sequence: bool = False
     overlay_scale: int | None = None  # None: the library's readable default
     overlay_legend: bool = False
+    simplify: float = 0.5
+    cut_ends: bool = False
     max_pixels: int | None = None
     foreground: str = "auto"
     memory_budget: int | None = None  # bytes a worker may hold for the job
@@ -134,6 +136,16 @@ def warmup(memory_budget: int | None = None) -> str:
     return f"{loaded} numba kernels loaded from the cache in {took}"
 
 
+def _raster(job: Job) -> PolygonRaster:
+    raster = dict(job.raster)
+    geom = parse_geojson(
+        job.geojson or {},
+        max_vertices=raster.pop("max_vertices", None),
+        repair=raster.pop("repair", True),
+    )
+    return polygon_raster(geom, max_pixels=job.max_pixels, **raster)
+
+
 def _mask(job: Job) -> tuple[np.ndarray, PixelFrame | None, Foreground]:
     if job.png is not None:
         # read_shape also opens files by path: never let anything but bytes through.
@@ -144,8 +156,8 @@ def _mask(job: Job) -> tuple[np.ndarray, PixelFrame | None, Foreground]:
         )
         return mask, None, taken
     assert job.geojson is not None
-    mask, frame = polygon_mask(job.geojson, max_pixels=job.max_pixels, **job.raster)
-    return mask, frame, POLYGON_FOREGROUND
+    raster = _raster(job)
+    return raster.mask, raster.frame, POLYGON_FOREGROUND
 
 
 def answer_pixels(job: Job, shape: tuple[int, int]) -> int:
@@ -184,14 +196,21 @@ def run_job(job: Job) -> JobResult:
 def _run_job(job: Job) -> JobResult:
     import skelprune
 
-    mask, frame, taken = _mask(job)
+    raster, taken = None, None
+    if job.geojson is not None:
+        raster = _raster(job)
+        mask = raster.mask
+    else:
+        mask, _, taken = _mask(job)
     cost = estimate(mask, answer_pixels(job, mask.shape))
     check_budget(cost, job.memory_budget, job.time_budget)
     t0 = time.perf_counter()
-    res = skelprune.prune(mask, **job.prune_options)
+    if raster is not None:
+        res = skelprune.api.prune_raster(raster, **job.prune_options)
+    else:
+        res = skelprune.prune(mask, **job.prune_options)
+        res.foreground = taken
     elapsed = time.perf_counter() - t0
-    res.foreground = taken
-    framing = {} if frame is None else {"frame": frame}  # None: the image's own pixel frame
     headers: dict[str, str] = {}
     if job.output == "png":
         body = res.overlay_png(job.overlay_scale, job.overlay_legend)
@@ -200,10 +219,12 @@ def _run_job(job: Job) -> JobResult:
             for name, key in PNG_HEADERS.items()
         }
         headers["X-Skelprune-Components"] = str(len(res.components))
+        if res.warnings:  # a polygon the raster does not hold as it is
+            headers["X-Skelprune-Warnings"] = str(len(res.warnings))
     elif job.output == "geojson":
-        body = dumps(res.to_geojson(**framing))
+        body = dumps(res.to_geojson(simplify=job.simplify, cut_ends=job.cut_ends))
     else:
-        doc = res.to_dict(curve=job.curve, sequence=job.sequence, **framing)
+        doc = res.to_dict(curve=job.curve, sequence=job.sequence)
         if job.overlay:
             png = res.overlay_png(job.overlay_scale, job.overlay_legend)
             doc["overlay_png"] = base64.b64encode(png).decode("ascii")

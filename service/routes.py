@@ -77,6 +77,8 @@ QUERY_OPTIONS = frozenset(PruneQuery.model_fields)  # no aliases: field name = p
 JSON_ONLY = ("curve", "overlay", "sequence")
 #: Options of the overlay image: for Accept: image/png, or the JSON with overlay=true.
 OVERLAY_ONLY = ("overlay_scale", "overlay_legend")
+#: Options of the GeoJSON answer only.
+GEOJSON_ONLY = ("simplify", "cut_ends")
 #: Tags of the JSON body's union: pydantic puts them in error locations, the user's body
 #: has no such level.
 BODY_TAGS = frozenset({"Polygon", "MultiPolygon", "Feature", "FeatureCollection", "job"})
@@ -193,6 +195,13 @@ def _options(query: PruneQuery, body: Any, polygon: bool, output: Output) -> dic
                 f"option(s) {', '.join(misplaced)} only apply to the JSON document "
                 f"(Accept: application/json), not to the {MEDIA_TYPES[output]} answer"
             )
+    if output != "geojson":
+        misplaced = [k for k in GEOJSON_ONLY if k in opts]
+        if misplaced:
+            raise InvalidOptionError(
+                f"option(s) {', '.join(misplaced)} only apply to the GeoJSON answer "
+                "(Accept: application/geo+json)"
+            )
     if output == "geojson" or (output == "json" and not opts.get("overlay")):
         misplaced = [k for k in OVERLAY_ONLY if k in opts]
         if misplaced:
@@ -286,9 +295,11 @@ Compute the pruned skeleton of a shape.
 - `multipart/form-data`: the PNG in the field `file`;
 - `application/json` (or `application/geo+json`): a GeoJSON `Polygon`, `MultiPolygon`,
   `Feature` or `FeatureCollection` (holes allowed), or an object
-  `{"geojson": <GeoJSON>, <options>}`. The polygon is rasterised (default: longer side
-  512 px) and every coordinate, radius and length in the answer is in the polygon's
-  own frame and units.
+  `{"geojson": <GeoJSON>, <options>}`. The polygon is rasterised (default: a pixel size
+  fitted to the polygon, a few pixels across its narrowest part) and every coordinate,
+  radius and length in the answer is in the polygon's own frame and units. Where the
+  raster does not hold a part of the polygon as it is (a part vanished or split, a hole
+  closed), the answer says so in `warnings`, with a pixel size that holds it.
 
 **Output** (by `Accept`): `application/json` (default) the result document
 (`PruneDocument` below: per component its RER, SS, λ and the skeleton graph, nodes with
@@ -376,7 +387,7 @@ def _job(
     raster: dict[str, Any] = {}
     if geojson is not None:
         given = _group(opts, RasterOptions)
-        if "pixel_size" not in given:
+        if "pixel_size" not in given and settings.polygon_longest_side is not None:
             given.setdefault("longest_side", settings.polygon_longest_side)
         raster = {**RasterOptions(**given).kwargs(), "max_vertices": settings.max_vertices}
     return Job(
@@ -390,6 +401,8 @@ def _job(
         sequence=output_options.sequence,
         overlay_scale=output_options.overlay_scale,
         overlay_legend=output_options.overlay_legend,
+        simplify=output_options.simplify,
+        cut_ends=output_options.cut_ends,
         max_pixels=settings.max_pixels,
         foreground=read_options.foreground,
         memory_budget=settings.job_memory_mb * 2**20,
@@ -700,7 +713,7 @@ async def match(
     raster: dict[str, Any] = {}
     if shapes is not None:
         given = _group(opts, RasterOptions)
-        if "pixel_size" not in given:
+        if "pixel_size" not in given and settings.polygon_longest_side is not None:
             given.setdefault("longest_side", settings.polygon_longest_side)
         raster = {**RasterOptions(**given).kwargs(), "max_vertices": settings.max_vertices}
     inputs = (

@@ -79,7 +79,7 @@ def _option_models() -> tuple[type[BaseModel], dict[str, Any], dict[str, Any]]:
             if only:
                 text = f"{only} input only: " + text[0].lower() + text[1:]
             if f.name == "longest_side":
-                text += " The server's default is `SKELPRUNE_POLYGON_LONGEST_SIDE`."
+                text += " A server may set a default (`SKELPRUNE_POLYGON_LONGEST_SIDE`)."
             schema = getattr(f.metadata["check"], "schema", None)
             fields[f.name] = (wire | None, Field(None, description=text, json_schema_extra=schema))
     validators = {"check": field_validator(*fields)(_check)}
@@ -382,6 +382,32 @@ class Versions(BaseModel):
     )
 
 
+class RasterInfo(BaseModel):
+    """How a polygon was rasterised (polygon input only)."""
+
+    model_config = STRICT
+    pixel_size: float = Field(description="Side of a pixel, in the polygon's units.")
+    width: int
+    height: int
+    fitted: bool = Field(
+        description="True when the pixel size was fitted to the polygon (neither "
+        "pixel_size nor longest_side given)."
+    )
+    parts: int = Field(description="Parts of the (repaired) polygon.")
+
+
+class RasterWarningItem(BaseModel):
+    """A part of the polygon that the raster does not hold as it is."""
+
+    model_config = STRICT
+    kind: Literal["vanished", "split", "merged", "holes"]
+    message: str
+    part: int | None = Field(description="The polygon part meant, if one is.")
+    pixel_size: float | None = Field(
+        description="A pixel size that holds it (null: none found within the limits)."
+    )
+
+
 class PruneDocument(BaseModel):
     """The output document."""
 
@@ -394,6 +420,13 @@ class PruneDocument(BaseModel):
     coarse: Literal["dce"] | None
     foreground: ForegroundTaken
     components: list[Component]
+    raster: RasterInfo | None = Field(None, description="Polygon input only.")
+    warnings: list[RasterWarningItem] | None = Field(
+        None,
+        description="Polygon input only: parts the raster does not hold as they are "
+        "(vanished, split, merged with another, holes lost or added); empty when it holds "
+        "them all.",
+    )
     overlay_png: str | None = Field(None, description="Base64 PNG; only with overlay=true.")
 
 
@@ -471,6 +504,9 @@ class CollectionProperties(BaseModel):
     beta: float
     coarse: Literal["dce"] | None
     components: list[ComponentSummary]
+    warnings: list[RasterWarningItem] | None = Field(
+        None, description="Polygon input only, as in the JSON document."
+    )
 
 
 class SkeletonGeoJSON(BaseModel):

@@ -126,8 +126,12 @@ class Settings(BaseSettings):
     max_headers: int = Field(
         100, ge=8, description="Most header fields in one request (431, connection closed)."
     )
-    polygon_longest_side: int = Field(
-        512, ge=8, le=16384, description="Default raster size of a polygon's longer side, px."
+    polygon_longest_side: int | None = Field(
+        None,
+        ge=8,
+        le=16384,
+        description="Default raster size of a polygon's longer side, px (unset: a pixel "
+        "size fitted to each polygon).",
     )
     mp_context: Literal["forkserver", "spawn"] = Field(
         "forkserver",

@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import replace
-from typing import Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from scipy import ndimage
 
 from .errors import EmptyMaskError, InvalidOptionError
 from .io.foreground import select
-from .options import METHODS, PruneOptions, check_option
+from .options import METHODS, PruneOptions, RasterOptions, check_option
 from .output.document import ComponentResult, GraphSummary, PruneResult
 from .pruning.bayesian import bayesian_sequence, choose_step, remove_unsupported
 from .pruning.coarse import coarse_dce
@@ -24,7 +25,10 @@ from .pruning.margin import Margins, branch_margins
 from .reconstruction import count_covered
 from .skeleton import Skeleton
 
-__all__ = ["METHODS", "components", "prune", "prune_component"]
+if TYPE_CHECKING:
+    from .io.polygon import PolygonRaster
+
+__all__ = ["METHODS", "components", "prune", "prune_component", "prune_raster"]
 
 EIGHT = np.ones((3, 3), dtype=bool)
 
@@ -118,21 +122,36 @@ def prune_component(
     )
 
 
+def _is_polygon(shape: Any) -> bool:
+    return isinstance(shape, Mapping) or hasattr(shape, "__geo_interface__")
+
+
 def prune(
-    mask: np.ndarray,
+    mask: Any,
     beta: float = 9.0,
     method: Literal["bayesian", "dce"] = "bayesian",
     coarse: Literal["dce"] | None = "dce",
     dce_threshold: float | None = None,
     foreground: Literal["auto", "nonzero", "zero"] = "nonzero",
     min_margin: float | None = None,
+    *,
+    pixel_size: float | None = None,
+    longest_side: int | None = None,
+    pixels_per_width: float = RasterOptions.pixels_per_width,
+    pixel_budget: int = RasterOptions.pixel_budget,
+    repair: bool = RasterOptions.repair,
 ) -> PruneResult:
-    """Pruned skeleton of every 8-connected component of a binary mask.
+    """Pruned skeleton of every 8-connected component of a binary mask, or of a polygon.
 
     Parameters
     ----------
-    mask : (H, W) array
-        The image; by default its non-zero pixels are the shape.
+    mask : (H, W) array, GeoJSON mapping or shapely geometry
+        The image (by default its non-zero pixels are the shape), or a polygon: a GeoJSON
+        ``Polygon``, ``MultiPolygon``, ``Feature`` or ``FeatureCollection`` as a mapping,
+        or a shapely (Multi)Polygon. A polygon is rasterised
+        (:func:`skelprune.io.polygon.polygon_raster`) and its result maps itself back:
+        ``to_dict()`` and ``to_geojson()`` answer in the polygon's coordinates and carry
+        the raster's ``warnings``.
     beta : float
         Weight of the reconstruction term, ``α = β·log(length(M)/ℓ̄)``; the paper's 9.
     method : {"bayesian", "dce"}
@@ -155,6 +174,9 @@ def prune(
         For ``method="bayesian"``: drop the answer's end branches whose margin
         (:mod:`skelprune.pruning.margin`) is below this, one at a time, cheapest first, as
         the sequence would go on removing them. Default: off (the paper's answer).
+    pixel_size, longest_side, pixels_per_width, pixel_budget, repair
+        Polygon input only: how it becomes a raster (:class:`skelprune.options.RasterOptions`;
+        default: a pixel size fitted to the polygon).
 
     Returns
     -------
@@ -174,7 +196,45 @@ def prune(
     >>> comp = res.components[0]
     >>> len(comp.to_dict()["skeleton"]["endpoints"]), comp.rer < 0.05
     (4, True)
+
+    A polygon, in its own coordinates:
+
+    >>> strip = {"type": "Polygon",
+    ...          "coordinates": [[[0, 0], [1000, 0], [1000, 20], [0, 20], [0, 0]]]}
+    >>> res = prune(strip)
+    >>> doc = res.to_dict()
+    >>> doc["raster"]["fitted"], doc["warnings"]
+    (True, [])
+    >>> res.to_geojson()["features"][0]["geometry"]["type"]
+    'LineString'
     """
+    if _is_polygon(mask):
+        from .io.polygon import parse_geojson, polygon_raster
+
+        raster_opts = RasterOptions(
+            pixel_size=pixel_size,
+            longest_side=longest_side,
+            pixels_per_width=pixels_per_width,
+            pixel_budget=pixel_budget,
+            repair=repair,
+        )
+        obj = mask if isinstance(mask, Mapping) else mask.__geo_interface__
+        geom = parse_geojson(obj, repair=raster_opts.repair)
+        raster = polygon_raster(
+            geom,
+            pixel_size=raster_opts.pixel_size,
+            longest_side=raster_opts.longest_side,
+            pixels_per_width=raster_opts.pixels_per_width,
+            pixel_budget=raster_opts.pixel_budget,
+        )
+        return prune_raster(
+            raster,
+            beta=beta,
+            method=method,
+            coarse=coarse,
+            dce_threshold=dce_threshold,
+            min_margin=min_margin,
+        )
     opts = PruneOptions(
         beta=beta, method=method, coarse=coarse, dce_threshold=dce_threshold, min_margin=min_margin
     )
@@ -192,4 +252,15 @@ def prune(
         result.foreground = taken
     for crop, origin in components(fg):
         result.components.append(prune_component(crop, origin, opts))
+    return result
+
+
+def prune_raster(raster: PolygonRaster, **options: Any) -> PruneResult:
+    """:func:`prune` of a rasterised polygon (:func:`skelprune.io.polygon.polygon_raster`):
+    the result keeps the raster, so that it maps itself back to the polygon."""
+    from .io.foreground import POLYGON_FOREGROUND
+
+    result = prune(raster.mask, **options)
+    result.foreground = POLYGON_FOREGROUND
+    result.raster = raster
     return result

@@ -80,28 +80,29 @@ def _prune(
     raster: RasterOptions,
     curve: bool,
     sequence: bool = False,
+    geojson: OutputOptions | None = None,
 ) -> tuple[PruneResult, dict[str, Any]]:
-    """The result and its document (a polygon's in the polygon's own coordinates)."""
+    """The result and its document (a polygon's in the polygon's own coordinates), or its
+    GeoJSON with ``geojson``'s line options."""
     from .api import prune
 
-    framing: dict[str, Any] = {}
     if path.lower().endswith(GEOJSON_SUFFIXES):
-        from .io.foreground import POLYGON_FOREGROUND
-        from .io.polygon import polygon_mask
-
         try:
             shape = json.loads(Path(path).read_bytes())
         except (ValueError, UnicodeDecodeError) as exc:
             raise InvalidPolygonError(f"not a GeoJSON file: {exc}") from None
-        mask, framing["frame"] = polygon_mask(shape, **raster.kwargs())
-        taken = POLYGON_FOREGROUND
+        if not isinstance(shape, dict):
+            raise InvalidPolygonError("not a GeoJSON object")
+        res = prune(shape, **options.kwargs(), **raster.kwargs())
     else:
         from .io import read_shape
 
         mask, taken = read_shape(path, foreground=read.foreground)
-    res = prune(mask, **options.kwargs())
-    res.foreground = taken
-    return res, res.to_dict(curve=curve, sequence=sequence, **framing)
+        res = prune(mask, **options.kwargs())
+        res.foreground = taken
+    if geojson is not None:
+        return res, res.to_geojson(simplify=geojson.simplify, cut_ends=geojson.cut_ends)
+    return res, res.to_dict(curve=curve, sequence=sequence)
 
 
 def _prune_file(
@@ -111,9 +112,14 @@ def _prune_file(
     raster: RasterOptions,
     curve: bool,
     sequence: bool = False,
+    geojson: OutputOptions | None = None,
 ) -> dict[str, Any]:
     try:
-        return {"file": path, "result": _prune(path, read, options, raster, curve, sequence)[1]}
+        res, doc = _prune(path, read, options, raster, curve, sequence, geojson)
+        line = {"file": path, "result": doc}
+        if res.warnings:
+            line["warnings"] = [w["message"] for w in res.warnings]
+        return line
     except (SkelpruneError, OSError) as exc:
         return {"file": path, "error": f"{type(exc).__name__}: {exc}"}
 
@@ -210,7 +216,23 @@ def prune_command(
     sequence: Annotated[bool, typer.Option(help=HELP["sequence"])] = OutputOptions.sequence,
     pixel_size: Annotated[float | None, typer.Option(help=_geojson_only("pixel_size"))] = None,
     longest_side: Annotated[int | None, typer.Option(help=_geojson_only("longest_side"))] = None,
+    pixels_per_width: Annotated[
+        float, typer.Option(help=_geojson_only("pixels_per_width"))
+    ] = RasterOptions.pixels_per_width,
+    pixel_budget: Annotated[
+        int, typer.Option(help=_geojson_only("pixel_budget"))
+    ] = RasterOptions.pixel_budget,
     repair: Annotated[bool, typer.Option(help=_geojson_only("repair"))] = RasterOptions.repair,
+    geojson: Annotated[
+        bool,
+        typer.Option(
+            "--geojson",
+            help="Print the skeleton as a GeoJSON FeatureCollection (lines for maps) "
+            "instead of the document.",
+        ),
+    ] = False,
+    simplify: Annotated[float, typer.Option(help=HELP["simplify"])] = OutputOptions.simplify,
+    cut_ends: Annotated[bool, typer.Option(help=HELP["cut_ends"])] = OutputOptions.cut_ends,
     workers: Annotated[
         int, typer.Option(help="Worker processes for several files, >= 0 (0: one a CPU core).")
     ] = 0,
@@ -219,8 +241,19 @@ def prune_command(
     # checked once, before any file is read
     options, read = _options_or_exit(beta, method, coarse, dce_threshold, min_margin, foreground)
     try:
-        raster = RasterOptions(pixel_size=pixel_size, longest_side=longest_side, repair=repair)
-        shown = OutputOptions(overlay_scale=overlay_scale, overlay_legend=overlay_legend)
+        raster = RasterOptions(
+            pixel_size=pixel_size,
+            longest_side=longest_side,
+            pixels_per_width=pixels_per_width,
+            pixel_budget=pixel_budget,
+            repair=repair,
+        )
+        shown = OutputOptions(
+            overlay_scale=overlay_scale,
+            overlay_legend=overlay_legend,
+            simplify=simplify,
+            cut_ends=cut_ends,
+        )
     except SkelpruneError as exc:
         raise _usage(str(exc)) from None
     if workers < 0:
@@ -232,10 +265,14 @@ def prune_command(
         raise _usage("no PNG or GeoJSON file given")
     if len(inputs) == 1 and not files[0].is_dir():
         try:
-            res, doc = _prune(str(inputs[0]), read, options, raster, curve, sequence)
+            res, doc = _prune(
+                str(inputs[0]), read, options, raster, curve, sequence, shown if geojson else None
+            )
         except (SkelpruneError, OSError) as exc:
             typer.echo(f"error: {inputs[0]}: {exc}", err=True)
             raise typer.Exit(1) from None
+        for warning in res.warnings:  # also in the document; here for the reader
+            typer.echo(f"warning: {inputs[0]}: {warning['message']}", err=True)
         if overlay is not None:
             try:
                 overlay.write_bytes(res.overlay_png(shown.overlay_scale, shown.overlay_legend))
@@ -261,6 +298,7 @@ def prune_command(
             [raster] * k,
             [curve] * k,
             [sequence] * k,
+            [shown if geojson else None] * k,
         )
         for line in tqdm(jobs, total=len(inputs), file=sys.stderr, unit="shape"):
             failed += "error" in line

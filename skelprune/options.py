@@ -23,6 +23,8 @@ from .errors import InvalidOptionError, shown
 __all__ = [
     "COARSE",
     "DEFAULT_LONGEST_SIDE",
+    "DEFAULT_PIXELS_PER_WIDTH",
+    "DEFAULT_PIXEL_BUDGET",
     "FOREGROUND_RULES",
     "GROUPS",
     "LONGEST_SIDE_RANGE",
@@ -43,11 +45,17 @@ MAX_BETA = 1_000_000_000
 FOREGROUND_RULES = ("auto", "nonzero", "zero")
 #: Spellings of ``coarse``: the name ``"none"`` is the full medial axis (``None``).
 COARSE = ("dce", "none")
-#: Pixels across the longer side of a polygon's bounding box, unless told otherwise ...
+#: Pixels across the longer side of a polygon's bounding box at the least (a polygon's
+#: narrow parts may ask for more) ...
 DEFAULT_LONGEST_SIDE = 512
 #: ... and the range it may be set to: fewer pixels cannot hold a skeleton worth the
 #: name; for more, give a pixel_size.
 LONGEST_SIDE_RANGE = (8, 16384)
+#: Pixels across a polygon's narrowest part when the pixel size comes from the polygon
+#: (where the answer stops changing on generated rivers: docs/gis.md) ...
+DEFAULT_PIXELS_PER_WIDTH = 3.0
+#: ... within this many raster pixels (a 2048 × 2048 image).
+DEFAULT_PIXEL_BUDGET = 2048 * 2048
 
 
 def _option(
@@ -233,6 +241,18 @@ class OutputOptions:
     overlay_legend: bool = _option(
         False, "Overlay image: add a strip with the colour key, RER and SS.", _flag
     )
+    simplify: float = _option(
+        0.5,
+        "GeoJSON answer: simplify each line within this many pixels, >= 0, keeping its "
+        "nodes, keeping it inside the shape and off the other lines (0: every pixel).",
+        _number(0, strict=False),
+    )
+    cut_ends: bool = _option(
+        False,
+        "GeoJSON answer: end a reach cut straight across at the middle of the cut, not "
+        "in a fork to its two corners (the JSON document keeps the fork).",
+        _flag,
+    )
 
     def __post_init__(self) -> None:
         _check_fields(self)
@@ -245,7 +265,7 @@ class RasterOptions:
     Examples
     --------
     >>> RasterOptions(pixel_size=0.5).kwargs()
-    {'pixel_size': 0.5, 'repair': True}
+    {'pixel_size': 0.5, 'pixels_per_width': 3.0, 'pixel_budget': 4194304, 'repair': True}
     >>> RasterOptions(pixel_size=0.5, longest_side=100)
     Traceback (most recent call last):
     ...
@@ -254,14 +274,30 @@ class RasterOptions:
 
     pixel_size: float | None = _option(
         None,
-        "Raster pixel size in the polygon's units, > 0 (instead of longest_side).",
+        "Raster pixel size in the polygon's units, > 0 (default: fitted to the polygon, "
+        "see pixels_per_width).",
         _number(0, strict=True),
     )
     longest_side: int | None = _option(
         None,
         "Pixels across the longer side of the bounding box, a whole number from "
-        f"{LONGEST_SIDE_RANGE[0]} to {LONGEST_SIDE_RANGE[1]} (default {DEFAULT_LONGEST_SIDE}).",
+        f"{LONGEST_SIDE_RANGE[0]} to {LONGEST_SIDE_RANGE[1]} (instead of pixel_size; "
+        "default: fitted to the polygon).",
         _integer(*LONGEST_SIDE_RANGE),
+    )
+    pixels_per_width: float = _option(
+        DEFAULT_PIXELS_PER_WIDTH,
+        "When neither pixel_size nor longest_side is given: pixels across the polygon's "
+        f"narrowest part, >= 1 (default {DEFAULT_PIXELS_PER_WIDTH:g}); the raster is never "
+        f"coarser than {DEFAULT_LONGEST_SIDE} px along the longer side and holds at most "
+        "pixel_budget pixels.",
+        _number(1, strict=False),
+    )
+    pixel_budget: int = _option(
+        DEFAULT_PIXEL_BUDGET,
+        "Most pixels of a raster fitted to the polygon, a whole number from 4096 to "
+        f"{1 << 28} (default {DEFAULT_PIXEL_BUDGET}).",
+        _integer(4096, 1 << 28),
     )
     repair: bool = _option(
         True,
@@ -306,7 +342,7 @@ def option_fields(*groups: type) -> list[tuple[str, Any, str, tuple[str, ...] | 
     what the CLI and the service describe their options from.
 
     >>> [name for name, *_ in option_fields(OutputOptions)]
-    ['curve', 'overlay', 'sequence', 'overlay_scale', 'overlay_legend']
+    ['curve', 'overlay', 'sequence', 'overlay_scale', 'overlay_legend', 'simplify', 'cut_ends']
     """
     return [
         (f.name, f.default, f.metadata["help"], f.metadata["choices"])

@@ -84,9 +84,19 @@ function showProblem(p) {
   $("status").textContent = "";
 }
 
+// A polygon's parts that the raster does not hold as they are (vanished, split, holes).
+function showWarnings(warnings) {
+  const box = $("warnings");
+  box.textContent = warnings.length
+    ? "Warning: " + warnings.map((w) => w.message).join("\nWarning: ")
+    : "";
+  box.hidden = warnings.length === 0;
+}
+
 async function run() {
   if (!state.input) return;
   $("problem").hidden = true;
+  $("warnings").hidden = true;
   $("status").textContent = "Pruning…";
   $("run").disabled = true;
   const t0 = performance.now();
@@ -109,6 +119,7 @@ async function run() {
   state.doc = JSON.parse(state.text);
   $("run").disabled = false;
   $("status").textContent = "";
+  showWarnings(state.doc.warnings || []);
   show();
 }
 

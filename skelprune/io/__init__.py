@@ -3,14 +3,22 @@
 The first stage of the pipeline (input → medial axis → graph → pruning → metrics →
 output). :func:`read_mask` / :func:`read_shape` decode PNG files and arrays (:mod:`.png`),
 taking as the shape what :mod:`.foreground`'s rule says,
-:func:`polygon_mask` rasterises GeoJSON polygons (:mod:`.polygon`), and
+:func:`polygon_mask` rasterises GeoJSON polygons (:mod:`.polygon`; :func:`polygon_raster`
+keeps the polygon and the topology check's warnings, :mod:`.fit` fits the pixel size), and
 :class:`PixelFrame` maps pixel results back to the polygon's coordinates (:mod:`.frame`).
 """
 
 from .foreground import Foreground
 from .frame import IDENTITY, PixelFrame
 from .png import PNG_SIGNATURE, check_png_size, png_size, read_mask, read_shape
-from .polygon import DEFAULT_LONGEST_SIDE, parse_geojson, polygon_mask, rasterize
+from .polygon import (
+    DEFAULT_LONGEST_SIDE,
+    PolygonRaster,
+    parse_geojson,
+    polygon_mask,
+    polygon_raster,
+    rasterize,
+)
 
 __all__ = [
     "DEFAULT_LONGEST_SIDE",
@@ -18,10 +26,12 @@ __all__ = [
     "PNG_SIGNATURE",
     "Foreground",
     "PixelFrame",
+    "PolygonRaster",
     "check_png_size",
     "parse_geojson",
     "png_size",
     "polygon_mask",
+    "polygon_raster",
     "rasterize",
     "read_mask",
     "read_shape",

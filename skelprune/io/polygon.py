@@ -13,8 +13,10 @@ Validation, with the reason in the error:
   ``make_valid`` by default (a bow-tie becomes two triangles); ``repair=False`` refuses
   it instead, with shapely's reason.
 
-Rasterisation: the polygon's bounding box is scaled so that its longer side spans
-``longest_side`` pixels (default 512), or uses the given ``pixel_size``, with a margin
+Rasterisation: the pixel size is fitted to the polygon (:mod:`skelprune.io.fit`: a few
+pixels across its narrowest part, at least 512 pixels along the bounding box's longer
+side, within a pixel budget), or the bounding box is scaled so that its longer side spans
+``longest_side`` pixels, or the given ``pixel_size`` is used, with a margin
 of ``margin`` background pixels (default 2) on every side. A pixel belongs to the shape
 iff its centre lies inside the polygon or on its boundary (OpenCV fills the interior,
 shapely decides the pixels next to an edge exactly).
@@ -26,6 +28,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 import cv2
@@ -34,18 +37,33 @@ import shapely
 from shapely.geometry import GeometryCollection, MultiPolygon, Polygon
 
 from skelprune.errors import EmptyMaskError, ImageTooLargeError, InvalidPolygonError, shown
+from skelprune.io.fit import (
+    RasterWarning,
+    budget_pixel_size,
+    check_topology,
+    fitted_pixel_size,
+)
 from skelprune.io.frame import PixelFrame
-from skelprune.options import DEFAULT_LONGEST_SIDE, RasterOptions
+from skelprune.options import (
+    DEFAULT_LONGEST_SIDE,
+    DEFAULT_PIXEL_BUDGET,
+    DEFAULT_PIXELS_PER_WIDTH,
+    RasterOptions,
+)
 
 __all__ = [
     "DEFAULT_LONGEST_SIDE",
     "DEFAULT_MARGIN",
+    "PolygonRaster",
     "parse_geojson",
     "polygon_mask",
+    "polygon_raster",
     "rasterize",
 ]
 
 DEFAULT_MARGIN = 2
+#: Times a fitted pixel size is refined to the size the topology check names.
+REFITS = 2
 _SHIFT = 8  # fractional bits for cv2.fillPoly: sub-pixel vertex positions
 _MAX_SIDE = 1 << 20  # keeps fixed-point vertex coordinates inside int32
 #: Largest coordinate magnitude accepted: its square (an area) is still a finite float.
@@ -234,6 +252,32 @@ def parse_geojson(
     return result
 
 
+@dataclass
+class PolygonRaster:
+    """A polygon, its raster, the frame that maps the raster back, and what it lost.
+
+    ``fitted`` tells whether the pixel size came from the polygon (no ``pixel_size`` or
+    ``longest_side`` given); ``warnings`` lists the parts the raster does not hold as they
+    are (:func:`skelprune.io.fit.check_topology`).
+    """
+
+    geometry: MultiPolygon
+    mask: np.ndarray
+    frame: PixelFrame
+    fitted: bool
+    warnings: list[RasterWarning] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        """What the document says of the raster (``raster``)."""
+        return {
+            "pixel_size": self.frame.pixel_size,
+            "width": int(self.mask.shape[1]),
+            "height": int(self.mask.shape[0]),
+            "fitted": self.fitted,
+            "parts": len(self.geometry.geoms),
+        }
+
+
 def rasterize(
     geom: MultiPolygon,
     *,
@@ -241,6 +285,8 @@ def rasterize(
     longest_side: int | None = None,
     margin: int = DEFAULT_MARGIN,
     max_pixels: int | None = None,
+    pixels_per_width: float = DEFAULT_PIXELS_PER_WIDTH,
+    pixel_budget: int = DEFAULT_PIXEL_BUDGET,
 ) -> tuple[np.ndarray, PixelFrame]:
     """Fill a polygon into a boolean raster.
 
@@ -251,11 +297,15 @@ def rasterize(
     pixel_size : float, optional
         Side of a pixel in the polygon's units. Exclusive with ``longest_side``.
     longest_side : int, optional
-        Pixels across the longer side of the bounding box (default 512).
+        Pixels across the longer side of the bounding box.
     margin : int
         Background pixels added on every side.
     max_pixels : int, optional
         Refuse a raster larger than this (before allocating it).
+    pixels_per_width, pixel_budget
+        Without ``pixel_size`` and ``longest_side``: the pixel size is fitted to the
+        polygon (:mod:`skelprune.io.fit`), this many pixels across its narrowest part,
+        within this many pixels (and ``max_pixels``).
 
     Returns
     -------
@@ -269,18 +319,81 @@ def rasterize(
     EmptyMaskError
         When no pixel centre falls inside the polygon (it is thinner than a pixel).
     """
-    RasterOptions(pixel_size=pixel_size, longest_side=longest_side)  # the options' checks
+    raster = polygon_raster(
+        geom,
+        pixel_size=pixel_size,
+        longest_side=longest_side,
+        margin=margin,
+        max_pixels=max_pixels,
+        pixels_per_width=pixels_per_width,
+        pixel_budget=pixel_budget,
+        check=False,
+    )
+    return raster.mask, raster.frame
+
+
+def polygon_raster(
+    geom: MultiPolygon,
+    *,
+    pixel_size: float | None = None,
+    longest_side: int | None = None,
+    margin: int = DEFAULT_MARGIN,
+    max_pixels: int | None = None,
+    pixels_per_width: float = DEFAULT_PIXELS_PER_WIDTH,
+    pixel_budget: int = DEFAULT_PIXEL_BUDGET,
+    check: bool = True,
+) -> PolygonRaster:
+    """:func:`rasterize`, keeping the geometry, and (``check``) the topology check's
+    warnings."""
+    RasterOptions(  # the options' checks
+        pixel_size=pixel_size,
+        longest_side=longest_side,
+        pixels_per_width=pixels_per_width,
+        pixel_budget=pixel_budget,
+    )
     minx, miny, maxx, maxy = geom.bounds
     extent = max(maxx - minx, maxy - miny)
     if not math.isfinite(extent):
         raise InvalidPolygonError("coordinates span too large a range to rasterise")
-    if pixel_size is None:
-        side = DEFAULT_LONGEST_SIDE if longest_side is None else longest_side
-        if side > _MAX_SIDE:
-            raise ImageTooLargeError(
-                f"longest_side {shown(side)} is over the limit of {_MAX_SIDE} pixels"
-            )
-        pixel_size = extent / side
+
+    def fill(g: MultiPolygon, size: float) -> tuple[np.ndarray, PixelFrame]:
+        return _fill(g, size, margin, max_pixels)
+
+    fitted = pixel_size is None and longest_side is None
+    budget = pixel_budget if max_pixels is None else min(pixel_budget, max_pixels)
+    if fitted:
+        if extent <= 0 or not math.isfinite(extent / DEFAULT_LONGEST_SIDE):
+            raise InvalidPolygonError(f"polygon extent {extent:.3g} is too small to rasterise")
+        size = fitted_pixel_size(geom, pixels_per_width, budget, DEFAULT_LONGEST_SIDE, margin)
+        mask, frame = fill(geom, size)
+    else:
+        if pixel_size is None:
+            side = DEFAULT_LONGEST_SIDE if longest_side is None else longest_side
+            if side > _MAX_SIDE:
+                raise ImageTooLargeError(
+                    f"longest_side {shown(side)} is over the limit of {_MAX_SIDE} pixels"
+                )
+            pixel_size = extent / side
+        mask, frame = fill(geom, pixel_size)
+    warnings = check_topology(geom, mask, frame, margin, fill) if check else []
+    if fitted:
+        # A fitted size that loses a part: take the size that holds it, budget allowing
+        # (the size came from a measure; the check is the proof).
+        finest = budget_pixel_size(geom, budget, margin)
+        for _ in range(REFITS):
+            sizes = [w.pixel_size for w in warnings if w.pixel_size is not None]
+            if not sizes or min(sizes) < finest:
+                break
+            mask, frame = fill(geom, min(sizes))
+            warnings = check_topology(geom, mask, frame, margin, fill)
+    return PolygonRaster(geom, mask, frame, fitted, warnings)
+
+
+def _fill(
+    geom: MultiPolygon, pixel_size: float, margin: int, max_pixels: int | None
+) -> tuple[np.ndarray, PixelFrame]:
+    minx, miny, maxx, maxy = geom.bounds
+    extent = max(maxx - minx, maxy - miny)
     cols_f = (maxx - minx) / pixel_size
     rows_f = (maxy - miny) / pixel_size
     if not (cols_f <= _MAX_SIDE and rows_f <= _MAX_SIDE):  # also catches inf / nan
@@ -345,6 +458,8 @@ def polygon_mask(
     max_vertices: int | None = None,
     max_pixels: int | None = None,
     repair: bool = True,
+    pixels_per_width: float = DEFAULT_PIXELS_PER_WIDTH,
+    pixel_budget: int = DEFAULT_PIXEL_BUDGET,
 ) -> tuple[np.ndarray, PixelFrame]:
     """Validate and rasterise a GeoJSON polygon: :func:`parse_geojson` then :func:`rasterize`.
 
@@ -363,4 +478,6 @@ def polygon_mask(
         longest_side=longest_side,
         margin=margin,
         max_pixels=max_pixels,
+        pixels_per_width=pixels_per_width,
+        pixel_budget=pixel_budget,
     )

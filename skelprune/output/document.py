@@ -8,19 +8,24 @@ from __future__ import annotations
 
 import base64
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import shapely
 
 from .._orientation import Orientation
 from .._version import ALGORITHM_VERSION, __version__
 from ..graph import BranchGraph
 from ..io.foreground import Foreground
 from ..io.frame import IDENTITY, PixelFrame
+
+if TYPE_CHECKING:
+    from ..io.polygon import PolygonRaster
 from ..pruning.bayesian import PruningSequence
 from ..pruning.margin import Margins
 from ..reconstruction import reconstruction
 from ..skeleton import Skeleton
+from .lines import boundary_index, cut_end_forks, map_lines, mask_distance, recentre
 from .render import auto_scale, encode_png, render_overlay
 
 __all__ = ["ComponentResult", "PruneResult", "branch_line"]
@@ -354,6 +359,19 @@ class PruneResult:
     #: What was taken as the shape (:mod:`skelprune.io.foreground`); readers of images
     #: (:func:`skelprune.io.read_shape`) set theirs here.
     foreground: Foreground = field(default_factory=lambda: Foreground("nonzero", "nonzero"))
+    #: For polygon input (:func:`skelprune.prune` of a polygon): the polygon, its raster,
+    #: the frame back to its coordinates and the raster's warnings.
+    raster: PolygonRaster | None = None
+
+    @property
+    def frame(self) -> PixelFrame:
+        """The result's own frame: the polygon's coordinates, or the image's pixels."""
+        return IDENTITY if self.raster is None else self.raster.frame
+
+    @property
+    def warnings(self) -> list[dict[str, Any]]:
+        """What the raster of a polygon does not hold as it is (empty for images)."""
+        return [] if self.raster is None else [w.to_dict() for w in self.raster.warnings]
 
     @property
     def width(self) -> int:
@@ -379,10 +397,15 @@ class PruneResult:
         self,
         curve: bool = True,
         overlay: bool = False,
-        frame: PixelFrame | None = IDENTITY,
+        frame: PixelFrame | None = None,
         sequence: bool = False,
     ) -> dict[str, Any]:
         """The output document of docs/graph.md (plain JSON types).
+
+        ``frame`` None: the result's own frame (a polygon's coordinates, an image's
+        pixels); :data:`~skelprune.io.frame.IDENTITY` for the raster's pixels. A polygon's
+        document also says how it was rasterised (``raster``) and what the raster does
+        not hold as it is (``warnings``).
 
         Examples
         --------
@@ -392,7 +415,7 @@ class PruneResult:
         >>> doc["width"], len(doc["components"][0]["skeleton"]["endpoints"])
         (40, 4)
         """
-        frame = IDENTITY if frame is None else frame  # None: the image's own pixels
+        frame = self.frame if frame is None else frame
         doc: dict[str, Any] = {
             "width": self.width,
             "height": self.height,
@@ -405,22 +428,54 @@ class PruneResult:
             ],
             "version": {"library": __version__, "algorithm": ALGORITHM_VERSION},
         }
+        if self.raster is not None:
+            doc["raster"] = self.raster.to_dict()
+            doc["warnings"] = self.warnings
         if overlay:
             doc["overlay_png"] = base64.b64encode(self.overlay_png()).decode("ascii")
         return doc
 
-    def to_geojson(self, frame: PixelFrame | None = IDENTITY) -> dict[str, Any]:
-        """GeoJSON FeatureCollection: branches as LineStrings, nodes as Points.
+    def to_geojson(
+        self,
+        frame: PixelFrame | None = None,
+        simplify: float = 0.5,
+        cut_ends: bool = False,
+    ) -> dict[str, Any]:
+        """GeoJSON FeatureCollection for maps: branches as LineStrings, nodes as Points.
+
+        ``frame`` as for :meth:`to_dict` (None: the result's own frame). Lines run from
+        node to node, simplified within ``simplify`` pixels (0: every pixel of the path,
+        as the document has it) without leaving the shape or crossing one another
+        (:mod:`skelprune.output.lines`); for a polygon, their inner vertices first move to
+        the medial point across the line (sub-pixel, from the exact polygon). ``cut_ends``
+        ends a reach cut straight across at the middle of the cut instead of in a fork to
+        its corners. The document's points stay exact: only this map output changes.
 
         Every feature's properties carry its component's ``rer`` and ``ss``; the
-        collection's ``properties`` (a foreign member) the document's options and each
-        component's ``area``, ``alpha``, ``rer``, ``ss`` and ``objective``.
+        collection's ``properties`` (a foreign member) the document's options, each
+        component's ``area``, ``alpha``, ``rer``, ``ss`` and ``objective``, and for a
+        polygon the raster's ``warnings``.
         """
+        frame = self.frame if frame is None else frame
         features: list[dict[str, Any]] = []
-        doc = self.to_dict(curve=False, frame=frame)
+        doc = self.to_dict(curve=False, frame=IDENTITY)
+        polygon = None
+        if self.raster is not None and simplify > 0:
+            f = self.raster.frame
+            sign = -1.0 if f.flip_y else 1.0
+            polygon = shapely.transform(
+                self.raster.geometry,
+                lambda xy: np.stack(
+                    [(xy[:, 0] - f.x0) / f.pixel_size, sign * (xy[:, 1] - f.y0) / f.pixel_size],
+                    axis=1,
+                ),
+            )
+        index = None if polygon is None else boundary_index(polygon)
+        distance = mask_distance(self.mask)
         summaries = []
         for ci, comp in enumerate(doc["components"]):
             sk = comp["skeleton"]
+            nodes, branches = sk["nodes"], sk["branches"]
             # on every feature too: GIS tools show a feature's properties, not the collection's
             numbers = {"rer": comp["rer"], "ss": comp["ss"]}
             summaries.append(
@@ -432,52 +487,70 @@ class PruneResult:
                     "objective": comp["objective"],
                 }
             )
-            for br in sk["branches"]:
-                line = branch_line(sk, br)
+            lines: list[Any] = [np.asarray(branch_line(sk, br), float) for br in branches]
+            ends_at: dict[tuple[int, str], int] = {}
+            moved: dict[int, tuple[float, float]] = {}
+            if cut_ends:
+                lines, ends_at, moved = cut_end_forks(nodes, branches, lines, self.mask, distance)
+            kept = [i for i, ln in enumerate(lines) if ln is not None]
+            exact = [lines[i] for i in kept]
+            # the exact polygon gives sub-pixel medial positions
+            chosen = exact if index is None else recentre(exact, index)
+            simple = map_lines(chosen, simplify, self.mask, polygon, exact)
+            used: set[int] = set()
+            for i, line in zip(kept, simple, strict=True):
+                br = branches[i]
+                src = ends_at.get((i, "source"), br["source"])
+                dst = ends_at.get((i, "target"), br["target"])
+                used.update((src, dst))
                 features.append(
                     {
                         "type": "Feature",
                         "geometry": {
                             "type": "LineString",
-                            "coordinates": [[x, y] for x, y, _ in line],
+                            "coordinates": [list(frame.point(x, y)) for x, y, _ in line.tolist()],
                         },
                         "properties": {
                             "component": ci,
                             "kind": "branch",
                             "id": br["id"],
-                            "source": br["source"],
-                            "target": br["target"],
-                            "length": br["length"],
-                            "radii": [r for *_, r in line],
+                            "source": src,
+                            "target": dst,
+                            "length": frame.distance(br["length"]),
+                            "radii": [frame.distance(r) for r in line[:, 2].tolist()],
                             "margin": br["margin"],
                             "removed_at": br["removed_at"],
                             **numbers,
                         },
                     }
                 )
-            for nd in sk["nodes"]:
+            for nd in nodes:
+                if cut_ends and nd["id"] not in used:
+                    continue  # a fork's junction and second tip, gone with the fork
+                x, y = moved.get(nd["id"], (nd["x"], nd["y"]))
                 features.append(
                     {
                         "type": "Feature",
-                        "geometry": {"type": "Point", "coordinates": [nd["x"], nd["y"]]},
+                        "geometry": {"type": "Point", "coordinates": list(frame.point(x, y))},
                         "properties": {
                             "component": ci,
                             "kind": nd["kind"],
                             "id": nd["id"],
-                            "radius": nd["radius"],
+                            "radius": 0.0 if nd["id"] in moved else frame.distance(nd["radius"]),
                             **numbers,
                         },
                     }
                 )
         # A foreign member of the collection (RFC 7946 §6.1): the document's numbers.
-        properties = {k: doc[k] for k in ("width", "height", "method", "beta", "coarse")}
-        return {
-            "type": "FeatureCollection",
-            "properties": {**properties, "components": summaries},
-            "features": features,
+        properties: dict[str, Any] = {
+            k: doc[k] for k in ("width", "height", "method", "beta", "coarse")
         }
+        properties["components"] = summaries
+        if self.raster is not None:
+            properties["warnings"] = self.warnings
+        return {"type": "FeatureCollection", "properties": properties, "features": features}
 
-    def to_networkx(self, frame: PixelFrame | None = IDENTITY) -> Any:
+    def to_networkx(self, frame: PixelFrame | None = None) -> Any:
         """The skeleton as a ``networkx.MultiGraph`` (needs the optional ``networkx``).
 
         Nodes are ``(component, node id)`` with the document's node fields (``x``, ``y``,

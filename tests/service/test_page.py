@@ -312,7 +312,19 @@ def test_a_geojson_polygon(server: Running, browser, tmp_path: Path) -> None:
         for e in browser.find_elements(By.CSS_SELECTOR, "#nodes circle.endpoint")
     ]
     assert min(ends) < 0.25 * svg.size["height"] < max(ends)
+    assert not browser.find_element(By.ID, "warnings").is_displayed()  # the raster holds it
     _shot(browser, "tee-geojson.png")
+    # an islet no raster within the pixel budget can hold: the page says so, and why
+    islet = [[x0 + 2e4, y0], [x0 + 2e4 + 1e-3, y0], [x0 + 2e4, y0 + 1e-3], [x0 + 2e4, y0]]
+    far = {"type": "MultiPolygon", "coordinates": [[outer, hole], [islet]]}
+    path = tmp_path / "islet.geojson"
+    path.write_text(json.dumps(far))
+    _upload(browser, base, path)
+    _result(browser)
+    box = browser.find_element(By.ID, "warnings")
+    assert box.is_displayed()
+    assert "of 2 is smaller than the pixel" in box.text and "no pixel size" in box.text
+    _shot(browser, "islet-warning.png")
 
 
 def _ring_and_dot() -> np.ndarray:

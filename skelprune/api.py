@@ -21,6 +21,7 @@ from .pruning.dce import (
     generated_in_several_segments,
 )
 from .pruning.margin import Margins, branch_margins
+from .pruning.tips import trim_tips
 from .reconstruction import count_covered
 from .skeleton import Skeleton
 
@@ -80,7 +81,7 @@ def prune_component(
         # experiments: its α and ℓ̄ are those of its own starting skeleton (or of M,
         # should the coarse skeleton have none).
         norm = start.normalisation(beta)
-        if norm.alpha is None and start is not medial:
+        if start is not medial and (norm.alpha is None or not start.end_branches()):
             norm = medial.normalisation(beta)
         seq = bayesian_sequence(
             start, norm.alpha, norm.lbar, uncovered=start.n_points < medial.n_points
@@ -106,8 +107,14 @@ def prune_component(
             medial.r2[gone],
         )
     answer = seq.skeleton_at(chosen)
+    trim = None
+    if options.trim and options.method == "bayesian" and seq.alpha is not None:
+        trim = trim_tips(answer, seq.lost[chosen], seq.alpha, seq.lbar)
+        answer = trim.skeleton
     # DCE's answer is not chosen by the trade-off: its branches have no margin.
-    margins = Margins() if options.method == "dce" else branch_margins(answer.graph, seq, chosen)
+    margins = (
+        Margins() if options.method == "dce" else branch_margins(answer.graph, seq, chosen, trim)
+    )
     return ComponentResult(
         skeleton=answer,
         medial_axis=GraphSummary.of(medial),
@@ -115,6 +122,7 @@ def prune_component(
         chosen_step=chosen,
         ma_rer=ma_lost / seq.area,
         margins=margins,
+        trim=trim,
     )
 
 
@@ -126,6 +134,7 @@ def prune(
     dce_threshold: float | None = None,
     foreground: Literal["auto", "nonzero", "zero"] = "nonzero",
     min_margin: float | None = None,
+    trim: bool = True,
 ) -> PruneResult:
     """Pruned skeleton of every 8-connected component of a binary mask.
 
@@ -155,6 +164,11 @@ def prune(
         For ``method="bayesian"``: drop the answer's end branches whose margin
         (:mod:`skelprune.pruning.margin`) is below this, one at a time, cheapest first, as
         the sequence would go on removing them. Default: off (the paper's answer).
+    trim : bool
+        For ``method="bayesian"``: cut each end branch of the answer back from its tip to
+        the point that minimises the target λ along it (:mod:`skelprune.pruning.tips`;
+        the default), so that a round end's branch stops near its centre instead of
+        turning to the boundary. ``False``: the greedy's answer, branches whole.
 
     Returns
     -------
@@ -165,7 +179,8 @@ def prune(
     EmptyMaskError
         When the mask has no foreground pixel.
     InvalidOptionError
-        For a bad ``beta``, ``method``, ``coarse``, ``foreground`` or ``min_margin``.
+        For a bad ``beta``, ``method``, ``coarse``, ``foreground``, ``min_margin`` or
+        ``trim``.
 
     Examples
     --------
@@ -176,10 +191,15 @@ def prune(
     (4, True)
     """
     opts = PruneOptions(
-        beta=beta, method=method, coarse=coarse, dce_threshold=dce_threshold, min_margin=min_margin
+        beta=beta,
+        method=method,
+        coarse=coarse,
+        dce_threshold=dce_threshold,
+        min_margin=min_margin,
+        trim=trim,
     )
-    if opts.method == "dce":  # DCE pruning has no stage before it
-        opts = replace(opts, coarse=None)
+    if opts.method == "dce":  # DCE pruning has no stage before it, nor tips cut after it
+        opts = replace(opts, coarse=None, trim=False)
     check_option("foreground", foreground)
     mask = np.asarray(mask)
     if mask.ndim != 2:
@@ -187,7 +207,9 @@ def prune(
     fg, taken = (mask != 0, None) if foreground == "nonzero" else select(mask, foreground)
     if not fg.any():
         raise EmptyMaskError("the mask has no foreground pixel")
-    result = PruneResult(mask=fg, method=opts.method, beta=opts.beta, coarse=opts.coarse)
+    result = PruneResult(
+        mask=fg, method=opts.method, beta=opts.beta, coarse=opts.coarse, trim=opts.trim
+    )
     if taken is not None:
         result.foreground = taken
     for crop, origin in components(fg):

@@ -143,8 +143,9 @@ class PruneOptions:
 
     Examples
     --------
-    >>> PruneOptions(coarse="none")
-    PruneOptions(beta=9.0, method='bayesian', coarse=None, dce_threshold=None, min_margin=None)
+    >>> PruneOptions(coarse="none")  # doctest: +NORMALIZE_WHITESPACE
+    PruneOptions(beta=9.0, method='bayesian', coarse=None, dce_threshold=None,
+                 min_margin=None, trim=True)
     >>> PruneOptions(beta=-1)
     Traceback (most recent call last):
     ...
@@ -180,6 +181,13 @@ class PruneOptions:
         "below this, >= 0, cheapest first, as the sequence goes on (default off: the "
         "paper's answer).",
         _number(0, strict=False),
+    )
+    trim: bool = _option(
+        True,
+        "For method=bayesian: cut each end branch of the answer back from its tip to the "
+        "point where the trade-off is best (true, the default), or keep the answer's "
+        "branches whole (false).",
+        _flag,
     )
 
     def __post_init__(self) -> None:

@@ -20,6 +20,7 @@ from .pruning.dce import (
     boundary_partition,
     generated_in_several_segments,
 )
+from .pruning.floor import floor_step
 from .pruning.margin import Margins, branch_margins
 from .pruning.tips import trim_tips
 from .reconstruction import count_covered
@@ -86,7 +87,7 @@ def prune_component(
         seq = bayesian_sequence(
             start, norm.alpha, norm.lbar, uncovered=start.n_points < medial.n_points
         )
-        chosen = choose_step(seq.objective)
+        chosen = choose_step(seq.objective) if options.choice == "argmin" else floor_step(seq)
         if min_margin is not None and seq.alpha is not None:
             # Drop end branches kept by less than min_margin: the cheapest one is the
             # sequence's next removal, and its margin is that step's rise of λ.
@@ -134,6 +135,7 @@ def prune(
     dce_threshold: float | None = None,
     foreground: Literal["auto", "nonzero", "zero"] = "nonzero",
     min_margin: float | None = None,
+    choice: Literal["argmin", "noise-floor"] = "argmin",
     trim: bool = True,
 ) -> PruneResult:
     """Pruned skeleton of every 8-connected component of a binary mask.
@@ -164,6 +166,11 @@ def prune(
         For ``method="bayesian"``: drop the answer's end branches whose margin
         (:mod:`skelprune.pruning.margin`) is below this, one at a time, cheapest first, as
         the sequence would go on removing them. Default: off (the paper's answer).
+    choice : {"argmin", "noise-floor"}
+        For ``method="bayesian"``: how the answer is chosen from the sequence:
+        ``"argmin"``, the paper's skeleton of least λ, or ``"noise-floor"``
+        (:mod:`skelprune.pruning.floor`), least λ with the reconstruction error counted
+        only over the pixels deeper than the boundary's one-pixel rim.
     trim : bool
         For ``method="bayesian"``: cut each end branch of the answer back from its tip to
         the point that minimises the target λ along it (:mod:`skelprune.pruning.tips`;
@@ -196,6 +203,7 @@ def prune(
         coarse=coarse,
         dce_threshold=dce_threshold,
         min_margin=min_margin,
+        choice=choice,
         trim=trim,
     )
     if opts.method == "dce":  # DCE pruning has no stage before it, nor tips cut after it

@@ -183,6 +183,7 @@ MethodOption = Annotated[Method, typer.Option(help=HELP["method"])]
 CoarseOption = Annotated[Coarse, typer.Option(help=HELP["coarse"])]
 ThresholdOption = Annotated[float | None, typer.Option(help=HELP["dce_threshold"])]
 MarginOption = Annotated[float | None, typer.Option(help=HELP["min_margin"])]
+TrimOption = Annotated[bool, typer.Option(help=HELP["trim"])]
 ForegroundOption = Annotated[Rule, typer.Option(help=HELP["foreground"])]
 
 
@@ -201,6 +202,7 @@ def prune_command(
     coarse: CoarseOption = Coarse("dce"),
     dce_threshold: ThresholdOption = None,
     min_margin: MarginOption = None,
+    trim: TrimOption = PruneOptions.trim,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
     overlay: Annotated[
         Path | None, typer.Option(help="Write the overlay PNG here (one input file only).")
@@ -220,7 +222,9 @@ def prune_command(
 ) -> None:
     """Prune the skeleton of each shape and print the result as JSON."""
     # checked once, before any file is read
-    options, read = _options_or_exit(beta, method, coarse, dce_threshold, min_margin, foreground)
+    options, read = _options_or_exit(
+        beta, method, coarse, dce_threshold, min_margin, trim, foreground
+    )
     try:
         raster = RasterOptions(pixel_size=pixel_size, longest_side=longest_side, repair=repair)
         shown = OutputOptions(overlay_scale=overlay_scale, overlay_legend=overlay_legend)
@@ -287,6 +291,7 @@ def _options_or_exit(
     coarse: Any,
     dce_threshold: float | None,
     min_margin: float | None,
+    trim: bool,
     foreground: Any,
 ) -> tuple[PruneOptions, ReadOptions]:
     try:
@@ -297,6 +302,7 @@ def _options_or_exit(
                 coarse=coarse.value,
                 dce_threshold=dce_threshold,
                 min_margin=min_margin,
+                trim=trim,
             ),
             ReadOptions(foreground=foreground.value),
         )
@@ -313,13 +319,16 @@ def match_command(
     coarse: CoarseOption = Coarse("dce"),
     dce_threshold: ThresholdOption = None,
     min_margin: MarginOption = None,
+    trim: TrimOption = PruneOptions.trim,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
 ) -> None:
     """Match the skeletons of two shapes (path similarity) and print distance and
     endpoint correspondence as JSON."""
     from .matching import match
 
-    options, read = _options_or_exit(beta, method, coarse, dce_threshold, min_margin, foreground)
+    options, read = _options_or_exit(
+        beta, method, coarse, dce_threshold, min_margin, trim, foreground
+    )
     try:
         shapes = [_prune(str(p), read, options, RasterOptions(), False)[0] for p in (a, b)]
         res = match(*shapes)
@@ -339,6 +348,7 @@ def retrieve_command(
     coarse: CoarseOption = Coarse("dce"),
     dce_threshold: ThresholdOption = None,
     min_margin: MarginOption = None,
+    trim: TrimOption = PruneOptions.trim,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
     workers: Annotated[int, typer.Option(help="Worker processes (0: one a core).")] = 0,
 ) -> None:
@@ -348,7 +358,9 @@ def retrieve_command(
 
     from .matching import distance_matrix
 
-    options, read = _options_or_exit(beta, method, coarse, dce_threshold, min_margin, foreground)
+    options, read = _options_or_exit(
+        beta, method, coarse, dce_threshold, min_margin, trim, foreground
+    )
     inputs = _expand(folder)
     if not inputs:
         typer.echo("error: no PNG file given", err=True)

@@ -21,6 +21,7 @@ from typing import Any
 from .errors import InvalidOptionError, shown
 
 __all__ = [
+    "CHOICES",
     "COARSE",
     "DEFAULT_LONGEST_SIDE",
     "FOREGROUND_RULES",
@@ -40,6 +41,8 @@ METHODS = ("bayesian", "dce")
 FOREGROUND_RULES = ("auto", "nonzero", "zero")
 #: Spellings of ``coarse``: the name ``"none"`` is the full medial axis (``None``).
 COARSE = ("dce", "none")
+#: How the answer is chosen from the sequence (:mod:`skelprune.pruning.floor`).
+CHOICES = ("argmin", "noise-floor")
 #: Pixels across the longer side of a polygon's bounding box, unless told otherwise ...
 DEFAULT_LONGEST_SIDE = 512
 #: ... and the range it may be set to: fewer pixels cannot hold a skeleton worth the
@@ -145,7 +148,7 @@ class PruneOptions:
     --------
     >>> PruneOptions(coarse="none")  # doctest: +NORMALIZE_WHITESPACE
     PruneOptions(beta=9.0, method='bayesian', coarse=None, dce_threshold=None,
-                 min_margin=None, trim=True)
+                 min_margin=None, choice='argmin', trim=True)
     >>> PruneOptions(beta=-1)
     Traceback (most recent call last):
     ...
@@ -181,6 +184,14 @@ class PruneOptions:
         "below this, >= 0, cheapest first, as the sequence goes on (default off: the "
         "paper's answer).",
         _number(0, strict=False),
+    )
+    choice: str = _option(
+        "argmin",
+        "For method=bayesian: argmin (the paper's answer: the skeleton of least λ) or "
+        "noise-floor (least λ with the reconstruction error counted only deeper than the "
+        "boundary's one-pixel rim, which a one-pixel boundary move changes).",
+        _choice(CHOICES),
+        CHOICES,
     )
     trim: bool = _option(
         True,

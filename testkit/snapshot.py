@@ -47,7 +47,8 @@ def write_snapshot(out: Path, quick: bool = False, **extra: object) -> int:
                 (out / name).write_text(json.dumps(doc, sort_keys=True))
                 written += 1
     for path in sorted(DATA.glob("kimia216/*.png"))[:: 40 if quick else 8]:
-        (out / f"overlay__{path.stem}.png").write_bytes(skelprune.prune(_mask(path), **extra).overlay_png())
+        res = skelprune.prune(_mask(path), **extra)
+        (out / f"overlay__{path.stem}.png").write_bytes(res.overlay_png())
         written += 1
     polygon = json.loads((REPO / "examples" / "shape.geojson").read_text())
     for side in (64, 256):

@@ -21,7 +21,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-
 from scipy import ndimage as ndi
 
 from .perturb import PERTURBATIONS, _canvas, _clean, _fill, _hole_seeds, _rings, rescale

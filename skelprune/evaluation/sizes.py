@@ -48,7 +48,7 @@ SIZE_VARIANTS: dict[str, dict[str, Any]] = {
     "trim=false": {"trim": False},
     "coarse=none": {"coarse": None},
     "noise-floor": {"choice": "noise-floor"},
-    "noise-floor,trim=false": {"choice": "noise-floor", "trim": False},
+    "noise-floor/trim=false": {"choice": "noise-floor", "trim": False},
     "min_margin=0.01": {"min_margin": 0.01},
     "min_margin=0.03": {"min_margin": 0.03},
     "min_margin=0.1": {"min_margin": 0.1},
@@ -159,3 +159,118 @@ def sizes_markdown(records: list[SizeRecord]) -> str:
                 f"{lost:.0f} % | {rer:.2f} % |"
             )
     return "\n".join(lines)
+
+
+def _anchor_task(args: tuple[str, str, str, Any, tuple[str, ...]]) -> list[tuple]:
+    from PIL import Image
+
+    from ..api import prune
+
+    batch, shape, pert, path, variants = args
+    mask = np.asarray(Image.open(path)) != 0
+    out = []
+    for v in variants:
+        res = prune(mask, **SIZE_VARIANTS[v])
+        area = sum(c.area for c in res.components)
+        rer = sum(c.rer * c.area for c in res.components) / area
+        out.append((batch, shape, pert, v, res.n_endpoints(), float(rer)))
+    return out
+
+
+def run_anchor_variants(
+    folder: Any, variants: Sequence[str], workers: int = 2
+) -> list[tuple[str, str, str, str, int | None, float | None]]:
+    """``(batch, shape, perturbation, method, endpoints, rer)`` of the authors' code
+    (method ``"authors"``, from ``data/anchors``) and of ``variants`` on the same masks."""
+    from .anchors import ANCHOR, load_anchors
+
+    rows = load_anchors(folder)
+    out: list[tuple[str, str, str, str, int | None, float | None]] = [
+        (b, s, p, ANCHOR, e, rer) for b, s, p, _, e, rer in rows
+    ]
+    jobs = [(b, s, p, path, tuple(variants)) for b, s, p, path, _, _ in rows]
+    if workers <= 1:
+        out += [r for j in jobs for r in _anchor_task(j)]
+    else:
+        ctx = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+            out += [r for rs in pool.map(_anchor_task, jobs, chunksize=8) for r in rs]
+    return out
+
+
+def anchor_variants_markdown(rows: list[tuple]) -> str:
+    """Per batch and method: exact / ±1 per perturbation and pooled over the six, gains
+    and losses, median clean RER."""
+    methods = list(dict.fromkeys(r[3] for r in rows))
+    batches = list(dict.fromkeys(r[0] for r in rows))
+    perts = [p for p in SIX if any(r[2] == p for r in rows)]
+    lines = [
+        "| batch | method | " + " | ".join(perts) + " | **pooled** | gained | lost | RER |",
+        "|" + "---|" * (len(perts) + 6),
+    ]
+    for b in batches:
+        for m in methods:
+            got = {(r[1], r[2]): r[4] for r in rows if r[0] == b and r[3] == m}
+            shapes = sorted({r[1] for r in rows if r[0] == b})
+
+            def pairs(ps: Sequence[str]) -> list[tuple[int, int]]:
+                out = []
+                for s in shapes:
+                    for p in ps:
+                        c, q = got.get((s, "clean")), got.get((s, p))
+                        # a failed run counts as a disagreement
+                        out.append((-99, 99) if c is None or q is None else (c, q))
+                return out
+
+            cells = [f"{_share(pairs([p]), 0):.0f}/{_share(pairs([p]), 1):.0f}" for p in perts]
+            six = pairs(perts)
+            gained = 100.0 * sum(q > c for c, q in six) / max(len(six), 1)
+            lost = 100.0 * sum(q < c for c, q in six) / max(len(six), 1)
+            rers = [r[5] for r in rows if r[0] == b and r[3] == m and r[2] == "clean" and r[5]]
+            rer = 100.0 * statistics.median(rers) if rers else float("nan")
+            lines.append(
+                f"| {b} | {m} | "
+                + " | ".join(cells)
+                + f" | **{_share(six, 0):.0f}/{_share(six, 1):.0f}** | {gained:.0f} % | "
+                f"{lost:.0f} % | {rer:.2f} % |"
+            )
+    return "\n".join(lines)
+
+
+def _gt_task(args: tuple[Any, str, tuple[str, ...]]) -> dict[str, np.ndarray]:
+    from ..api import prune
+    from .groundtruth import _load, pixel_scores
+
+    folder, name, variants = args
+    mask, gt = _load(folder, name)
+    out = {}
+    for v in variants:
+        rows, cols, _ = prune(mask, **SIZE_VARIANTS[v]).skeleton_points()
+        sk = np.zeros(mask.shape, bool)
+        sk[rows, cols] = True
+        out[v] = pixel_scores(sk, gt)
+    return out
+
+
+def groundtruth_variants_markdown(folder: Any, variants: Sequence[str], workers: int = 2) -> str:
+    """Mean precision / recall / F1 at 0–3 px of ``variants`` against the ground-truth
+    skeletons of ``folder`` (``shapes/``, ``skeletons/``)."""
+    from pathlib import Path
+
+    from .groundtruth import TOLERANCES
+
+    names = sorted(p.stem for p in (Path(folder) / "shapes").glob("*.png"))
+    jobs = [(Path(folder), n, tuple(variants)) for n in names]
+    if workers <= 1:
+        scores = [_gt_task(j) for j in jobs]
+    else:
+        ctx = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+            scores = list(pool.map(_gt_task, jobs, chunksize=8))
+    head = " | ".join(f"{t} px P / R / **F1**" for t in TOLERANCES)
+    lines = [f"| variant | {head} |", "|" + "---|" * (len(TOLERANCES) + 1)]
+    for v in variants:
+        m = np.mean([s[v] for s in scores], axis=0)
+        cells = " | ".join(f"{p:.3f} / {r:.3f} / **{f:.3f}**" for p, r, f in m)
+        lines.append(f"| {v} | {cells} |")
+    return f"{len(names)} shapes\n\n" + "\n".join(lines)

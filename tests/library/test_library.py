@@ -198,7 +198,12 @@ def test_degenerate_shapes_never_raise(name, mask):
     assert comp["rer"] <= 0.2
     assert skeleton_mask(res).any()
     if name in ("one pixel", "one-pixel line", "two pixels"):
-        assert comp["alpha"] is None and comp["chosen_step"] == 0
+        assert comp["chosen_step"] == 0  # nothing to prune
+        # a single point has no α; a single path has one (its two end paths)
+        assert (comp["alpha"] is None) == (name == "one pixel")
+        assert len(doc["components"][0]["skeleton"]["endpoints"]) == (
+            1 if name == "one pixel" else 2
+        )
 
 
 def test_empty_mask_is_a_clear_error():

@@ -392,6 +392,10 @@ class PruneDocument(BaseModel):
     method: Literal["bayesian", "dce"]
     beta: float
     coarse: Literal["dce"] | None
+    choice: Literal["argmin", "noise-floor"] = Field(
+        description="How the answer was chosen from the pruning sequence."
+    )
+    trim: bool = Field(description="Whether the answer's end branches were cut back at their tips.")
     foreground: ForegroundTaken
     components: list[Component]
     overlay_png: str | None = Field(None, description="Base64 PNG; only with overlay=true.")
@@ -470,6 +474,8 @@ class CollectionProperties(BaseModel):
     method: Literal["bayesian", "dce"]
     beta: float
     coarse: Literal["dce"] | None
+    choice: Literal["argmin", "noise-floor"]
+    trim: bool
     components: list[ComponentSummary]
 
 

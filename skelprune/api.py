@@ -207,7 +207,7 @@ def prune(
         trim=trim,
     )
     if opts.method == "dce":  # DCE pruning has no stage before it, nor tips cut after it
-        opts = replace(opts, coarse=None, trim=False)
+        opts = replace(opts, coarse=None, choice="argmin", trim=False)
     check_option("foreground", foreground)
     mask = np.asarray(mask)
     if mask.ndim != 2:
@@ -216,7 +216,12 @@ def prune(
     if not fg.any():
         raise EmptyMaskError("the mask has no foreground pixel")
     result = PruneResult(
-        mask=fg, method=opts.method, beta=opts.beta, coarse=opts.coarse, trim=opts.trim
+        mask=fg,
+        method=opts.method,
+        beta=opts.beta,
+        coarse=opts.coarse,
+        choice=opts.choice,
+        trim=opts.trim,
     )
     if taken is not None:
         result.foreground = taken

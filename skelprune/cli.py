@@ -32,6 +32,7 @@ from typer.exceptions import TyperException
 
 from .errors import InvalidPolygonError, SkelpruneError
 from .options import (
+    CHOICES,
     COARSE,
     FOREGROUND_RULES,
     METHODS,
@@ -184,6 +185,8 @@ CoarseOption = Annotated[Coarse, typer.Option(help=HELP["coarse"])]
 ThresholdOption = Annotated[float | None, typer.Option(help=HELP["dce_threshold"])]
 MarginOption = Annotated[float | None, typer.Option(help=HELP["min_margin"])]
 TrimOption = Annotated[bool, typer.Option(help=HELP["trim"])]
+Choice = enum.Enum("Choice", {name: name for name in CHOICES}, type=str)
+ChoiceOption = Annotated[Choice, typer.Option(help=HELP["choice"])]
 ForegroundOption = Annotated[Rule, typer.Option(help=HELP["foreground"])]
 
 
@@ -202,6 +205,7 @@ def prune_command(
     coarse: CoarseOption = Coarse("dce"),
     dce_threshold: ThresholdOption = None,
     min_margin: MarginOption = None,
+    choice: ChoiceOption = Choice(PruneOptions.choice),
     trim: TrimOption = PruneOptions.trim,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
     overlay: Annotated[
@@ -223,7 +227,7 @@ def prune_command(
     """Prune the skeleton of each shape and print the result as JSON."""
     # checked once, before any file is read
     options, read = _options_or_exit(
-        beta, method, coarse, dce_threshold, min_margin, trim, foreground
+        beta, method, coarse, dce_threshold, min_margin, choice, trim, foreground
     )
     try:
         raster = RasterOptions(pixel_size=pixel_size, longest_side=longest_side, repair=repair)
@@ -291,6 +295,7 @@ def _options_or_exit(
     coarse: Any,
     dce_threshold: float | None,
     min_margin: float | None,
+    choice: Any,
     trim: bool,
     foreground: Any,
 ) -> tuple[PruneOptions, ReadOptions]:
@@ -302,6 +307,7 @@ def _options_or_exit(
                 coarse=coarse.value,
                 dce_threshold=dce_threshold,
                 min_margin=min_margin,
+                choice=choice.value,
                 trim=trim,
             ),
             ReadOptions(foreground=foreground.value),
@@ -319,6 +325,7 @@ def match_command(
     coarse: CoarseOption = Coarse("dce"),
     dce_threshold: ThresholdOption = None,
     min_margin: MarginOption = None,
+    choice: ChoiceOption = Choice(PruneOptions.choice),
     trim: TrimOption = PruneOptions.trim,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
 ) -> None:
@@ -327,7 +334,7 @@ def match_command(
     from .matching import match
 
     options, read = _options_or_exit(
-        beta, method, coarse, dce_threshold, min_margin, trim, foreground
+        beta, method, coarse, dce_threshold, min_margin, choice, trim, foreground
     )
     try:
         shapes = [_prune(str(p), read, options, RasterOptions(), False)[0] for p in (a, b)]
@@ -348,6 +355,7 @@ def retrieve_command(
     coarse: CoarseOption = Coarse("dce"),
     dce_threshold: ThresholdOption = None,
     min_margin: MarginOption = None,
+    choice: ChoiceOption = Choice(PruneOptions.choice),
     trim: TrimOption = PruneOptions.trim,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
     workers: Annotated[int, typer.Option(help="Worker processes (0: one a core).")] = 0,
@@ -359,7 +367,7 @@ def retrieve_command(
     from .matching import distance_matrix
 
     options, read = _options_or_exit(
-        beta, method, coarse, dce_threshold, min_margin, trim, foreground
+        beta, method, coarse, dce_threshold, min_margin, choice, trim, foreground
     )
     inputs = _expand(folder)
     if not inputs:

@@ -198,6 +198,16 @@ def run_anchor_variants(
     return out
 
 
+def _pairs(got: dict, shapes: Sequence[str], perts: Sequence[str]) -> list[tuple[int, int]]:
+    """(clean, perturbed) endpoint counts; a failed run counts as a disagreement."""
+    out = []
+    for s in shapes:
+        for p in perts:
+            c, q = got.get((s, "clean")), got.get((s, p))
+            out.append((-99, 99) if c is None or q is None else (c, q))
+    return out
+
+
 def anchor_variants_markdown(rows: list[tuple]) -> str:
     """Per batch and method: exact / ±1 per perturbation and pooled over the six, gains
     and losses, median clean RER."""
@@ -213,17 +223,11 @@ def anchor_variants_markdown(rows: list[tuple]) -> str:
             got = {(r[1], r[2]): r[4] for r in rows if r[0] == b and r[3] == m}
             shapes = sorted({r[1] for r in rows if r[0] == b})
 
-            def pairs(ps: Sequence[str]) -> list[tuple[int, int]]:
-                out = []
-                for s in shapes:
-                    for p in ps:
-                        c, q = got.get((s, "clean")), got.get((s, p))
-                        # a failed run counts as a disagreement
-                        out.append((-99, 99) if c is None or q is None else (c, q))
-                return out
-
-            cells = [f"{_share(pairs([p]), 0):.0f}/{_share(pairs([p]), 1):.0f}" for p in perts]
-            six = pairs(perts)
+            cells = []
+            for p in perts:
+                one = _pairs(got, shapes, [p])
+                cells.append(f"{_share(one, 0):.0f}/{_share(one, 1):.0f}")
+            six = _pairs(got, shapes, perts)
             gained = 100.0 * sum(q > c for c, q in six) / max(len(six), 1)
             lost = 100.0 * sum(q < c for c, q in six) / max(len(six), 1)
             rers = [r[5] for r in rows if r[0] == b and r[3] == m and r[2] == "clean" and r[5]]

@@ -378,6 +378,8 @@ class PruneResult:
     method: str
     beta: float
     coarse: str | None
+    #: How the answers were chosen from their sequences (:mod:`skelprune.pruning.floor`).
+    choice: str = "argmin"
     #: Whether the answers' tips were cut (:mod:`skelprune.pruning.tips`).
     trim: bool = False
     components: list[ComponentResult] = field(default_factory=list)
@@ -429,6 +431,7 @@ class PruneResult:
             "method": self.method,
             "beta": float(self.beta),
             "coarse": self.coarse,
+            "choice": self.choice,
             "trim": self.trim,
             "foreground": self.foreground.to_dict(),
             "components": [
@@ -501,7 +504,9 @@ class PruneResult:
                     }
                 )
         # A foreign member of the collection (RFC 7946 §6.1): the document's numbers.
-        properties = {k: doc[k] for k in ("width", "height", "method", "beta", "coarse", "trim")}
+        properties = {
+            k: doc[k] for k in ("width", "height", "method", "beta", "coarse", "choice", "trim")
+        }
         return {
             "type": "FeatureCollection",
             "properties": {**properties, "components": summaries},

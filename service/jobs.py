@@ -92,7 +92,8 @@ def warmup() -> str:
     """Worker initialiser: import the library and run it once so the JIT is compiled.
 
     The shape has a hole (the loop code paths) and a noisy boundary whose spurs the
-    coarse stage removes (its code paths); ``coarse=None`` and ``method="dce"`` run
+    coarse stage removes (its code paths); ``coarse=None``, ``method="dce"`` and
+    ``choice="noise-floor"`` run
     too, and a match, so that no job of any option meets a function still to be loaded.
 
     Returns
@@ -108,7 +109,7 @@ def warmup() -> str:
     mask[4:28, 4:40] = True
     mask[12:20, 16:28] = False  # a hole
     mask = boundary_noise(mask, "uniform", 1.0, rng=0)
-    for options in ({}, {"coarse": None}, {"method": "dce"}):
+    for options in ({}, {"coarse": None}, {"method": "dce"}, {"choice": "noise-floor"}):
         res = skelprune.prune(mask, **options)
         res.to_dict()
     res.to_geojson()

@@ -93,8 +93,8 @@ def warmup() -> str:
 
     The shape has a hole (the loop code paths) and a noisy boundary whose spurs the
     coarse stage removes (its code paths); ``coarse=None``, ``method="dce"`` and
-    ``choice="noise-floor"`` run
-    too, and a match, so that no job of any option meets a function still to be loaded.
+    ``choice="noise-floor"`` run too, and a match, so that no job of any option meets a
+    function still to be loaded.
 
     Returns
     -------

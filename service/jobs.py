@@ -109,7 +109,7 @@ def warmup() -> str:
     mask[4:28, 4:40] = True
     mask[12:20, 16:28] = False  # a hole
     mask = boundary_noise(mask, "uniform", 1.0, rng=0)
-    for options in ({}, {"coarse": None}, {"method": "dce"}, {"choice": "noise-floor"}):
+    for options in ({"choice": "noise-floor"}, {}, {"coarse": None}, {"method": "dce"}):
         res = skelprune.prune(mask, **options)
         res.to_dict()
     res.to_geojson()

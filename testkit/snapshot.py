@@ -31,7 +31,8 @@ def _mask(path: Path) -> np.ndarray:
 def write_snapshot(out: Path, quick: bool = False, **extra: object) -> int:
     """Write every document below ``out``; return how many files were written.
 
-    ``extra`` options go to every ``prune`` call (``trim=False``: the untrimmed answers).
+    ``extra`` options go to every ``prune`` call (``trim=False, min_margin=0``: the
+    paper's answers, untrimmed, as the library gave them before either option).
     """
     out.mkdir(parents=True, exist_ok=True)
     written = 0
@@ -66,8 +67,16 @@ def main() -> None:
     parser.add_argument(
         "--no-trim", action="store_true", help="prune with trim=False (the untrimmed answers)"
     )
+    parser.add_argument(
+        "--argmin", action="store_true", help="prune with min_margin=0 (the paper's argmin)"
+    )
     args = parser.parse_args()
-    extra = {"trim": False} if args.no_trim else {}
+    parser_extra = {}
+    if args.no_trim:
+        parser_extra["trim"] = False
+    if args.argmin:
+        parser_extra["min_margin"] = 0.0
+    extra = parser_extra
     print(f"{write_snapshot(args.out, args.quick, **extra)} documents in {args.out}")
 
 

@@ -49,7 +49,9 @@ SIZE_VARIANTS: dict[str, dict[str, Any]] = {
     "coarse=none": {"coarse": None},
     "noise-floor": {"choice": "noise-floor"},
     "noise-floor/trim=false": {"choice": "noise-floor", "trim": False},
+    "min_margin=0.005": {"min_margin": 0.005},
     "min_margin=0.01": {"min_margin": 0.01},
+    "min_margin=0.02": {"min_margin": 0.02},
     "min_margin=0.03": {"min_margin": 0.03},
     "min_margin=0.1": {"min_margin": 0.1},
 }

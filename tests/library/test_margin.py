@@ -16,6 +16,8 @@ from service.settings import Settings
 from skelprune._orientation import oriented
 from skelprune.api import components
 from skelprune.errors import InvalidOptionError
+from skelprune.options import DEFAULT_MIN_MARGIN
+from skelprune.pruning.bayesian import choose_step
 from skelprune.reconstruction import reconstruction
 from testkit.oracle import objective
 from testkit.shapes import blobs, dataset, load, rectangle_with_holes, two_components
@@ -129,9 +131,11 @@ def test_margin_in_geojson_and_none_for_dce() -> None:
 
 def test_min_margin_continues_the_sequence() -> None:
     for mask in shapes()[:12]:
-        base = skelprune.prune(mask)
-        assert skelprune.prune(mask, min_margin=0.0).to_dict() == base.to_dict()
-        for m in (0.01, 0.1, 1.0):
+        base = skelprune.prune(mask, min_margin=0.0)  # the paper's argmin
+        assert base.components[0].chosen_step == choose_step(base.components[0].sequence.objective)
+        default = skelprune.prune(mask).to_dict()
+        assert skelprune.prune(mask, min_margin=DEFAULT_MIN_MARGIN).to_dict() == default
+        for m in (0.003, 0.01, 0.1, 1.0):
             res = skelprune.prune(mask, min_margin=m)
             for c0, c in zip(base.components, res.components, strict=True):
                 lam = c.sequence.objective

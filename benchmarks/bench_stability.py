@@ -16,7 +16,7 @@ dataset and 3 rectangles a noise kind and only prints.
 size bands at once (``skelprune.evaluation.sizes``): dataset shapes and round-ended
 shapes drawn in ``testkit.shapes``, scaled by their contour to 128, 256 and 512 px,
 every variant of ``SIZE_VARIANTS``; ``--quick`` (a couple of minutes) takes 9 shapes
-and one noisy copy a model, for the default and the untrimmed answer.
+and one noisy copy a model, for the default and the paper's untrimmed answer.
 """
 
 from __future__ import annotations

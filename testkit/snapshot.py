@@ -43,7 +43,11 @@ def write_snapshot(out: Path, quick: bool = False, **extra: object) -> int:
         for path in paths:
             mask = _mask(path)
             for label, options in OPTION_SETS.items():
-                doc = skelprune.prune(mask, **options, **extra).to_dict()
+                kw = {**options, **extra}
+                if options.get("method") == "dce":  # neither applies to DCE pruning
+                    kw.pop("min_margin", None)
+                    kw.pop("trim", None)
+                doc = skelprune.prune(mask, **kw).to_dict()
                 name = f"{dataset.replace('/', '_')}__{path.stem}__{label}.json"
                 (out / name).write_text(json.dumps(doc, sort_keys=True))
                 written += 1

@@ -42,15 +42,16 @@ MODELS = (
 SIX = ("gaussian-1", "uniform-1.2", "rotate-15", "rotate-30", "scale-0.5", "scale-1.5")
 #: Longest side of the shape in each size band (pixels).
 BANDS = (128, 256, 512)
-#: Pruning variants measured: name -> options of :func:`skelprune.prune`.
+#: Pruning variants measured: name -> options of :func:`skelprune.prune` (``argmin``:
+#: ``min_margin=0``, the paper's answer; ``argmin/trim=false``: the paper's answer with
+#: its branches whole).
 SIZE_VARIANTS: dict[str, dict[str, Any]] = {
     "default": {},
-    "trim=false": {"trim": False},
+    "argmin": {"min_margin": 0.0},
+    "argmin/trim=false": {"min_margin": 0.0, "trim": False},
     "coarse=none": {"coarse": None},
-    "noise-floor": {"choice": "noise-floor"},
-    "noise-floor/trim=false": {"choice": "noise-floor", "trim": False},
+    "noise-floor": {"choice": "noise-floor", "min_margin": 0.0},
     "min_margin=0.005": {"min_margin": 0.005},
-    "min_margin=0.01": {"min_margin": 0.01},
     "min_margin=0.02": {"min_margin": 0.02},
     "min_margin=0.03": {"min_margin": 0.03},
     "min_margin=0.1": {"min_margin": 0.1},

@@ -15,8 +15,9 @@ dataset and 3 rectangles a noise kind and only prints.
 ``python -m benchmarks.bench_stability --sizes [--quick]`` measures over noise models and
 size bands at once (``skelprune.evaluation.sizes``): dataset shapes and round-ended
 shapes drawn in ``testkit.shapes``, scaled by their contour to 128, 256 and 512 px,
-every variant of ``SIZE_VARIANTS``; ``--quick`` (a couple of minutes) takes 9 shapes
-and one noisy copy a model, for the default and the paper's untrimmed answer.
+every variant of ``SIZE_VARIANTS``, one noisy copy a model (every 24th shape of each
+dataset: 27 shapes, about 11 minutes a variant pair on two shared cores); ``--quick``
+(a few minutes) takes every 48th, for the default and the paper's untrimmed answer.
 """
 
 from __future__ import annotations
@@ -87,7 +88,7 @@ def sizes(args: argparse.Namespace) -> None:
     from skelprune.evaluation.sizes import SIZE_VARIANTS, run_sizes, sizes_markdown
     from testkit.shapes import DRAWN
 
-    step = 48 if args.quick else 12
+    step = 48 if args.quick else 24
     shapes = []
     for name in ("kimia216", "kimia99", "skelneton-dev/shapes"):
         shapes += load_dataset(DATA / name, None)[step // 2 :: step]
@@ -101,7 +102,7 @@ def sizes(args: argparse.Namespace) -> None:
             ["default", "trim=false", "min_margin=0.03"] if args.quick else list(SIZE_VARIANTS)
         )
     t = time.perf_counter()
-    records = run_sizes(shapes, variants, seeds=1 if args.quick else 2, workers=args.workers)
+    records = run_sizes(shapes, variants, seeds=1, workers=args.workers)
     print(f"{len(shapes)} shapes; exact / within ±1 (%), gains and losses over the six pooled\n")
     print(sizes_markdown(records))
     print(f"\n{time.perf_counter() - t:.0f} s")

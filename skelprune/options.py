@@ -44,7 +44,7 @@ FOREGROUND_RULES = ("auto", "nonzero", "zero")
 COARSE = ("dce", "none")
 #: The margin below which the answer's end branches go unless told otherwise: chosen by
 #: the stability benchmark over noise models and sizes (docs/stability-findings.md).
-DEFAULT_MIN_MARGIN = 0.01
+DEFAULT_MIN_MARGIN = 0.02
 #: How the answer is chosen from the sequence (:mod:`skelprune.pruning.floor`).
 CHOICES = ("argmin", "noise-floor")
 #: Pixels across the longer side of a polygon's bounding box, unless told otherwise ...
@@ -186,8 +186,8 @@ class PruneOptions:
         None,
         "For method=bayesian: also drop the answer's end branches whose margin is "
         f"below this, >= 0, cheapest first, as the sequence goes on (default "
-        f"{DEFAULT_MIN_MARGIN:g}: the steadiest under noise, turns and scaling at every "
-        "size measured; 0: the paper's answer, the argmin of λ).",
+        f"{DEFAULT_MIN_MARGIN:g}, chosen for endpoint stability under noise, turns and "
+        "scaling at every size; 0: the paper's answer, the argmin of λ).",
         _number(0, strict=False),
     )
     choice: str = _option(

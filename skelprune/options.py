@@ -44,7 +44,7 @@ FOREGROUND_RULES = ("auto", "nonzero", "zero")
 COARSE = ("dce", "none")
 #: The margin below which the answer's end branches go unless told otherwise: chosen by
 #: the stability benchmark over noise models and sizes (docs/stability-findings.md).
-DEFAULT_MIN_MARGIN = 0.02
+DEFAULT_MIN_MARGIN = 0.01
 #: How the answer is chosen from the sequence (:mod:`skelprune.pruning.floor`).
 CHOICES = ("argmin", "noise-floor")
 #: Pixels across the longer side of a polygon's bounding box, unless told otherwise ...

@@ -52,7 +52,7 @@ SIZE_VARIANTS: dict[str, dict[str, Any]] = {
     "coarse=none": {"coarse": None},
     "noise-floor": {"choice": "noise-floor", "min_margin": 0.0},
     "min_margin=0.005": {"min_margin": 0.005},
-    "min_margin=0.01": {"min_margin": 0.01},
+    "min_margin=0.02": {"min_margin": 0.02},
     "min_margin=0.03": {"min_margin": 0.03},
     "min_margin=0.1": {"min_margin": 0.1},
 }

@@ -211,3 +211,13 @@ def test_flip_matching_finds_every_branch_under_exact_turns() -> None:
             assert flips == 0 and total > 10, (p, kind)
         assert run.agreement(None, p) == 1.0 and run.agreement(0.1, p) == 1.0
     assert run.mean_endpoints(0.1) <= run.mean_endpoints(None)
+
+
+@pytest.mark.parametrize("size", [(10, 30), (20, 50), (30, 70), (60, 160)])
+def test_the_default_margin_keeps_a_rectangles_corner_branches(size) -> None:
+    h, w = size
+    mask = np.zeros((h + 10, w + 10), bool)
+    mask[5 : 5 + h, 5 : 5 + w] = True
+    res = skelprune.prune(mask)
+    assert res.n_endpoints() == 4
+    assert res.components[0].rer < 0.02

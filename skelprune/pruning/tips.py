@@ -113,6 +113,30 @@ def _losses(mask, c, rows, cols, r2, drop, n_drop, scratch, last):
 
 
 @njit(cache=True)
+def _candidates(mask, c, rows, cols, r2, pts, drop, diag, m, scratch, last):
+    """Per cut ``k < m``: pixels lost and (axial, diagonal) steps dropped; and the box
+    (top, left, bottom, right) the points' disks can reach."""
+    n = diag.size + 1
+    loss = _losses(mask, c, rows[pts], cols[pts], r2[pts], drop, n, scratch, last)
+    lost = np.zeros(m, np.int64)
+    cut = np.zeros((m, 2), np.int64)
+    for k in range(1, m):
+        lost[k] = lost[k - 1] + loss[k - 1]
+        cut[k, 0] = cut[k - 1, 0] + 1 - diag[k - 1]
+        cut[k, 1] = cut[k - 1, 1] + diag[k - 1]
+    box = np.empty(4, np.int64)
+    box[0] = box[1] = np.iinfo(np.int64).max
+    box[2] = box[3] = np.iinfo(np.int64).min
+    for p in pts:
+        rad = int(math.sqrt(r2[p])) + 1
+        box[0] = min(box[0], rows[p] - rad)
+        box[1] = min(box[1], cols[p] - rad)
+        box[2] = max(box[2], rows[p] + rad)
+        box[3] = max(box[3], cols[p] + rad)
+    return lost, cut, box
+
+
+@njit(cache=True)
 def _uncover(c, rows, cols, r2):
     """Take the disks of these points off the counts."""
     for k in range(rows.size):
@@ -141,24 +165,32 @@ class _Tips:
         self.scratch = np.zeros((h, w), np.int32)
         self.last = np.zeros((h, w), np.int64)
 
-    def candidates(self, b: int, e: int) -> tuple[list[int], np.ndarray, np.ndarray, np.ndarray]:
-        """The tip's points, their drop indices, and per cut ``k = 0 … len − 1`` of
-        the path (``len − 2`` on a single path): pixels lost and (axial, diagonal)
-        steps dropped."""
+    def candidates(
+        self, b: int, e: int
+    ) -> tuple[list[int], np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int]]:
+        """The tip's points, their drop indices, per cut ``k = 0 … len − 1`` of the path
+        (``len − 2`` on a single path) the pixels lost and the (axial, diagonal) steps
+        dropped, and the box the tip's disks can reach."""
         sk, graph = self.sk, self.graph
         points, drop, steps = graph.tip(b, e)
-        n = len(steps) + 1  # path points
+        # a single path keeps two points: one would be a single endpoint
+        m = len(steps) + (0 if graph.branches[b].node[1 - e] is None else 1)
         pts = np.asarray(points, np.int64)
         dr = np.asarray(drop, np.int64)
-        loss = _losses(
-            sk.shape, self.c, sk.rows[pts], sk.cols[pts], sk.r2[pts], dr, n, self.scratch, self.last
+        lost, cut, box = _candidates(
+            sk.shape,
+            self.c,
+            sk.rows,
+            sk.cols,
+            sk.r2,
+            pts,
+            dr,
+            np.asarray(steps, np.int64),
+            m,
+            self.scratch,
+            self.last,
         )
-        # a single path keeps two points: one would be a single endpoint
-        m = n - 1 if graph.branches[b].node[1 - e] is None else n
-        lost = np.concatenate(([0], np.cumsum(loss[: m - 1])))
-        nd = np.concatenate(([0], np.cumsum(np.asarray(steps[: m - 1], np.int64))))
-        na = np.arange(m) - nd
-        return points, dr, lost, np.stack([na, nd], axis=1)
+        return points, dr, lost, cut, (int(box[0]), int(box[1]), int(box[2]), int(box[3]))
 
     def exclusive(self, b: int) -> int:
         """Pixels only branch ``b``'s disks cover."""
@@ -179,17 +211,23 @@ class _Tips:
         return int(loss[0])
 
 
-def _best(lost0: int, na0: int, nd0: int, cand_lost, cand_steps, area, alpha, lbar) -> int:
-    """``argmin λ`` over the cuts, ties to the larger ``k``; λ as
-    :func:`~skelprune.pruning.bayesian.objective` computes it."""
+@njit(cache=True)
+def _best(lost0, na0, nd0, cand_lost, cand_steps, area, alpha, lbar):
+    """``argmin λ`` over the cuts, ties to the larger ``k``; λ with exactly the operations
+    of :func:`~skelprune.pruning.bayesian.objective`, so that the choice is bit-identical
+    to the oracle's."""
     best, best_lam = 0, math.inf
-    for k in range(len(cand_lost)):
-        lam = alpha * (lost0 + int(cand_lost[k])) / area + math.log(
-            step_length(na0 - int(cand_steps[k, 0]), nd0 - int(cand_steps[k, 1])) / lbar + 1.0
+    for k in range(cand_lost.size):
+        lam = alpha * (lost0 + cand_lost[k]) / area + math.log(
+            step_length(na0 - cand_steps[k, 0], nd0 - cand_steps[k, 1]) / lbar + 1.0
         )
         if lam <= best_lam:
             best, best_lam = k, lam
     return best
+
+
+def _meet(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> bool:
+    return a[0] <= b[2] and b[0] <= a[2] and a[1] <= b[3] and b[1] <= a[3]
 
 
 def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
@@ -228,10 +266,13 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
     ends = graph.free_ends()
     # The order: longest cut on Ŝ alone first, then endpoint (row, col).
     keyed = []
+    first = {}
     for b, e in ends:
-        _, _, cl, cs = tips.candidates(b, e)
+        cand = tips.candidates(b, e)
+        cl, cs = cand[2], cand[3]
         k = _best(lost, graph.na, graph.nd, cl, cs, area, alpha, lbar)
         p = graph.free_end_point(b, e)
+        first[b, e] = cand
         keyed.append(
             (
                 -step_length(int(cs[k, 0]), int(cs[k, 1])),
@@ -243,8 +284,13 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
         )
     keyed.sort()
     cuts: list[tuple[int, int, int]] = []
+    changed: list[tuple[int, int, int, int]] = []  # where earlier cuts changed the counts
+    cut_branches: set[int] = set()
     for *_, b, e in keyed:
-        points, drop, cl, cs = tips.candidates(b, e)
+        points, drop, cl, cs, box = first[b, e]
+        if b in cut_branches or any(_meet(box, c) for c in changed):
+            # an earlier cut changed what this tip's disks share: count again
+            points, drop, cl, cs, box = tips.candidates(b, e)
         k = _best(lost, graph.na, graph.nd, cl, cs, area, alpha, lbar)
         cuts.append((b, e, k))
         if k == 0:
@@ -253,6 +299,8 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
             [p for p, d in zip(points, drop.tolist(), strict=True) if d < k], np.int64
         )
         _uncover(tips.c, answer.rows[gone], answer.cols[gone], answer.r2[gone])
+        changed.append(box)  # (the whole tip's box holds the dropped points' disks)
+        cut_branches.add(b)
         lost += int(cl[k])
         graph.cut_tip(b, e, gone.tolist(), int(cs[k, 0]), int(cs[k, 1]))
     exclusive = {b: tips.exclusive(b) for b in graph.end_branches()}

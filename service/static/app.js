@@ -423,7 +423,8 @@ function drawNumbers() {
     : "Step 0 is the medial axis. ";
   const dce = doc.method === "dce"
     ? "With method=dce the steps are the DCE pruning's removals, in its order, and the answer is the last; λ is shown for comparison, it did not choose. "
-    : "The answer is the step with the smallest λ (ties to the later step). ";
+    : "The answer is the step with the smallest λ (ties to the later step), then further while the next step raises λ by less than min_margin" +
+      (doc.trim ? "; its end branches are then cut back from their tips to the point of least λ, which the chosen step shows. " : ". ");
   if (c.alpha === null) {
     $("sequence-note").textContent = start + "This component has no end branch to prune (or a mean end-path length of 0): α is undefined, the sequence has only step 0, and λ is LR alone.";
     return;

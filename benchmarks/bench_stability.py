@@ -98,9 +98,7 @@ def sizes(args: argparse.Namespace) -> None:
     if args.variants:
         variants = args.variants.split(",")
     else:
-        variants = (
-            ["default", "trim=false", "min_margin=0.03"] if args.quick else list(SIZE_VARIANTS)
-        )
+        variants = ["default", "argmin/trim=false"] if args.quick else list(SIZE_VARIANTS)
     t = time.perf_counter()
     records = run_sizes(shapes, variants, seeds=1, workers=args.workers)
     print(f"{len(shapes)} shapes; exact / within ±1 (%), gains and losses over the six pooled\n")

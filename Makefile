@@ -3,15 +3,18 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: setup run test lint bench eval openapi clean
+.PHONY: setup run client test lint bench eval openapi clean
 
 # One stamp per set of extras: `make run` installs only what serving needs, `make test`
 # and `make bench` add theirs to the same .venv (pip keeps what is already there).
+# pip's own output goes to .venv/pip.log, shown only when it fails.
 $(VENV)/.installed-%: pyproject.toml
-	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[$(subst +,$(comma),$*)]'
-	touch $@
+	@test -x $(BIN)/python || { echo "setup: creating $(VENV) with $(PYTHON)"; $(PYTHON) -m venv $(VENV); }
+	@echo "setup: installing skelprune with the extras [$(subst +,$(comma),$*)] into $(VENV) (log: $(VENV)/pip.log)"
+	@$(BIN)/python -m pip install --disable-pip-version-check --upgrade pip > $(VENV)/pip.log 2>&1 \
+		&& $(BIN)/python -m pip install --disable-pip-version-check -e '.[$(subst +,$(comma),$*)]' >> $(VENV)/pip.log 2>&1 \
+		|| { tail -n 30 $(VENV)/pip.log; echo "setup: pip failed; the whole log is $(VENV)/pip.log"; exit 1; }
+	@touch $@
 
 comma := ,
 SERVE := $(VENV)/.installed-service
@@ -23,13 +26,20 @@ KERNELS := $(VENV)/.compiled
 # Compile the numba kernels ahead (loaded in under a second afterwards), not on the
 # first request or in every worker.
 $(KERNELS): $(SERVE) $(shell find skelprune -name "*.py") service/jobs.py
-	$(BIN)/python -m service.compile
-	touch $(KERNELS)
+	@echo "setup: compiling the numba kernels (once; half a minute to a minute)"
+	@$(BIN)/python -m service.compile
+	@touch $(KERNELS)
 
 setup: $(BENCH) $(KERNELS)
 
 run: $(SERVE) $(KERNELS)
-	$(BIN)/python -m service
+	@echo "serve: python -m service on http://$${SKELPRUNE_HOST:-127.0.0.1}:$${SKELPRUNE_PORT:-8000} (Ctrl-C stops it; the log is JSON lines)"
+	@$(BIN)/python -m service
+
+# examples/client.py against a running service (`make run` in another terminal)
+CLIENT := $(VENV)/.installed-service+client
+client: $(CLIENT)
+	@$(BIN)/python examples/client.py http://$${SKELPRUNE_HOST:-127.0.0.1}:$${SKELPRUNE_PORT:-8000}
 
 # the viewer page's browser test drives Debian's Chromium (installed once, with apt)
 BROWSER := /usr/bin/chromedriver
@@ -40,7 +50,7 @@ test: lint $(KERNELS) $(BROWSER)
 	$(BIN)/python -m pytest -q
 
 # ruff (lint and format) for the Python, shellcheck for the shell scripts CI runs
-PY_SOURCES := skelprune service tests testkit benchmarks
+PY_SOURCES := skelprune service tests testkit benchmarks evaluation
 lint: $(TESTS)
 	$(BIN)/ruff check $(PY_SOURCES)
 	$(BIN)/ruff format --check $(PY_SOURCES)
@@ -50,7 +60,7 @@ bench: $(BENCH) $(KERNELS)
 	$(BIN)/python -m benchmarks
 
 eval: $(BENCH) $(KERNELS)
-	$(BIN)/skelprune eval --out docs
+	$(BIN)/python -m evaluation --out docs
 
 openapi: $(SERVE)
 	$(BIN)/python -m service.openapi_md > openapi.md

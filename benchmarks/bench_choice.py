@@ -10,7 +10,7 @@ On every second kimia216 shape and four perturbations, with the default pipeline
   (a turn by 90°, a mirror), which change no pixel, and turns by 1° or 2° and a 2 %
   rescaling, which move a few boundary pixels;
 * the agreement a different choice rule would reach: the simplest skeleton whose λ is
-  within a margin of the minimum. SPEC §2.4 fixes the answer as ``argmin λ``; the margin
+  within a margin of the minimum. docs/algorithm.md fixes the answer as ``argmin λ``; the margin
   rows are a measurement, not an option of the library.
 
 ``python -m benchmarks choice`` (about half a minute on one core).
@@ -22,11 +22,11 @@ import importlib
 
 import numpy as np
 
+from evaluation.perturb import rescale, rotate
+from evaluation.stability import PERTURBATIONS, _rng, load_dataset
 from skelprune import prune
 from skelprune._orientation import oriented
 from skelprune.api import components
-from skelprune.evaluation.perturb import rescale, rotate
-from skelprune.evaluation.stability import PERTURBATIONS, _rng, load_dataset
 from skelprune.graph import BranchGraph
 from skelprune.pruning.coarse import coarse_removals
 

@@ -1,6 +1,7 @@
 """Large shapes: the default pipeline on silhouettes filling 1024, 2048 and 4096 px.
 
-SPEC §5 stops at 512 × 512; the service accepts up to ``SKELPRUNE_MAX_PIXELS`` (4096²)
+The library benchmark stops at 512 × 512; the service accepts up to
+``SKELPRUNE_MAX_PIXELS`` (4096²)
 under a 30 s job limit. The shapes: blob-like ones, whose maximal disks are huge (a
 filled disk, a filled square, and kimia216's heart-1 and brick-3 scaled up), and three
 kimia216 silhouettes (bird-10, car-6, hammer-3). Each shape at each size runs in a fresh

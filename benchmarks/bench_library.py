@@ -1,4 +1,4 @@
-"""Speed of the full pipeline (SPEC §5), one core, medians over shapes of the best of 3.
+"""Speed of the full pipeline, one core, medians over shapes of the best of 3.
 
 The default pipeline (coarse DCE stage) beside ``coarse=None`` (the coarse stage must not
 cost much time), on the datasets and, because that is what the stage is for, on every
@@ -16,8 +16,8 @@ from scipy import ndimage
 from skimage.morphology import skeletonize
 
 import skelprune
+from evaluation.stability import PERTURBATIONS, _rng
 from skelprune.api import components
-from skelprune.evaluation.stability import PERTURBATIONS, _rng
 from skelprune.pruning.bayesian import bayesian_sequence
 from skelprune.skeleton import Skeleton
 

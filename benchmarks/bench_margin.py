@@ -1,8 +1,8 @@
 """Branch margins: flips by margin quartile and the min_margin option (``docs/margin.md``).
 
 ``python -m benchmarks margin`` runs kimia216 and kimia99 under every perturbation of the
-stability benchmark (2 worker processes), prints the tables of ``skelprune.evaluation.margin``
-and rewrites ``docs/margin.md`` (as ``skelprune eval`` does); ``--limit N`` takes the
+stability benchmark (2 worker processes), prints the tables of ``evaluation.margin``
+and rewrites ``docs/margin.md`` (as ``python -m evaluation`` does); ``--limit N`` takes the
 first N shapes of each dataset and only prints.
 """
 
@@ -12,8 +12,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from skelprune.evaluation.margin import flip_table, margin_markdown, min_margin_table, run_margins
-from skelprune.evaluation.stability import load_dataset
+from evaluation.margin import flip_table, margin_markdown, min_margin_table, run_margins
+from evaluation.stability import load_dataset
 
 from .common import DATA
 

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from skelprune.evaluation.retrieval import (
+from evaluation.retrieval import (
     all_pairs,
     class_of,
     descriptors,
@@ -26,7 +26,7 @@ from skelprune.evaluation.retrieval import (
     retrieval_markdown,
     run_retrieval,
 )
-from skelprune.evaluation.stability import load_dataset
+from evaluation.stability import load_dataset
 from skelprune.matching import _match
 
 from .common import DATA, table

@@ -1,4 +1,4 @@
-"""HTTP service vs the library, on loopback (SPEC §5 targets).
+"""HTTP service vs the library, on loopback (the speed targets).
 
 1. Round trip: one client, sequential ``POST /v1/prune`` of a 256 × 256 PNG to a real
    ``python -m service`` process, against the direct library call on the same PNG in

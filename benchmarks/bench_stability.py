@@ -1,19 +1,19 @@
-"""Stability benchmark (SPEC §5): which pruning variant keeps its endpoints.
+"""Stability benchmark: which pruning variant keeps its endpoints.
 
-On kimia216 and kimia99, every perturbation of ``skelprune.evaluation.perturb.PERTURBATIONS``: share
+On kimia216 and kimia99, every perturbation of ``evaluation.perturb.PERTURBATIONS``: share
 of shapes whose endpoint count is unchanged, for ``coarse=None``, ``coarse="dce"``,
 ``method="dce"`` and the ``skeletonize`` + branch-cut baseline; the noisy rectangles of
 the paper's Table 2; median RER and ms a shape; how far the skeleton moves (skeleton
 distance); and the comparison with the authors' code on the masks of ``data/anchors``
-(``skelprune.evaluation.anchors``). The computation lives in
-``skelprune.evaluation.stability`` (``skelprune eval`` reports the same numbers).
+(``evaluation.anchors``). The computation lives in
+``evaluation.stability`` (``python -m evaluation`` reports the same numbers).
 
 ``python -m benchmarks stability`` runs everything (2 worker processes) and rewrites
 ``docs/stability.md``; ``python -m benchmarks.bench_stability --quick`` runs 20 shapes a
 dataset and 3 rectangles a noise kind and only prints.
 
 ``python -m benchmarks.bench_stability --sizes [--quick]`` measures over noise models and
-size bands at once (``skelprune.evaluation.sizes``): dataset shapes and round-ended
+size bands at once (``evaluation.sizes``): dataset shapes and round-ended
 shapes drawn in ``testkit.shapes``, scaled by their contour to 128, 256 and 512 px,
 every variant of ``SIZE_VARIANTS``, one noisy copy a model (every 24th shape of each
 dataset: 27 shapes, about 11 minutes a variant pair on two shared cores); ``--quick``
@@ -26,8 +26,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from skelprune.evaluation.anchors import anchors_markdown, run_anchors
-from skelprune.evaluation.report import (
+from evaluation.anchors import anchors_markdown, run_anchors
+from evaluation.report import (
     agreement_table,
     clean_table,
     distance_table,
@@ -35,7 +35,7 @@ from skelprune.evaluation.report import (
     stability_markdown,
     targets_table,
 )
-from skelprune.evaluation.stability import load_dataset, run_stability
+from evaluation.stability import load_dataset, run_stability
 
 from .common import DATA
 
@@ -82,10 +82,10 @@ def main(argv: list[str] | None = None) -> None:
 
 
 def sizes(args: argparse.Namespace) -> None:
-    """The size-band stability table (:mod:`skelprune.evaluation.sizes`)."""
+    """The size-band stability table (:mod:`evaluation.sizes`)."""
     import time
 
-    from skelprune.evaluation.sizes import SIZE_VARIANTS, run_sizes, sizes_markdown
+    from evaluation.sizes import SIZE_VARIANTS, run_sizes, sizes_markdown
     from testkit.shapes import DRAWN
 
     step = 48 if args.quick else 24

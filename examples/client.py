@@ -66,4 +66,7 @@ def main(base: str = "http://127.0.0.1:8000") -> None:
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:2])
+    try:
+        main(*sys.argv[1:2])
+    except httpx.TransportError as exc:  # no service there: say so in one line
+        sys.exit(f"error: no answer from the service ({exc}); start it with `make run`")

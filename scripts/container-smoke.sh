@@ -15,7 +15,7 @@
 #                (about 4 minutes more; run it before a release)
 # Environment:
 #   SKELPRUNE_BASE_CACHE   where the base root filesystem tarball is cached
-#   SKELPRUNE_SMOKE_PNG    the PNG to POST (default: the first of ../shared/data/kimia216)
+#   SKELPRUNE_SMOKE_PNG    the PNG to POST (default: examples/shape.png)
 #   SKELPRUNE_SMOKE_KEEP=1 keep the built image afterwards (default: removed)
 # Needs root (debootstrap, buildah/podman with chroot isolation and the vfs driver).
 set -euo pipefail
@@ -171,12 +171,8 @@ if ((BASE_ONLY)); then
     exit 0
 fi
 
-SAMPLE=${SKELPRUNE_SMOKE_PNG:-}
-if [[ -z $SAMPLE ]]; then
-    SAMPLE=$(find "$REPO/../shared/data/kimia216" -maxdepth 1 -name '*.png' 2>/dev/null \
-             | sort | head -n1 || true)
-fi
-[[ -n $SAMPLE && -f $SAMPLE ]] || die "no sample PNG (looked in $REPO/../shared/data/kimia216)"
+SAMPLE=${SKELPRUNE_SMOKE_PNG:-$REPO/examples/shape.png}
+[[ -f $SAMPLE ]] || die "no sample PNG at $SAMPLE"
 
 WORK=$(mktemp -d)
 cleanup() {

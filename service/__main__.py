@@ -30,7 +30,11 @@ def listen(host: str, port: int) -> socket.socket:
     SystemExit
         With a one-line message, when the address cannot be bound (e.g. in use).
     """
-    sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET)
+    # IPPROTO_TCP spelled out: asyncio sets TCP_NODELAY only on sockets whose protocol
+    # says TCP, and accepted sockets inherit it. Without it, Nagle's algorithm holds a
+    # kept-alive connection's small answers until the client's delayed ACK (~40 ms).
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM, socket.IPPROTO_TCP)
     sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
     try:
         sock.bind((host, port))
@@ -70,6 +74,7 @@ def main() -> None:
     import uvicorn  # only after the port is bound: a port in use fails sooner
 
     from service.app import create_app  # only now: importing it already compiles
+    from service.protocol import Limits, guarded_protocol
 
     # uvicorn drains in-flight requests and closes the pool on SIGTERM/SIGINT, then
     # re-raises the signal under the handlers it found. These make that final step a
@@ -89,7 +94,12 @@ def main() -> None:
             log_level=settings.log_level,
             log_config=logging_config(settings.log_level),  # JSON lines on stderr
             access_log=False,  # the service writes its own access log, with request IDs
-            # http: uvicorn's default picks httptools (the service extra) and falls back to h11
+            # httptools (the service extra) with header limits and a header deadline
+            http=guarded_protocol(
+                Limits(settings.max_header_bytes, settings.max_headers, settings.header_timeout)
+            ),
+            timeout_keep_alive=settings.keep_alive_timeout,
+            server_header=False,  # no software banner on every answer
             # a drain after SIGTERM is bounded: below the orchestrator's grace period
             timeout_graceful_shutdown=settings.shutdown_timeout,
         )

@@ -8,6 +8,7 @@ import logging
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +24,13 @@ from pydantic.json_schema import models_json_schema
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from service import __version__, examples
-from service.errors import BodyTooLargeError, install_error_handlers, problem
+from service.budget import cap_address_space
+from service.errors import (
+    BodyTooLargeError,
+    RequestTimeoutError,
+    install_error_handlers,
+    problem,
+)
 from service.jobs import warmup
 from service.match_job import MatchDocument, MatchPolygons
 from service.page import router as page_router
@@ -38,7 +45,7 @@ from service.security import (
 )
 from service.settings import Settings
 
-__all__ = ["BodyLimitMiddleware", "Metrics", "create_app"]
+__all__ = ["BodyLimitMiddleware", "HeadMiddleware", "Metrics", "create_app"]
 
 REF_TEMPLATE = "#/components/schemas/{model}"
 DOCS_ASSETS = "/docs-assets"  # Swagger UI's and ReDoc's scripts
@@ -47,15 +54,19 @@ log = logging.getLogger("service")
 
 
 class BodyLimitMiddleware:
-    """Refuse request bodies over ``limit`` bytes with 413, streamed or not.
+    """Refuse request bodies over ``limit`` bytes with 413, streamed or not, and bodies
+    that take longer than ``timeout`` seconds to arrive with 408.
 
     A declared ``Content-Length`` over the limit is answered before anything is read;
-    a chunked body is counted as it arrives and stopped at the limit.
+    a chunked body is counted as it arrives and stopped at the limit. The deadline runs
+    from the request's start until its body is complete (later receives, such as the
+    wait for a disconnect while an answer streams, are not bounded).
     """
 
-    def __init__(self, app: ASGIApp, limit: int) -> None:
+    def __init__(self, app: ASGIApp, limit: int, timeout: float | None = None) -> None:
         self.app = app
         self.limit = limit
+        self.timeout = timeout
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
@@ -71,17 +82,42 @@ class BodyLimitMiddleware:
             await response(scope, receive, send)
             return
         received = 0
+        complete = False
+        loop = asyncio.get_running_loop()
+        deadline = None if self.timeout is None else loop.time() + self.timeout
 
         async def limited() -> Message:
-            nonlocal received
-            msg = await receive()
+            nonlocal received, complete
+            if complete or deadline is None:
+                msg = await receive()
+            else:
+                try:
+                    msg = await asyncio.wait_for(receive(), max(0.0, deadline - loop.time()))
+                except TimeoutError:
+                    raise RequestTimeoutError(
+                        f"the request body took longer than {self.timeout:g} s to arrive"
+                    ) from None
             if msg["type"] == "http.request":
                 received += len(msg.get("body", b""))
+                complete = not msg.get("more_body", False)
                 if received > self.limit:
                     raise BodyTooLargeError(message)
             return msg
 
         await self.app(scope, limited, send)
+
+
+class HeadMiddleware:
+    """``HEAD`` on any path is its ``GET`` without the body (uvicorn drops the body of a
+    ``HEAD`` answer and keeps its headers): probes and caches may ask with ``HEAD``."""
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] == "http" and scope["method"] == "HEAD":
+            scope = {**scope, "method": "GET"}  # a copy: the server's own says HEAD
+        await self.app(scope, receive, send)
 
 
 @dataclass
@@ -246,7 +282,9 @@ def create_app(
         settings.workers,
         queue_size=settings.queue_size,
         job_timeout=settings.job_timeout,
-        initializer=warmup if settings.warmup else None,
+        initializer=partial(warmup, memory_budget=settings.job_memory_mb * 2**20)
+        if settings.warmup
+        else partial(cap_address_space, settings.job_memory_mb * 2**20),
         startup_timeout=settings.startup_timeout,
         context=settings.mp_context,
         preload=("skelprune", "service.jobs"),
@@ -305,7 +343,9 @@ def create_app(
     install_error_handlers(app, retry_after=settings.retry_after)
     Instrumentator(registry=registry, excluded_handlers=["/metrics"]).instrument(app)
     # Middlewares, innermost first (each add wraps the ones before it):
-    app.add_middleware(BodyLimitMiddleware, limit=settings.max_body_bytes)
+    app.add_middleware(
+        BodyLimitMiddleware, limit=settings.max_body_bytes, timeout=settings.body_timeout
+    )
     if settings.api_key is not None:  # before the body is read: strangers send nothing
         app.add_middleware(ApiKeyMiddleware, key=settings.api_key.get_secret_value())
     if settings.cors_origins:  # outside the key check: preflights carry no credentials
@@ -325,5 +365,6 @@ def create_app(
             max_age=600,
         )
     app.add_middleware(RequestContextMiddleware, access_log_enabled=settings.access_log)
+    app.add_middleware(HeadMiddleware)
     app.openapi = _openapi(app)  # type: ignore[method-assign]
     return app

@@ -16,9 +16,11 @@ from typing import Any
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import JSONResponse
+from fastapi.responses import JSONResponse, Response
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.requests import ClientDisconnect
 
+from service.budget import JobTooLargeError
 from service.logs import request_id_var
 from service.pool import (
     JobFailedError,
@@ -41,9 +43,12 @@ from skelprune.matching import UnmatchableShapeError
 __all__ = [
     "PROBLEMS",
     "PROBLEM_MEDIA_TYPE",
+    "BadRequestError",
     "BodyTooLargeError",
+    "HeaderTooLargeError",
     "InternalError",
     "NotAcceptableError",
+    "RequestTimeoutError",
     "UnauthorizedError",
     "UnsupportedMediaTypeError",
     "install_error_handlers",
@@ -55,6 +60,8 @@ log = logging.getLogger("service.errors")
 
 PROBLEM_MEDIA_TYPE = "application/problem+json"
 TYPE_PREFIX = "urn:skelprune:problem:"
+#: Status logged and counted for a request whose client went away mid-body.
+CLIENT_CLOSED_REQUEST = 499
 
 
 class BodyTooLargeError(Exception):
@@ -73,6 +80,20 @@ class UnauthorizedError(Exception):
     """The service has an API key and the request did not carry it."""
 
 
+class BadRequestError(Exception):
+    """The request is not valid HTTP (answered below the application)."""
+
+
+class HeaderTooLargeError(Exception):
+    """The request line and headers are over ``SKELPRUNE_MAX_HEADER_BYTES`` or have more
+    than ``SKELPRUNE_MAX_HEADERS`` fields."""
+
+
+class RequestTimeoutError(Exception):
+    """The client took longer than ``SKELPRUNE_HEADER_TIMEOUT`` to send its headers or
+    ``SKELPRUNE_BODY_TIMEOUT`` to send its body."""
+
+
 class InternalError(Exception):
     """A bug: an exception nothing else maps (the message gives a log reference)."""
 
@@ -89,12 +110,16 @@ class Problem:
 PROBLEMS: dict[type[BaseException], Problem] = {
     InvalidImageError: Problem(400, "invalid-image", "Invalid image"),
     ImageTooLargeError: Problem(413, "image-too-large", "Image too large"),
+    JobTooLargeError: Problem(413, "job-too-large", "Job too large"),
     EmptyMaskError: Problem(422, "empty-mask", "Empty mask"),
     InvalidPolygonError: Problem(422, "invalid-polygon", "Invalid polygon"),
     InvalidOptionError: Problem(422, "invalid-option", "Invalid option"),
     UnmatchableShapeError: Problem(422, "unmatchable-shape", "Shape cannot be matched"),
     SkelpruneError: Problem(422, "invalid-input", "Invalid input"),
     BodyTooLargeError: Problem(413, "body-too-large", "Request body too large"),
+    BadRequestError: Problem(400, "bad-request", "Bad request"),
+    HeaderTooLargeError: Problem(431, "header-too-large", "Request header fields too large"),
+    RequestTimeoutError: Problem(408, "request-timeout", "Request timeout"),
     UnsupportedMediaTypeError: Problem(415, "unsupported-media-type", "Unsupported media type"),
     NotAcceptableError: Problem(406, "not-acceptable", "Not acceptable"),
     UnauthorizedError: Problem(401, "unauthorized", "Unauthorized"),
@@ -182,6 +207,8 @@ def install_error_handlers(app: FastAPI, *, retry_after: int) -> None:
         row = lookup(exc)
         assert row is not None
         headers = {"Retry-After": str(retry_after)} if row.status == 503 else None
+        if row.status == 408:  # the rest of the body may still come: not on this connection
+            headers = {"Connection": "close"}
         if row.status >= 500:
             log.warning(
                 "%s %s -> %d: %s",
@@ -248,6 +275,19 @@ def install_error_handlers(app: FastAPI, *, retry_after: int) -> None:
             instance=request.url.path,
         )
 
+    async def client_gone(request: Request, exc: Exception) -> Response:
+        # The client closed the connection before its request was read: nobody to answer,
+        # and not the server's fault. 499 (nginx's "client closed request") keeps it out
+        # of the 5xx counts of the access log and /metrics.
+        log.info(
+            "%s %s: the client closed the connection before sending its body",
+            request.method,
+            request.url.path,
+            extra={"request_id": request_id_var.get()},
+        )
+        return Response(status_code=CLIENT_CLOSED_REQUEST)
+
+    app.add_exception_handler(ClientDisconnect, client_gone)
     for cls in PROBLEMS:
         if cls is not RequestValidationError:
             app.add_exception_handler(cls, domain_error)

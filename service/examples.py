@@ -248,12 +248,17 @@ PRUNE_RESPONSES: dict[int | str, dict[str, Any]] = {
         "cannot produce any of 'text/html'; available: application/json, "
         "image/png, application/geo+json",
     ),
-    413: problem_response(
-        413,
-        "image-too-large",
-        "Image too large",
-        "image has 100000000 pixels (10000×10000), the limit is 16777216",
-    ),
+    413: {
+        **problem_response(
+            413,
+            "image-too-large",
+            "Image too large",
+            "image has 100000000 pixels (10000×10000), the limit is 16777216",
+        ),
+        "description": "Image too large (`image-too-large`: the image, polygon raster or "
+        "overlay over the pixel limit), or job too large (`job-too-large`: its memory or "
+        "time, estimated from the input before any work, over the job's budget).",
+    },
     415: problem_response(
         415,
         "unsupported-media-type",

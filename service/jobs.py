@@ -15,13 +15,15 @@ from typing import Any, Literal
 
 import numpy as np
 
-from skelprune.errors import InvalidImageError, SkelpruneError
+from service.budget import cap_address_space, check_budget, estimate, out_of_memory
+from skelprune.errors import ImageTooLargeError, InvalidImageError, SkelpruneError
 from skelprune.io import read_shape
 from skelprune.io.foreground import POLYGON_FOREGROUND, Foreground
 from skelprune.io.frame import PixelFrame
 from skelprune.io.polygon import polygon_mask
+from skelprune.output.render import auto_scale
 
-__all__ = ["Job", "JobResult", "kernel_counts", "run_job", "warmup"]
+__all__ = ["Job", "JobResult", "answer_pixels", "dumps", "kernel_counts", "run_job", "warmup"]
 
 Output = Literal["json", "png", "geojson"]
 
@@ -53,6 +55,8 @@ class Job:
     overlay_legend: bool = False
     max_pixels: int | None = None
     foreground: str = "auto"
+    memory_budget: int | None = None  # bytes a worker may hold for the job
+    time_budget: float | None = None  # seconds the job may take (the job time limit)
 
 
 #: Response headers of the PNG answer: one value a component, comma-separated, in the
@@ -88,8 +92,10 @@ def kernel_counts() -> tuple[int, int]:
     return loaded, compiled
 
 
-def warmup() -> str:
-    """Worker initialiser: import the library and run it once so the JIT is compiled.
+def warmup(memory_budget: int | None = None) -> str:
+    """Worker initialiser: import the library and run it once so the JIT is compiled;
+    then cap the worker's address space for ``memory_budget`` bytes a job, if given
+    (:func:`service.budget.cap_address_space`).
 
     The shape has a hole (the loop code paths) and a noisy boundary whose spurs the
     coarse stage removes (its code paths); ``coarse=None``, ``method="dce"`` and
@@ -103,12 +109,14 @@ def warmup() -> str:
     """
     t0 = time.perf_counter()
     import skelprune
-    from skelprune.evaluation.perturb import boundary_noise
 
     mask = np.zeros((32, 44), dtype=bool)
     mask[4:28, 4:40] = True
     mask[12:20, 16:28] = False  # a hole
-    mask = boundary_noise(mask, "uniform", 1.0, rng=0)
+    rng = np.random.default_rng(0)  # one-pixel bumps and notches along the rim: spurs
+    mask[3, 4:40] = rng.random(36) < 0.5
+    mask[28, 4:40] = rng.random(36) < 0.5
+    mask[4:28:3, 4] = False
     for options in ({"choice": "noise-floor"}, {}, {"coarse": None}, {"method": "dce"}):
         res = skelprune.prune(mask, **options)
         res.to_dict()
@@ -117,6 +125,8 @@ def warmup() -> str:
     skelprune.match(res, res).to_dict()  # the matching kernels of POST /v1/match
     loaded, compiled = kernel_counts()
     took = f"{time.perf_counter() - t0:.1f} s"
+    if memory_budget is not None:
+        cap_address_space(memory_budget)
     if compiled:
         return (
             f"compiled {compiled} numba kernels ({loaded} loaded from the cache) "
@@ -139,11 +149,45 @@ def _mask(job: Job) -> tuple[np.ndarray, PixelFrame | None, Foreground]:
     return mask, frame, POLYGON_FOREGROUND
 
 
+def answer_pixels(job: Job, shape: tuple[int, int]) -> int:
+    """Pixels of the job's answer image (0 without one); refuses more than the pixel limit.
+
+    Raises
+    ------
+    ImageTooLargeError
+        When ``overlay_scale`` makes the overlay larger than ``max_pixels``.
+    """
+    if job.output != "png" and not job.overlay:
+        return 0
+    scale = auto_scale(shape) if job.overlay_scale is None else job.overlay_scale
+    height, width = shape[0] * scale, shape[1] * scale
+    if job.max_pixels is not None and width * height > job.max_pixels:
+        raise ImageTooLargeError(
+            f"the overlay image would have {width * height} pixels ({width}×{height}: "
+            f"overlay_scale {scale} on {shape[1]}×{shape[0]}), the limit is "
+            f"{job.max_pixels}; use a smaller overlay_scale"
+        )
+    return width * height
+
+
 def run_job(job: Job) -> JobResult:
-    """Decode the input, prune it and serialise the requested output."""
+    """Decode the input, check its memory estimate, prune it and serialise the answer.
+
+    A ``MemoryError`` anywhere is the input's size: the same 413 as an estimate over
+    the budget (:class:`~service.budget.JobTooLargeError`), not an internal error.
+    """
+    try:
+        return _run_job(job)
+    except MemoryError:
+        raise out_of_memory(job.memory_budget) from None
+
+
+def _run_job(job: Job) -> JobResult:
     import skelprune
 
     mask, frame, taken = _mask(job)
+    cost = estimate(mask, answer_pixels(job, mask.shape))
+    check_budget(cost, job.memory_budget, job.time_budget)
     t0 = time.perf_counter()
     res = skelprune.prune(mask, **job.prune_options)
     elapsed = time.perf_counter() - t0
@@ -158,19 +202,20 @@ def run_job(job: Job) -> JobResult:
         }
         headers["X-Skelprune-Components"] = str(len(res.components))
     elif job.output == "geojson":
-        body = _dumps(res.to_geojson(**framing))
+        body = dumps(res.to_geojson(**framing))
     else:
         doc = res.to_dict(curve=job.curve, sequence=job.sequence, **framing)
         if job.overlay:
             png = res.overlay_png(job.overlay_scale, job.overlay_legend)
             doc["overlay_png"] = base64.b64encode(png).decode("ascii")
-        body = _dumps(doc)
+        body = dumps(doc)
     return JobResult(
         body=body, media_type=MEDIA_TYPES[job.output], prune_seconds=elapsed, headers=headers
     )
 
 
-def _dumps(doc: Any) -> bytes:
+def dumps(doc: Any) -> bytes:
+    """The answer as compact JSON (what every job serialises with)."""
     # allow_nan=False: a NaN would be invalid JSON. The input checks keep every number
     # finite; should one still overflow, the caller hears why (422), not "internal error".
     try:

@@ -2,15 +2,15 @@
 
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import dataclass, field
 from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from service.budget import check_budget, estimate, out_of_memory
 from service.examples import SQUARE_POLYGON
-from service.jobs import Job, _mask
+from service.jobs import Job, _mask, dumps
 from service.schemas import GeoJSONInput
 
 __all__ = [
@@ -82,17 +82,26 @@ class MatchResult:
 
 
 def run_match_job(job: MatchJob) -> MatchResult:
-    """Decode both inputs, prune them and answer the match as JSON."""
+    """Decode both inputs, prune them and answer the match as JSON (memory checked
+    and serialised as :func:`service.jobs.run_job` does)."""
+    try:
+        return _run_match_job(job)
+    except MemoryError:
+        raise out_of_memory(job.a.memory_budget) from None
+
+
+def _run_match_job(job: MatchJob) -> MatchResult:
     import skelprune
 
     (ma, frame_a, _), (mb, frame_b, _) = _mask(job.a), _mask(job.b)
+    check_budget(estimate(ma) + estimate(mb), job.a.memory_budget, job.a.time_budget)
     t0 = time.perf_counter()
     ra = skelprune.prune(ma, **job.prune_options)
     rb = skelprune.prune(mb, **job.prune_options)
     elapsed = time.perf_counter() - t0
     res = skelprune.match(ra, rb)
     frames = {k: f for k, f in (("frame_a", frame_a), ("frame_b", frame_b)) if f is not None}
-    body = json.dumps(res.to_dict(**frames), separators=(",", ":"), allow_nan=False).encode()
+    body = dumps(res.to_dict(**frames))
     return MatchResult(body=body, media_type="application/json", prune_seconds=elapsed)
 
 

@@ -125,6 +125,8 @@ def negotiate(accept: str | None) -> Output:
                 best, best_rank = q, rank
         return best if best_rank >= 0 else 0.0
 
+    if not ranges:  # only commas and blanks: no preference stated, as without the header
+        return "json"
     scored = [(quality(m), -i, out) for i, (m, out) in enumerate(PRODUCES.items())]
     q, _, out = max(scored)
     if q <= 0:
@@ -390,6 +392,8 @@ def _job(
         overlay_legend=output_options.overlay_legend,
         max_pixels=settings.max_pixels,
         foreground=read_options.foreground,
+        memory_budget=settings.job_memory_mb * 2**20,
+        time_budget=settings.job_timeout,
     )
 
 
@@ -440,6 +444,11 @@ def _batch_item(
         return _job(opts, settings, "json", None, shape.model_dump(mode="json", exclude_none=True))
     except SkelpruneError as exc:
         return {"index": index, "problem": _item_problem(exc)}
+    except RecursionError:  # an item nested deeper than validation's stack
+        return {
+            "index": index,
+            "problem": _item_problem(InvalidPolygonError("shape: nested too deep")),
+        }
 
 
 @router.post(
@@ -530,10 +539,25 @@ async def prune_batch(
             ) from None
     elif ctype in JSON_TYPES:
         try:
-            items = json.loads(body)
+            # UTF-8 only, as POST /v1/prune reads JSON (json.loads would guess UTF-16/32)
+            items = json.loads(body.decode("utf-8"))
+        except UnicodeDecodeError as exc:
+            raise RequestValidationError(
+                [
+                    {
+                        "loc": ("body",),
+                        "type": "json_invalid",
+                        "msg": f"invalid JSON: not UTF-8 (byte {exc.start})",
+                    }
+                ]
+            ) from None
         except ValueError as exc:
             raise RequestValidationError(
                 [{"loc": ("body",), "type": "json_invalid", "msg": f"invalid JSON: {exc}"}]
+            ) from None
+        except RecursionError:  # nesting deeper than the parser's stack
+            raise RequestValidationError(
+                [{"loc": ("body",), "type": "json_invalid", "msg": "invalid JSON: nested too deep"}]
             ) from None
         if not isinstance(items, list):
             raise RequestValidationError(
@@ -686,12 +710,21 @@ async def match(
                 png=p,
                 max_pixels=settings.max_pixels,
                 foreground=read_options.foreground,
+                memory_budget=settings.job_memory_mb * 2**20,
+                time_budget=settings.job_timeout,
             )
             for p in pngs
         ]
         if pngs is not None
         else [
-            Job(output="json", geojson=g, raster=raster, max_pixels=settings.max_pixels)
+            Job(
+                output="json",
+                geojson=g,
+                raster=raster,
+                max_pixels=settings.max_pixels,
+                memory_budget=settings.job_memory_mb * 2**20,
+                time_budget=settings.job_timeout,
+            )
             for g in shapes or ()
         ]
     )

@@ -96,6 +96,36 @@ class Settings(BaseSettings):
     max_vertices: int = Field(
         100_000, ge=4, description="Most positions in a polygon input, all rings together."
     )
+    job_memory_mb: int = Field(
+        2048,
+        ge=256,
+        description="Memory a worker may hold for one job, MiB, its own ~300 MiB included: "
+        "a job whose estimate (from its pixels, boundary, components and answer image) is "
+        "over it gets 413 before any work, and so does one that runs out all the same.",
+    )
+    header_timeout: float = Field(
+        10.0,
+        gt=0,
+        description="Seconds a client may take to send a request line and its headers "
+        "(408, connection closed); also how long a new connection may stay silent.",
+    )
+    body_timeout: float = Field(
+        60.0,
+        gt=0,
+        description="Seconds a client may take to send a request body, from the end of "
+        "its headers (408, connection closed).",
+    )
+    keep_alive_timeout: float = Field(
+        5.0, gt=0, description="Seconds an idle kept-alive connection stays open."
+    )
+    max_header_bytes: int = Field(
+        16 * 1024,
+        ge=1024,
+        description="Largest request line plus headers, bytes (431, connection closed).",
+    )
+    max_headers: int = Field(
+        100, ge=8, description="Most header fields in one request (431, connection closed)."
+    )
     polygon_longest_side: int = Field(
         512, ge=8, le=16384, description="Default raster size of a polygon's longer side, px."
     )

@@ -103,7 +103,7 @@ def oriented(mask: np.ndarray) -> tuple[np.ndarray, Orientation]:
     """``mask`` in its canonical orientation (contiguous), and that orientation.
 
     :func:`skelprune.api.prune_component` works in this frame: the graph, the branch ids
-    and the ``(row, col)`` tie rules of SPEC §2.3–2.4 of a
+    and the ``(row, col)`` tie rules of docs/algorithm.md of a
     :class:`~skelprune.output.document.ComponentResult` are in it.
     """
     orientation = canonical_orientation(mask)

@@ -1,5 +1,5 @@
 """Command line: ``skelprune prune FILE [--beta B] [--overlay OUT.png]``, ``skelprune
-match A.png B.png``, ``skelprune retrieve FOLDER``, ``skelprune eval``.
+match A.png B.png``, ``skelprune retrieve FOLDER``.
 
 A FILE is a PNG mask or a GeoJSON polygon (``.geojson``/``.json``: a Polygon,
 MultiPolygon, Feature or FeatureCollection, rasterised as the service does it).
@@ -10,9 +10,6 @@ JSON line per file: ``{"file": ..., "result": {...}}`` or ``{"file": ..., "error
 ``skelprune match A.png B.png`` prints the path similarity of two shapes' skeletons
 (:func:`skelprune.match`); ``skelprune retrieve FOLDER [--top K]`` matches every shape with
 every other and prints one JSON line per shape with its ``K`` closest.
-
-``skelprune eval --out docs`` regenerates the evaluation report, ``stability.md`` and the
-figures from the benchmark data (``skelprune.evaluation``; needs the ``bench`` extra).
 """
 
 from __future__ import annotations
@@ -407,39 +404,6 @@ def retrieve_command(
         )
     if failed:
         raise typer.Exit(1)
-
-
-@app.command("eval")
-def eval_command(
-    out: Annotated[
-        Path, typer.Option(help="Folder for evaluation.md, stability.md and figures/.")
-    ] = Path("docs"),
-    data: Annotated[
-        Path | None,
-        typer.Option(
-            help="Folder with kimia216/ and kimia99/ (default: $SKELPRUNE_DATA or ../shared/data)."
-        ),
-    ] = None,
-    workers: Annotated[int, typer.Option(help="Processes of the stability run.")] = 2,
-    limit: Annotated[
-        int | None, typer.Option(hidden=True, help="First N shapes a dataset.")
-    ] = None,
-    rect_seeds: Annotated[
-        int, typer.Option(hidden=True, help="Noisy rectangles a noise kind.")
-    ] = 10,
-) -> None:
-    """Regenerate the evaluation report and figures (needs the bench extra: matplotlib)."""
-    from .evaluation.run import run_evaluation
-
-    try:
-        written = run_evaluation(
-            out, data=data, limit=limit, workers=workers, rect_seeds=rect_seeds
-        )
-    except (FileNotFoundError, ImportError) as exc:
-        typer.echo(f"error: {exc}", err=True)
-        raise typer.Exit(1) from None
-    for path in written.values():
-        typer.echo(str(path))
 
 
 @app.command("version")

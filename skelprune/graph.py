@@ -1,4 +1,4 @@
-"""Skeleton graph: endpoints, junction clusters, branches and loops (SPEC §2.3–2.4).
+"""Skeleton graph: endpoints, junction clusters, branches and loops (docs/algorithm.md).
 
 A skeleton is a set of pixels. Pixels with three or more 8-neighbours are junction
 pixels; adjacent junction pixels form one junction node. Branches are the pixel
@@ -6,7 +6,7 @@ paths between nodes; a path with no junction at all is a single branch (two free
 ends), and a cycle with no junction is a loop branch.
 
 :class:`BranchGraph` is the mutable graph the pruning works on. It implements the
-one operation pruning needs, removing an end branch, with the rule of SPEC §2.4: a
+one operation pruning needs, removing an end branch, with the rule of docs/algorithm.md: a
 junction left with two branch ends is dissolved and its two branches become one.
 Lengths are kept as exact integer counts of axial and diagonal steps, so that two
 implementations that do the same removals get bit-identical lengths.

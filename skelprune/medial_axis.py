@@ -1,4 +1,4 @@
-"""Medial axis of a binary shape (SPEC §2.1).
+"""Medial axis of a binary shape (docs/algorithm.md).
 
 The axis is computed by distance-ordered homotopic thinning (Pudney 1998) anchored
 at the centres of maximal disks, followed by a thinning pass that makes it one pixel
@@ -6,7 +6,7 @@ thin while preferring removals that lose no reconstructed area. The result keeps
 topology of the shape (8-connected foreground, 4-connected background) and, through
 the anchors, reconstructs it almost exactly.
 
-Disk convention (SPEC §2.2): a point ``s`` with squared radius ``r2`` covers pixel
+Disk convention (docs/algorithm.md): a point ``s`` with squared radius ``r2`` covers pixel
 ``p`` iff ``|p - s|**2 < r2``, where ``r2`` is the exact squared Euclidean distance
 from ``s`` to the nearest background pixel. The union of the disks of all shape
 pixels is then exactly the shape.
@@ -366,7 +366,7 @@ def _thin(fg, r2, rows, cols, simple, degree) -> None:
 def _extend_ends(fg, r2, degree) -> None:
     """Extend every endpoint down the distance map until it reaches the boundary.
 
-    SPEC §2.1: end branches of ``M`` reach the boundary. A discrete centre of maximal
+    docs/algorithm.md: end branches of ``M`` reach the boundary. A discrete centre of maximal
     disk can sit a few pixels inside (a rounded end has several); its branch then
     stops short. Each step goes to the neighbour of least ``r2`` (axial first on
     ties) that touches no other axis pixel, so topology and thinness are kept and

@@ -28,6 +28,7 @@ __all__ = [
     "FOREGROUND_RULES",
     "GROUPS",
     "LONGEST_SIDE_RANGE",
+    "MAX_BETA",
     "METHODS",
     "OutputOptions",
     "PruneOptions",
@@ -38,6 +39,8 @@ __all__ = [
 ]
 
 METHODS = ("bayesian", "dce")
+#: The largest β accepted: far past any useful weight, and far from a float overflow.
+MAX_BETA = 1_000_000_000
 #: The foreground rules (:mod:`skelprune.io.foreground`).
 FOREGROUND_RULES = ("auto", "nonzero", "zero")
 #: Spellings of ``coarse``: the name ``"none"`` is the full medial axis (``None``).
@@ -69,7 +72,7 @@ def _with_schema(check: Callable[[str, Any], Any], **schema: Any) -> Callable[[s
     return check
 
 
-def _number(low: float, strict: bool) -> Callable[[str, Any], float]:
+def _number(low: float, strict: bool, high: float | None = None) -> Callable[[str, Any], float]:
     def check(name: str, value: Any) -> float:
         try:
             finite = (
@@ -79,14 +82,23 @@ def _number(low: float, strict: bool) -> Callable[[str, Any], float]:
             )
         except OverflowError:  # an integer too large for a float
             finite = False
-        if not finite or value < low or (strict and value == low):
+        if (
+            not finite
+            or value < low
+            or (strict and value == low)
+            or (high is not None and value > high)
+        ):
+            upper = "" if high is None else f" and <= {high:g}"
             raise InvalidOptionError(
-                f"{name} must be a finite number {'>' if strict else '>='} {low:g}, "
+                f"{name} must be a finite number {'>' if strict else '>='} {low:g}{upper}, "
                 f"got {shown(value)}"
             )
         return float(value)
 
-    return _with_schema(check, **{"exclusiveMinimum" if strict else "minimum": low})
+    schema: dict[str, float] = {"exclusiveMinimum" if strict else "minimum": low}
+    if high is not None:
+        schema["maximum"] = high
+    return _with_schema(check, **schema)
 
 
 def _integer(low: int, high: int) -> Callable[[str, Any], int]:
@@ -156,13 +168,13 @@ class PruneOptions:
     >>> PruneOptions(beta=-1)
     Traceback (most recent call last):
     ...
-    skelprune.errors.InvalidOptionError: beta must be a finite number > 0, got -1
+    skelprune.errors.InvalidOptionError: beta must be a finite number > 0 and <= 1e+09, got -1
     """
 
     beta: float = _option(
         9.0,
-        "Weight β of the reconstruction term, > 0: α = β·log(L(M)/ℓ̄). The paper's 9.",
-        _number(0, strict=True),
+        "Weight β of the reconstruction term, > 0 (at most 1e9): α = β·log(L(M)/ℓ̄). The paper's 9.",
+        _number(0, strict=True, high=MAX_BETA),
     )
     method: str = _option(
         "bayesian",

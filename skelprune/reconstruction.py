@@ -1,4 +1,4 @@
-"""Reconstruction of a shape from skeleton disks, and its area term (SPEC §2.2).
+"""Reconstruction of a shape from skeleton disks, and its area term (docs/algorithm.md).
 
 Besides the plain reconstruction, :class:`Coverage` keeps, for every pixel, how many
 owners (branches or junction clusters) cover it with their disks and the sum of their

@@ -167,7 +167,7 @@ class Skeleton:
         return sum(1 for b in self.graph.branches if b.alive)
 
     def end_branches(self) -> list[int]:
-        """Ids of the end branches (SPEC §2.4), sorted."""
+        """Ids of the end branches (docs/algorithm.md), sorted."""
         return self.graph.end_branches()
 
     def points(self) -> np.ndarray:
@@ -175,7 +175,7 @@ class Skeleton:
         return self.graph.alive_points()
 
     def normalisation(self, beta: float) -> Normalisation:
-        """Seed point, mean end-path length ``ℓ̄`` and ``α = β·log(L/ℓ̄)`` (SPEC §2.3)."""
+        """Seed point, mean end-path length ``ℓ̄`` and ``α = β·log(L/ℓ̄)`` (docs/algorithm.md)."""
         return normalisation(self.graph, self.r2, beta)
 
     def reconstruction(self) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Checks of a result document as a graph other programs build on (SPEC §3).
+"""Checks of a result document as a graph other programs build on (docs/graph.md).
 
 Each function asserts on the document alone (plus the mask it came from), the way a
 user's program would read it.

@@ -1,11 +1,11 @@
-"""Naive oracle for the Bayesian pruning (SPEC §2.4, "Exactness").
+"""Naive oracle for the Bayesian pruning (docs/algorithm.md).
 
 Topology comes from the same :class:`BranchGraph` as the fast code (the rules of
 which branch is an end branch and how junctions dissolve are the model, not the
 optimisation). Everything the fast code keeps incrementally is recomputed here from
 scratch, with an independent numpy reconstruction: at every step, for every
 candidate, the disks of all remaining points are painted anew. The target λ and the
-tie order are written here again from SPEC §2.3–2.4, not imported, so that the
+tie order are written here again from docs/algorithm.md, not imported, so that the
 production formula is checked too.
 """
 
@@ -20,14 +20,14 @@ from skelprune.graph import BranchGraph
 
 
 def objective(lost: int, area: int, na: int, nd: int, alpha: float, lbar: float) -> float:
-    """SPEC §2.3: ``λ = α·AR + log(Γ + 1)``, ``AR = lost / area``, ``Γ = L / ℓ̄``, where the
+    """docs/algorithm.md: ``λ = α·AR + log(Γ + 1)``, ``AR = lost / area``, ``Γ = L / ℓ̄``, where the
     length ``L`` counts ``na`` axial steps of 1 and ``nd`` diagonal steps of √2."""
     length = na + nd * math.sqrt(2.0)
     return alpha * lost / area + math.log(length / lbar + 1.0)
 
 
 def candidate_key(graph: BranchGraph, b: int, lam: float, d_area: int) -> tuple:
-    """SPEC §2.4's order of candidates: smallest λ, then smaller lost area, then shorter,
+    """docs/algorithm.md's order of candidates: smallest λ, then smaller lost area, then shorter,
     then smaller endpoint (row, col)."""
     br = graph.branches[b]
     p = graph.endpoint(b)

@@ -26,11 +26,20 @@ def free_port() -> int:
 
 
 @contextmanager
-def running_server(log_path: Path, ready: str = "/readyz", **settings: str) -> Iterator[Running]:
+def running_server(
+    log_path: Path,
+    ready: str = "/readyz",
+    python: str = sys.executable,
+    cwd: Path = REPO,
+    env_extra: dict[str, str] | None = None,
+    **settings: str,
+) -> Iterator[Running]:
     """Start the server with ``SKELPRUNE_<NAME>`` settings, wait until ``ready`` is 200.
 
     Yields the process and its base URL; output goes to ``log_path``. A server the test
     did not stop itself is killed (with its workers) on exit. No API key unless given.
+    ``python`` and ``cwd`` start another installation (an installed wheel, say);
+    ``env_extra`` adds environment variables.
     """
     port = free_port()
     env = {
@@ -42,11 +51,12 @@ def running_server(log_path: Path, ready: str = "/readyz", **settings: str) -> I
         "NUMBA_NUM_THREADS": "1",
     }
     env.pop("SKELPRUNE_API_KEY", None)
+    env.update(env_extra or {})
     env.update({f"SKELPRUNE_{k.upper()}": v for k, v in settings.items()})
     with log_path.open("wb") as log:
         proc = subprocess.Popen(
-            [sys.executable, "-m", "service"],
-            cwd=REPO,
+            [python, "-m", "service"],
+            cwd=cwd,
             env=env,
             stdout=log,
             stderr=subprocess.STDOUT,

@@ -1,4 +1,4 @@
-"""Which pixels of an image are the shape: the foreground rule (SPEC §4).
+"""Which pixels of an image are the shape: the foreground rule (docs/service.md).
 
 ``foreground="auto"`` (the default for images) picks the shape users mean:
 

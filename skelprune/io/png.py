@@ -1,11 +1,11 @@
 """Decoding of PNG files and arrays into boolean shape masks.
 
-Rules (SPEC §4): greyscale, RGB, RGBA, palette (with or without transparency) and
+Rules (docs/service.md): greyscale, RGB, RGBA, palette (with or without transparency) and
 16-bit PNGs are accepted. Which pixels are the shape is decided by the foreground rule
 of :mod:`skelprune.io.foreground` (``auto`` by default: the background is the grey level
 holding most of the border; ``nonzero`` and ``zero`` on request).
 
-Choices made where the SPEC is silent:
+Choices made where the PNG format leaves room:
 
 - An image uses transparency when at least one pixel is fully transparent: alpha 0 in
   an alpha channel, a palette entry with alpha 0 that some pixel uses, or a pixel equal
@@ -15,14 +15,16 @@ Choices made where the SPEC is silent:
 - Values are taken exactly, before any rounding (16-bit samples keep 16 bits where
   Pillow gives them): for ``nonzero``, a colour pixel belongs to the shape unless it is
   pure black.
-- The chunk structure (lengths, CRCs, a final IEND) is checked before Pillow decodes, so
-  a truncated or corrupted file is refused instead of half-decoded.
+- The chunk structure (lengths, CRCs, a final IEND) is checked before Pillow decodes, and
+  the image data must inflate to every scanline the header promises, so a truncated or
+  corrupted file is refused instead of half-decoded.
 """
 
 from __future__ import annotations
 
 import io
 import os
+import re
 import struct
 import zlib
 from pathlib import Path
@@ -132,14 +134,85 @@ def _check_chunks(data: bytes) -> None:
         pos = end
 
 
+#: Samples per pixel of each PNG colour type.
+_CHANNELS = {0: 1, 2: 3, 3: 1, 4: 2, 6: 4}
+#: Adam7 passes: (first row, row step, first column, column step).
+_ADAM7 = (
+    (0, 8, 0, 8),
+    (0, 8, 4, 8),
+    (4, 8, 0, 4),
+    (0, 4, 2, 4),
+    (2, 4, 0, 2),
+    (0, 2, 1, 2),
+    (1, 2, 0, 1),
+)
+
+
+def _raw_size(width: int, height: int, depth: int, colour: int, interlaced: bool) -> int:
+    """Bytes of filtered scanlines the IHDR promises (each row: filter byte + samples)."""
+    bits = _CHANNELS.get(colour, 1) * depth
+
+    def rows(w: int, h: int) -> int:
+        return h * (1 + (w * bits + 7) // 8) if w and h else 0
+
+    if not interlaced:
+        return rows(width, height)
+    return sum(
+        rows((width - c0 + dc - 1) // dc, (height - r0 + dr - 1) // dr)
+        for r0, dr, c0, dc in _ADAM7
+        if width > c0 and height > r0
+    )
+
+
+def _check_image_data(data: bytes, width: int, height: int, depth: int, colour: int) -> None:
+    """The IDAT stream inflates to every scanline the header promises.
+
+    Pillow fills what a short stream leaves out: valid chunks holding 10 of 60 rows
+    would otherwise decode as a whole image. Inflated in pieces, counted, not kept.
+    """
+    interlaced = data[28] == 1
+    need = _raw_size(width, height, depth, colour, interlaced)
+    inflate = zlib.decompressobj()
+    got = 0
+    pos = 8
+    try:
+        while pos + 8 <= len(data):
+            length, ctype = struct.unpack(">I4s", data[pos : pos + 8])
+            if ctype == b"IDAT":
+                piece = data[pos + 8 : pos + 8 + length]
+                while piece and got < need:
+                    got += len(inflate.decompress(piece, 1 << 20))
+                    piece = inflate.unconsumed_tail
+            elif ctype == b"IEND":
+                break
+            pos += 12 + length
+    except zlib.error:
+        raise InvalidImageError("cannot decode PNG: the image data is corrupt") from None
+    if got < need:
+        raise InvalidImageError(
+            f"truncated PNG: the image data holds {got} of the {need} bytes of scanlines "
+            f"its {width}×{height} header promises"
+        )
+
+
+def _plain(exc: BaseException) -> str:
+    """The decoder's message without its internals (object addresses, module names)."""
+    text = str(exc)
+    if "MAX_TEXT_CHUNK" in text:
+        return "a text chunk is too large"
+    text = re.sub(r"<[^<>]* at 0x[0-9a-fA-F]+>", "the data", text)
+    return re.sub(r"\b\w+(ImagePlugin|File)\.\w+", "a reader limit", text) or type(exc).__name__
+
+
 def _decode(data: bytes) -> Image.Image:
     try:
         im = Image.open(io.BytesIO(data), formats=["PNG"])
         im.load()
-    except Image.DecompressionBombError as exc:
-        raise ImageTooLargeError(f"image too large to decode safely: {exc}") from None
+    except Image.DecompressionBombError:
+        raise ImageTooLargeError("image too large to decode safely") from None
+    except UnidentifiedImageError:
+        raise InvalidImageError("cannot decode PNG: not a valid PNG image") from None
     except (
-        UnidentifiedImageError,
         OSError,
         SyntaxError,
         ValueError,
@@ -147,7 +220,7 @@ def _decode(data: bytes) -> Image.Image:
         struct.error,
         zlib.error,
     ) as exc:
-        raise InvalidImageError(f"cannot decode PNG: {exc}") from None
+        raise InvalidImageError(f"cannot decode PNG: {_plain(exc)}") from None
     return im
 
 
@@ -261,9 +334,10 @@ def read_shape(
                 ) from None
         else:
             data = bytes(source)
-        width, height, depth, _ = _ihdr(data)
+        width, height, depth, colour = _ihdr(data)
         check_png_size(data, max_pixels)
         _check_chunks(data)
+        _check_image_data(data, width, height, depth, colour)
         im = _decode(data)
         if im.size != (width, height):  # never decode something other than what was checked
             raise InvalidImageError(

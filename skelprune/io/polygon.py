@@ -33,7 +33,7 @@ import numpy as np
 import shapely
 from shapely.geometry import GeometryCollection, MultiPolygon, Polygon
 
-from skelprune.errors import ImageTooLargeError, InvalidPolygonError, shown
+from skelprune.errors import EmptyMaskError, ImageTooLargeError, InvalidPolygonError, shown
 from skelprune.io.frame import PixelFrame
 from skelprune.options import DEFAULT_LONGEST_SIDE, RasterOptions
 
@@ -263,6 +263,11 @@ def rasterize(
         ``(H, W)`` boolean raster.
     frame : PixelFrame
         Maps pixel centres ``(col, row)`` back to polygon coordinates.
+
+    Raises
+    ------
+    EmptyMaskError
+        When no pixel centre falls inside the polygon (it is thinner than a pixel).
     """
     RasterOptions(pixel_size=pixel_size, longest_side=longest_side)  # the options' checks
     minx, miny, maxx, maxy = geom.bounds
@@ -323,6 +328,11 @@ def rasterize(
     xs = frame.x0 + cols * pixel_size
     ys = frame.y0 - rows * pixel_size
     canvas[rows, cols] = shapely.intersects_xy(geom, xs, ys)
+    if not canvas.any():
+        raise EmptyMaskError(
+            f"the polygon covers no pixel centre at a pixel size of {pixel_size:.3g}: it is "
+            "thinner than a pixel; use a smaller pixel_size or a larger longest_side"
+        )
     return canvas.astype(bool), frame
 
 

@@ -1,4 +1,4 @@
-"""Results of pruning and their serialisation (SPEC §3).
+"""Results of pruning and their serialisation (docs/graph.md).
 
 ``ComponentResult`` holds arrays (skan's "data" side); ``to_dict`` and
 ``to_geojson`` are the reporting side, producing plain JSON types.
@@ -414,7 +414,7 @@ class PruneResult:
         frame: PixelFrame | None = IDENTITY,
         sequence: bool = False,
     ) -> dict[str, Any]:
-        """The output document of SPEC §3 (plain JSON types).
+        """The output document of docs/graph.md (plain JSON types).
 
         Examples
         --------

@@ -1,4 +1,4 @@
-"""The contour partition that DCE makes of a shape's boundary (SPEC §2.5).
+"""The contour partition that DCE makes of a shape's boundary (docs/algorithm.md).
 
 A module of its own because both :mod:`.dce`, which makes it, and :mod:`._generating`,
 which scans it, need the type, and neither should import the other for it.

@@ -1,4 +1,4 @@
-"""Bayesian skeleton pruning (SPEC §2.3–2.4, eqs. 7 and 9–11 of the paper).
+"""Bayesian skeleton pruning (docs/algorithm.md, eqs. 7 and 9–11 of the paper).
 
 Starting from the medial axis ``M``, end branches are removed one at a time, each
 time the one whose removal gives the smallest target ``λ = α·AR + LR``; the

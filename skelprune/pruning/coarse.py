@@ -1,7 +1,7 @@
 """The coarse stage of ``prune(coarse="dce")``: DCE contour-partition pruning made robust.
 
 The paper ran its Bayesian pruning from a skeleton first pruned to a coarse level with
-the DCE method of its ref. [10] (paper §7.4, SPEC §2.5). This module is that stage, with
+the DCE method of its ref. [10] (paper §7.4, docs/algorithm.md). This module is that stage, with
 two additions, both measured in ``docs/stability-findings.md``:
 
 * **The DCE stop follows the boundary's own roughness.** DCE stops when the least
@@ -91,8 +91,8 @@ def boundary_roughness(mask: np.ndarray) -> float:
     >>> m = np.zeros((40, 40), bool); m[5:35, 5:35] = True
     >>> round(boundary_roughness(m), 3)  # only the 4 corner pixels change
     0.034
-    >>> from skelprune.evaluation.perturb import boundary_noise
-    >>> boundary_roughness(boundary_noise(m, "gaussian", 1.0, rng=0)) > 0.3
+    >>> comb = m.copy(); comb[4, 5:35:2] = comb[5:35:2, 4] = True; comb[6, 6:34:2] = False
+    >>> boundary_roughness(comb) > 0.1  # 1-px teeth and notches along two sides
     True
     """
     mask = np.asarray(mask, dtype=bool)
@@ -232,11 +232,12 @@ class _EndBranches:
         self.supported = np.zeros(n, np.bool_)
         self.first = np.full(n, -1, np.int64)
         self.vertex = np.full(n, -1, np.int64)
-        m = partition.n_segments
-        self.vertex_of = np.full((m, m), -2, np.int64)
-        ids = np.arange(len(after))
-        self.vertex_of[before, after] = ids
-        self.vertex_of[after, before] = ids
+        # The convex vertex each segment starts at (-1: none): two segments meet at a
+        # vertex only if one starts where the other ends, so this and ``before`` answer
+        # "where do a and b meet" in memory linear in the segments (a pair table would
+        # be quadratic, and a noisy boundary has as many segments as pixels).
+        self.starts_at = np.full(partition.n_segments, -1, np.int64)
+        self.starts_at[after] = np.arange(len(after))
         self.before, self.after, self.positions = before, after, positions
         self.cache: dict[int, tuple[int, bool, int, float]] = {}  # b -> (n, sup, v, d2)
 
@@ -263,7 +264,7 @@ class _EndBranches:
             self.first,
             self.supported,
             self.vertex,
-            self.vertex_of,
+            self.starts_at,
             self.before,
             self.after,
         )
@@ -309,7 +310,7 @@ def _branch_states(
     first: np.ndarray,
     supported: np.ndarray,
     vertex: np.ndarray,
-    vertex_of: np.ndarray,
+    starts_at: np.ndarray,
     before: np.ndarray,
     after: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -338,7 +339,7 @@ def _branch_states(
                 if labels[2] != -1:
                     vertex[p] = -2
                 elif labels[1] != -1:
-                    vertex[p] = vertex_of[labels[0], labels[1]]
+                    vertex[p] = _meeting_vertex(starts_at, before, labels[0], labels[1])
             sup[k] |= supported[p]
             if vertex[p] == -2 or (v >= 0 and vertex[p] >= 0 and vertex[p] != v):
                 can_claim = False
@@ -358,14 +359,28 @@ def _branch_states(
     return sup, claimed
 
 
+@numba.njit(cache=True)
+def _meeting_vertex(starts_at: np.ndarray, before: np.ndarray, a: int, b: int) -> int:
+    """The convex vertex between segments ``a`` and ``b`` (either order), or -2."""
+    v = starts_at[b]
+    if v >= 0 and before[v] == a:
+        return v
+    v = starts_at[a]
+    if v >= 0 and before[v] == b:
+        return v
+    return -2
+
+
 def coarse_dce(skeleton: Skeleton) -> Skeleton:
     """The coarse skeleton: ``skeleton`` (a medial axis) pruned by :func:`coarse_removals`.
 
     Examples
     --------
-    >>> from skelprune.evaluation.perturb import boundary_noise
+    >>> from scipy import ndimage
     >>> m = np.zeros((44, 64), bool); m[4:40, 4:60] = True
-    >>> axis = Skeleton.medial_axis(boundary_noise(m, "gaussian", 1.0, rng=1))
+    >>> rim = ndimage.binary_dilation(m) & ~m  # one-pixel bumps on half the rim
+    >>> bumpy = m | (rim & (np.random.default_rng(0).random(m.shape) < 0.5))
+    >>> axis = Skeleton.medial_axis(bumpy)
     >>> coarse = coarse_dce(axis)
     >>> axis.n_endpoints > coarse.n_endpoints == 4
     True

@@ -1,6 +1,6 @@
 """Discrete Curve Evolution and the contour partition of Bai, Latecki & Liu (2007).
 
-The pruning method of Bai, Latecki & Liu (TPAMI 2007, ref. [10] of the paper, SPEC §2.5)
+The pruning method of Bai, Latecki & Liu (TPAMI 2007, ref. [10] of the paper, docs/algorithm.md)
 simplifies every boundary polygon of a shape with Discrete Curve Evolution (DCE,
 Latecki & Lakämper), cuts the boundary at the *convex* vertices of the evolved polygon,
 and keeps a skeleton point only if its maximal disk touches at least two of these

@@ -76,6 +76,7 @@ def test_make_run_installs_only_the_serving_extras() -> None:
     """``make run`` sets up with the service extra alone; ``make test`` adds the test one."""
 
     def installs(target: str) -> list[str]:
+        """The extras each editable pip install of ``make -n TARGET`` asks for."""
         out = subprocess.run(
             ["make", "-n", "-W", "pyproject.toml", target],
             cwd=REPO,
@@ -84,10 +85,11 @@ def test_make_run_installs_only_the_serving_extras() -> None:
             timeout=60,
             check=True,
         ).stdout
-        return [line for line in out.splitlines() if "pip install" in line and " -e " in line]
+        return re.findall(r"pip install [^|]*?-e '\.\[([a-z,]+)\]'", out)
 
-    assert installs("run") == [".venv/bin/python -m pip install --quiet -e '.[service]'"]
+    assert installs("run") == ["service"]
     test = installs("test")  # (and the service extra alone, which the kernels' stamp needs)
-    assert ".venv/bin/python -m pip install --quiet -e '.[service,test]'" in test
-    assert not [line for line in test if "bench" in line]
+    assert "service,test" in test
+    assert not [extras for extras in test if "bench" in extras]
     assert "bench" in installs("bench")[0]
+    assert installs("client") == ["service,client"]

@@ -1,18 +1,19 @@
-"""Evaluation helpers: the skeletonize + cut baseline, the stability run, ``skelprune eval``."""
+"""Evaluation helpers: the skeletonize + cut baseline, the stability run, the
+``python -m evaluation`` command."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import numpy as np
+import pytest
 from PIL import Image
 from scipy import ndimage
-from typer.testing import CliRunner
 
-from skelprune.cli import app
-from skelprune.evaluation.baseline import cut_end_branches, skeletonize_cut
-from skelprune.evaluation.perturb import PERTURBATIONS, Perturbation
-from skelprune.evaluation.stability import VARIANTS, load_dataset, measure, run_stability
+from evaluation.__main__ import main as evaluation_main
+from evaluation.baseline import cut_end_branches, skeletonize_cut
+from evaluation.perturb import PERTURBATIONS, Perturbation
+from evaluation.stability import VARIANTS, load_dataset, measure, run_stability
 from skelprune.graph import BranchGraph
 from testkit import DATA
 
@@ -103,16 +104,16 @@ def test_measure_matches_the_document() -> None:
 
 
 def test_eval_command_writes_report_and_figures(tmp_path: Path) -> None:
-    result = CliRunner().invoke(
-        app, ["eval", "--out", str(tmp_path), "--limit", "2", "--rect-seeds", "1", "--workers", "1"]
+    code = evaluation_main(
+        ["--out", str(tmp_path), "--limit", "2", "--rect-seeds", "1", "--workers", "1"]
     )
-    assert result.exit_code == 0, result.output
+    assert code == 0
     text = (tmp_path / "evaluation.md").read_text()
     for heading in ("Table 1", "Table 2", "Stability", "Fig. 3", "Speed", "Fig. 11"):
         assert heading in text
     for v in VARIANTS:
         assert v in text
-    assert "skelprune eval --out docs --limit 2" in text
+    assert "python -m evaluation --out docs --limit 2" in text
     stab = (tmp_path / "stability.md").read_text()
     assert "Endpoint agreement" in stab
     assert "Skeleton distance" in stab
@@ -136,12 +137,14 @@ def test_eval_command_writes_report_and_figures(tmp_path: Path) -> None:
         assert f"figures/{name}" in text
 
 
-def test_eval_command_reports_missing_data(tmp_path: Path) -> None:
-    result = CliRunner().invoke(
-        app, ["eval", "--out", str(tmp_path / "o"), "--data", str(tmp_path), "--workers", "1"]
+def test_eval_command_reports_missing_data(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code = evaluation_main(
+        ["--out", str(tmp_path / "o"), "--data", str(tmp_path), "--workers", "1"]
     )
-    assert result.exit_code == 1
-    assert "no PNG masks" in result.output
+    assert code == 1
+    assert "no PNG masks" in capsys.readouterr().err
 
 
 def test_anchor_run_reads_the_authors_counts_and_ours() -> None:
@@ -149,9 +152,9 @@ def test_anchor_run_reads_the_authors_counts_and_ours() -> None:
     for it when it was made, and the authors' shares come straight from the CSV."""
     import csv
 
-    from skelprune.evaluation.anchors import ANCHOR, BATCHES, anchor_table, run_anchors
+    from evaluation.anchors import ANCHOR, BATCHES, anchor_table, run_anchors
 
-    folder = Path("/work/shared/data/anchors")
+    folder = DATA / "anchors"
     run = run_anchors(folder, ("bayesian",), workers=1, progress=False, limit=2)
     assert run.methods == (ANCHOR, "bayesian")
     assert run.perturbations == (
@@ -200,7 +203,7 @@ def test_skeleton_distance_is_zero_for_identity_and_positive_under_noise() -> No
 
 
 def test_pixel_scores_against_ground_truth() -> None:
-    from skelprune.evaluation.groundtruth import pixel_scores, run_groundtruth
+    from evaluation.groundtruth import pixel_scores, run_groundtruth
 
     line = np.zeros((20, 40), bool)
     line[10, 5:35] = True

@@ -1,4 +1,4 @@
-"""Shape perturbations and the rectangle ground truth (skelprune.evaluation.perturb, SPEC §5)."""
+"""Shape perturbations and the rectangle ground truth (evaluation.perturb)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from PIL import Image
 from scipy import ndimage as ndi
 from skimage.morphology import medial_axis
 
-from skelprune.evaluation.perturb import (
+from evaluation.perturb import (
     PERTURBATIONS,
     Perturbation,
     boundary_flips,

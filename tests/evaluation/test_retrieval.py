@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from skelprune.evaluation.retrieval import (
+from evaluation.retrieval import (
     PERTURBATIONS,
     RETRIEVAL_VARIANTS,
     baseline_descriptor,
@@ -12,7 +12,7 @@ from skelprune.evaluation.retrieval import (
     retrieval_markdown,
     run_retrieval,
 )
-from skelprune.evaluation.stability import load_dataset
+from evaluation.stability import load_dataset
 from skelprune.matching import match
 from testkit import DATA
 

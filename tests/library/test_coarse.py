@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from evaluation.perturb import boundary_noise, noisy_rectangle
 from skelprune.api import components
-from skelprune.evaluation.perturb import boundary_noise, noisy_rectangle
 from skelprune.graph import BranchGraph
 from skelprune.medial_axis import medial_axis, squared_distance
 from skelprune.pruning.bayesian import remove_unsupported
@@ -57,7 +57,7 @@ def test_boundary_noise_raises_roughness_and_threshold(kind, scale):
 def test_the_vertex_budget_bounds_every_polygon():
     """A large boundary with many relevant bumps keeps at most the budget; a clean shape
     with few relevant vertices keeps few (the budget is a cap, not a target)."""
-    from skelprune.evaluation.perturb import resampled_noise
+    from evaluation.perturb import resampled_noise
 
     rr, cc = np.mgrid[:400, :400]
     radius = np.hypot(rr - 200, cc - 200)
@@ -270,3 +270,41 @@ def test_lazy_coarse_stage_equals_the_eager_reference(name, mask):
             continue
         slow = BranchGraph(ma.rows, ma.cols, crop.shape)
         assert coarse_removals(fast, crop, ma.r2) == reference_coarse(slow, crop, ma.r2)
+
+
+def test_where_segments_meet_is_the_pair_table_without_the_table():
+    """``_meeting_vertex`` answers what an m × m table of (before, after) pairs would,
+    on a boundary with hundreds of segments (pixel noise inside a square)."""
+    from skelprune.pruning.coarse import _convex_vertices, _meeting_vertex
+
+    rng = np.random.default_rng(3)
+    mask = np.zeros((60, 60), bool)
+    mask[5:55, 5:55] = rng.random((50, 50)) < 0.8
+    partition = boundary_partition(mask, n_vertices=50, threshold=0.0)
+    before, after, _ = _convex_vertices(partition)
+    m = partition.n_segments
+    assert m > 200
+    table = np.full((m, m), -2, np.int64)
+    table[before, after] = np.arange(len(after))
+    table[after, before] = np.arange(len(after))
+    starts_at = np.full(m, -1, np.int64)
+    starts_at[after] = np.arange(len(after))
+    got = np.array([[_meeting_vertex(starts_at, before, a, b) for b in range(m)] for a in range(m)])
+    off_diagonal = ~np.eye(m, dtype=bool)  # a point's labels are distinct segments
+    assert np.array_equal(got[off_diagonal], table[off_diagonal])
+
+
+def test_the_coarse_stage_holds_no_table_quadratic_in_the_segments():
+    """Pixel noise makes about as many boundary segments as boundary pixels: every
+    array the stage keeps is linear in the skeleton points plus the segments."""
+    from skelprune.pruning.coarse import _convex_vertices, _EndBranches
+    from testkit.adversarial import noise
+
+    crop, ma = _axis(noise(48, 0.8, seed=1))
+    graph = BranchGraph(ma.rows, ma.cols, crop.shape)
+    partition = coarse_partition(crop)
+    ends = _EndBranches(graph, ma.r2, partition, *_convex_vertices(partition))
+    m, n = partition.n_segments, ma.rows.size
+    assert m > 100
+    sizes = {k: v.size for k, v in vars(ends).items() if isinstance(v, np.ndarray)}
+    assert sizes and max(sizes.values()) <= 2 * (n + m), sizes

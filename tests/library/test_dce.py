@@ -1,4 +1,4 @@
-"""Discrete Curve Evolution and the contour partition (skelprune.pruning.dce, SPEC §2.5)."""
+"""Discrete Curve Evolution and the contour partition (skelprune.pruning.dce, docs/algorithm.md)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 from scipy import ndimage as ndi
 from skimage.draw import polygon as fill_polygon
 
-from skelprune.evaluation.perturb import boundary_noise, rescale
+from evaluation.perturb import boundary_noise, rescale
 from skelprune.pruning.dce import (
     BoundaryPartition,
     boundary_partition,

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from skimage.measure import find_contours
 
+from evaluation.perturb import boundary_noise, rotate
 from skelprune._contours import boundary_polygons as _boundary_polygons
-from skelprune.evaluation.perturb import boundary_noise, rotate
 from skelprune.pruning.dce import boundary_partition, generated_in_several_segments
 from testkit.shapes import (
     blobs,

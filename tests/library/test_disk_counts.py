@@ -8,6 +8,7 @@ import importlib
 import numpy as np
 import pytest
 
+from evaluation.perturb import boundary_noise
 from skelprune._digital import disk_half_width, isqrt
 from skelprune._disk_counts import (
     BLOCK,
@@ -18,7 +19,6 @@ from skelprune._disk_counts import (
     last_cover,
 )
 from skelprune.api import components
-from skelprune.evaluation.perturb import boundary_noise
 from testkit.shapes import blobs, dataset, load
 
 ma = importlib.import_module("skelprune.medial_axis")

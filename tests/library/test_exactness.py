@@ -1,4 +1,4 @@
-"""The fast pruning equals the naive from-scratch oracle (SPEC §2.4 "Exactness")."""
+"""The fast pruning equals the naive from-scratch oracle (docs/algorithm.md)."""
 
 from __future__ import annotations
 
@@ -81,7 +81,7 @@ NOISY = [
 
 
 def make_noisy(case: tuple[str, int, float]) -> np.ndarray:
-    from skelprune.evaluation.perturb import boundary_noise
+    from evaluation.perturb import boundary_noise
 
     _, i, scale = case
     return boundary_noise(load(K216[i], factor=2), "gaussian", scale, rng=i, margin=2)

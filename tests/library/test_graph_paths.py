@@ -1,4 +1,4 @@
-"""The document as a graph: ordered branch paths, lines meeting at nodes (SPEC §3)."""
+"""The document as a graph: ordered branch paths, lines meeting at nodes (docs/graph.md)."""
 
 from __future__ import annotations
 

@@ -40,7 +40,7 @@ def skeleton_mask(res: skelprune.PruneResult) -> np.ndarray:
 
 
 def test_medial_axis_reconstructs_datasets():
-    """SPEC §5: median AR(M) <= 0.3 % on kimia216 (and on both sets together)."""
+    """Target: median AR(M) <= 0.3 % on kimia216 (and on both sets together)."""
     ars: dict[str, list[float]] = {"kimia216": [], "kimia99": []}
     for name, values in ars.items():
         for path in dataset(name):
@@ -90,7 +90,7 @@ def test_medial_axis_is_thin_homotopic_and_exact_radii(make):
 
 @pytest.mark.parametrize("name", ["kimia216", "kimia99"])
 def test_medial_axis_end_branches_reach_the_boundary(name):
-    """SPEC §2.1: every end branch of M ends within a pixel or two of the boundary."""
+    """docs/algorithm.md: every end branch of M ends within a pixel or two of the boundary."""
     from skelprune.graph import BranchGraph
 
     tips = []

@@ -99,7 +99,7 @@ def test_margins_follow_their_definition(coarse: str | None, trim: bool) -> None
 
 def test_end_margins_are_non_negative_but_for_a_dissolved_junctions_path() -> None:
     """≥ 0 but where the greedy's ranking (lengths before a dissolved junction's path is
-    added, SPEC §2.4) took a branch whose removal then added length: documented."""
+    added, docs/algorithm.md) took a branch whose removal then added length: documented."""
     margins = []
     for path in dataset("kimia216"):
         res = skelprune.prune(load(path))
@@ -199,8 +199,8 @@ def test_min_margin_in_cli_and_service(tmp_path) -> None:
 def test_flip_matching_finds_every_branch_under_exact_turns() -> None:
     """A turn by 0° or 90° and a mirror-free shift keep every end branch: nothing is lost
     or gained, so the flip table's mapping and matching are right."""
-    from skelprune.evaluation.margin import run_margins
-    from skelprune.evaluation.perturb import Perturbation
+    from evaluation.margin import run_margins
+    from evaluation.perturb import Perturbation
 
     sets = {"kimia216": [(p.stem, load(p)) for p in dataset("kimia216")[:4]]}
     perts = (Perturbation("rotate-0", "rotate", 0.0), Perturbation("rotate-90", "rotate", 90.0))

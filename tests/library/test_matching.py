@@ -8,7 +8,7 @@ import pytest
 from PIL import Image
 
 import skelprune
-from skelprune.evaluation.perturb import rotate
+from evaluation.perturb import rotate
 from skelprune.matching import describe, distance_matrix
 from testkit import DATA
 

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 import skelprune
+from evaluation.perturb import boundary_noise
 from skelprune._orientation import Orientation, canonical_orientation
 from skelprune.api import components
 from skelprune.errors import InvalidImageError
-from skelprune.evaluation.perturb import boundary_noise
 from skelprune.medial_axis import medial_axis, squared_distance
 from testkit.shapes import (
     blobs,

@@ -561,7 +561,7 @@ def test_valid_odd_pngs_give_the_same_shape(client: TestClient) -> None:
 def test_a_number_json_cannot_write_is_the_callers_error() -> None:
     """Should a non-finite number still reach the encoder, the answer is a 4xx, not a 500."""
     from service.errors import lookup
-    from service.jobs import _dumps
+    from service.jobs import dumps as _dumps
 
     for value in (float("inf"), float("nan")):
         with pytest.raises(ValueError, match="JSON cannot write") as info:

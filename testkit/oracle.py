@@ -100,8 +100,8 @@ def naive_sequence(
 def naive_trim(
     graph: BranchGraph, mask: np.ndarray, r2: np.ndarray, alpha: float, lbar: float
 ) -> tuple[list[tuple[int, int, int]], float]:
-    """SPEC §2.4b's tip cuts of the skeleton ``graph`` (changed in place), recomputed from
-    scratch: every candidate cut's skeleton painted anew.
+    """The tip cuts of docs/algorithm.md ("Tips") on the skeleton ``graph`` (changed in
+    place), recomputed from scratch: every candidate cut's skeleton painted anew.
 
     Which points a cut drops is the graph's model (:meth:`BranchGraph.tip`, as the
     topology is); lengths are counted again from the points' coordinates, areas painted

@@ -11,6 +11,13 @@ distance); and the comparison with the authors' code on the masks of ``data/anch
 ``python -m benchmarks stability`` runs everything (2 worker processes) and rewrites
 ``docs/stability.md``; ``python -m benchmarks.bench_stability --quick`` runs 20 shapes a
 dataset and 3 rectangles a noise kind and only prints.
+
+``python -m benchmarks.bench_stability --sizes [--quick]`` measures over noise models and
+size bands at once (``evaluation.sizes``): dataset shapes and round-ended
+shapes drawn in ``testkit.shapes``, scaled by their contour to 128, 256 and 512 px,
+every variant of ``SIZE_VARIANTS``, one noisy copy a model (every 24th shape of each
+dataset: 27 shapes, about 11 minutes a variant pair on two shared cores); ``--quick``
+(a few minutes) takes every 48th, for the default and the paper's untrimmed answer.
 """
 
 from __future__ import annotations
@@ -43,7 +50,14 @@ def main(argv: list[str] | None = None) -> None:
     )
     parser.add_argument("--limit", type=int, default=None, help="shapes per dataset")
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument(
+        "--sizes", action="store_true", help="noise models and size bands at once; print only"
+    )
+    parser.add_argument("--variants", default=None, help="comma-separated, for --sizes")
     args = parser.parse_args(argv or [])
+    if args.sizes:
+        sizes(args)
+        return
     limit = 20 if args.quick and args.limit is None else args.limit
     sets = {name: load_dataset(DATA / name, limit) for name in ("kimia216", "kimia99")}
     run = run_stability(sets, rect_seeds=3 if args.quick else 10, workers=args.workers)
@@ -65,6 +79,31 @@ def main(argv: list[str] | None = None) -> None:
     if not args.quick and args.limit is None:
         (DOCS / "stability.md").write_text(stability_markdown(run, COMMAND, anchors))
         print(f"wrote {DOCS / 'stability.md'}")
+
+
+def sizes(args: argparse.Namespace) -> None:
+    """The size-band stability table (:mod:`evaluation.sizes`)."""
+    import time
+
+    from evaluation.sizes import SIZE_VARIANTS, run_sizes, sizes_markdown
+    from testkit.shapes import DRAWN
+
+    step = 48 if args.quick else 24
+    shapes = []
+    for name in ("kimia216", "kimia99", "skelneton-dev/shapes"):
+        shapes += load_dataset(DATA / name, None)[step // 2 :: step]
+    if args.limit:
+        shapes = shapes[: args.limit]
+    shapes += [(name, draw()) for name, draw in DRAWN.items()]
+    if args.variants:
+        variants = args.variants.split(",")
+    else:
+        variants = ["default", "argmin/trim=false"] if args.quick else list(SIZE_VARIANTS)
+    t = time.perf_counter()
+    records = run_sizes(shapes, variants, seeds=1, workers=args.workers)
+    print(f"{len(shapes)} shapes; exact / within ±1 (%), gains and losses over the six pooled\n")
+    print(sizes_markdown(records))
+    print(f"\n{time.perf_counter() - t:.0f} s")
 
 
 if __name__ == "__main__":

@@ -107,7 +107,7 @@ def _task(
     from skelprune.api import prune
 
     dataset, index, mask, seed, perts, mins = args
-    clean = prune(mask)
+    clean = prune(mask, min_margin=0.0)  # the paper's argmin
     ends = end_branches(clean)
     c_pos = np.array([e[:2] for e in ends]).reshape(-1, 2)
     centre = _centroid(mask)
@@ -121,7 +121,7 @@ def _task(
         counts[m] = {"clean": res.n_endpoints()}
     for p in perts:
         pm = p.apply(mask, _rng(seed, index, p.name))
-        res = prune(pm)
+        res = prune(pm, min_margin=0.0)
         counts[None][p.name] = res.n_endpoints()
         for m in mins:
             counts[m][p.name] = prune(pm, min_margin=m).n_endpoints()

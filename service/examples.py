@@ -32,6 +32,8 @@ DOCUMENT_EXAMPLE: dict[str, Any] = {
     "method": "bayesian",
     "beta": 9.0,
     "coarse": "dce",
+    "choice": "argmin",
+    "trim": True,
     "foreground": {"rule": "auto", "shape": "light", "threshold": 127.5, "border": 1.0},
     "components": [
         {
@@ -93,6 +95,8 @@ GEOJSON_EXAMPLE: dict[str, Any] = {
         "method": "bayesian",
         "beta": 9.0,
         "coarse": "dce",
+        "choice": "argmin",
+        "trim": True,
         "components": [
             {
                 "component": 0,

@@ -100,8 +100,9 @@ def warmup(memory_budget: int | None = None) -> str:
     (:func:`service.budget.cap_address_space`).
 
     The shape has a hole (the loop code paths) and a noisy boundary whose spurs the
-    coarse stage removes (its code paths); ``coarse=None`` and ``method="dce"`` run
-    too, and a match, so that no job of any option meets a function still to be loaded.
+    coarse stage removes (its code paths); ``coarse=None``, ``method="dce"`` and
+    ``choice="noise-floor"`` run too, and a match, so that no job of any option meets a
+    function still to be loaded.
 
     Returns
     -------
@@ -118,7 +119,7 @@ def warmup(memory_budget: int | None = None) -> str:
     mask[3, 4:40] = rng.random(36) < 0.5
     mask[28, 4:40] = rng.random(36) < 0.5
     mask[4:28:3, 4] = False
-    for options in ({}, {"coarse": None}, {"method": "dce"}):
+    for options in ({"choice": "noise-floor"}, {}, {"coarse": None}, {"method": "dce"}):
         res = skelprune.prune(mask, **options)
         res.to_dict()
     res.to_geojson()

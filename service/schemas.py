@@ -418,6 +418,10 @@ class PruneDocument(BaseModel):
     method: Literal["bayesian", "dce"]
     beta: float
     coarse: Literal["dce"] | None
+    choice: Literal["argmin", "noise-floor"] = Field(
+        description="How the answer was chosen from the pruning sequence."
+    )
+    trim: bool = Field(description="Whether the answer's end branches were cut back at their tips.")
     foreground: ForegroundTaken
     components: list[Component]
     raster: RasterInfo | None = Field(None, description="Polygon input only.")
@@ -503,6 +507,8 @@ class CollectionProperties(BaseModel):
     method: Literal["bayesian", "dce"]
     beta: float
     coarse: Literal["dce"] | None
+    choice: Literal["argmin", "noise-floor"]
+    trim: bool
     components: list[ComponentSummary]
     warnings: list[RasterWarningItem] | None = Field(
         None, description="Polygon input only, as in the JSON document."

@@ -6,8 +6,9 @@ simplicity and reconstruction error", Science China Information Sciences, 2013.
 >>> import numpy as np, skelprune
 >>> m = np.zeros((30, 60), bool); m[5:25, 5:55] = True
 >>> doc = skelprune.prune(m).to_dict()
->>> sorted(doc)
-['beta', 'coarse', 'components', 'foreground', 'height', 'method', 'version', 'width']
+>>> sorted(doc)  # doctest: +NORMALIZE_WHITESPACE
+['beta', 'choice', 'coarse', 'components', 'foreground', 'height', 'method', 'trim',
+ 'version', 'width']
 >>> doc["version"] == {"library": skelprune.__version__, "algorithm": ALGORITHM_VERSION}
 True
 """

@@ -11,7 +11,7 @@ from scipy import ndimage
 
 from .errors import EmptyMaskError, InvalidOptionError
 from .io.foreground import select
-from .options import METHODS, PruneOptions, RasterOptions, check_option
+from .options import DEFAULT_MIN_MARGIN, METHODS, PruneOptions, RasterOptions, check_option
 from .output.document import ComponentResult, GraphSummary, PruneResult
 from .pruning.bayesian import bayesian_sequence, choose_step, remove_unsupported
 from .pruning.coarse import coarse_dce
@@ -21,7 +21,9 @@ from .pruning.dce import (
     boundary_partition,
     generated_in_several_segments,
 )
+from .pruning.floor import floor_step
 from .pruning.margin import Margins, branch_margins
+from .pruning.tips import trim_tips
 from .reconstruction import count_covered
 from .skeleton import Skeleton
 
@@ -66,7 +68,8 @@ def prune_component(
     ties included, so that a shape turned by 90° or mirrored gets the turned or mirrored
     skeleton; the result maps its points back.
     """
-    beta, min_margin = options.beta, options.min_margin
+    beta = options.beta
+    min_margin = DEFAULT_MIN_MARGIN if options.min_margin is None else options.min_margin
     medial = Skeleton.medial_axis(crop, origin)
     if options.method == "dce":
         norm = medial.normalisation(beta)
@@ -84,13 +87,13 @@ def prune_component(
         # experiments: its α and ℓ̄ are those of its own starting skeleton (or of M,
         # should the coarse skeleton have none).
         norm = start.normalisation(beta)
-        if norm.alpha is None and start is not medial:
+        if start is not medial and (norm.alpha is None or not start.end_branches()):
             norm = medial.normalisation(beta)
         seq = bayesian_sequence(
             start, norm.alpha, norm.lbar, uncovered=start.n_points < medial.n_points
         )
-        chosen = choose_step(seq.objective)
-        if min_margin is not None and seq.alpha is not None:
+        chosen = choose_step(seq.objective) if options.choice == "argmin" else floor_step(seq)
+        if min_margin > 0 and seq.alpha is not None:
             # Drop end branches kept by less than min_margin: the cheapest one is the
             # sequence's next removal, and its margin is that step's rise of λ.
             lam = seq.objective
@@ -110,8 +113,14 @@ def prune_component(
             medial.r2[gone],
         )
     answer = seq.skeleton_at(chosen)
+    trim = None
+    if options.trim and options.method == "bayesian" and seq.alpha is not None:
+        trim = trim_tips(answer, seq.lost[chosen], seq.alpha, seq.lbar)
+        answer = trim.skeleton
     # DCE's answer is not chosen by the trade-off: its branches have no margin.
-    margins = Margins() if options.method == "dce" else branch_margins(answer.graph, seq, chosen)
+    margins = (
+        Margins() if options.method == "dce" else branch_margins(answer.graph, seq, chosen, trim)
+    )
     return ComponentResult(
         skeleton=answer,
         medial_axis=GraphSummary.of(medial),
@@ -119,6 +128,7 @@ def prune_component(
         chosen_step=chosen,
         ma_rer=ma_lost / seq.area,
         margins=margins,
+        trim=trim,
     )
 
 
@@ -134,6 +144,8 @@ def prune(
     dce_threshold: float | None = None,
     foreground: Literal["auto", "nonzero", "zero"] = "nonzero",
     min_margin: float | None = None,
+    choice: Literal["argmin", "noise-floor"] = "argmin",
+    trim: bool = True,
     *,
     pixel_size: float | None = None,
     longest_side: int | None = None,
@@ -173,7 +185,19 @@ def prune(
     min_margin : float, optional
         For ``method="bayesian"``: drop the answer's end branches whose margin
         (:mod:`skelprune.pruning.margin`) is below this, one at a time, cheapest first, as
-        the sequence would go on removing them. Default: off (the paper's answer).
+        the sequence would go on removing them. Default (``None``):
+        :data:`~skelprune.options.DEFAULT_MIN_MARGIN`, chosen by the stability benchmark
+        over noise models and sizes; ``0``: the paper's answer, the argmin of λ.
+    choice : {"argmin", "noise-floor"}
+        For ``method="bayesian"``: how the answer is chosen from the sequence:
+        ``"argmin"``, the paper's skeleton of least λ, or ``"noise-floor"``
+        (:mod:`skelprune.pruning.floor`), least λ with the reconstruction error counted
+        only over the pixels deeper than the boundary's one-pixel rim.
+    trim : bool
+        For ``method="bayesian"``: cut each end branch of the answer back from its tip to
+        the point that minimises the target λ along it (:mod:`skelprune.pruning.tips`;
+        the default), so that a round end's branch stops near its centre instead of
+        turning to the boundary. ``False``: the greedy's answer, branches whole.
     pixel_size, longest_side, pixels_per_width, pixel_budget, repair
         Polygon input only: how it becomes a raster (:class:`skelprune.options.RasterOptions`;
         default: a pixel size fitted to the polygon).
@@ -187,7 +211,8 @@ def prune(
     EmptyMaskError
         When the mask has no foreground pixel.
     InvalidOptionError
-        For a bad ``beta``, ``method``, ``coarse``, ``foreground`` or ``min_margin``.
+        For a bad ``beta``, ``method``, ``coarse``, ``foreground``, ``min_margin`` or
+        ``trim``.
 
     Examples
     --------
@@ -234,12 +259,20 @@ def prune(
             coarse=coarse,
             dce_threshold=dce_threshold,
             min_margin=min_margin,
+            choice=choice,
+            trim=trim,
         )
     opts = PruneOptions(
-        beta=beta, method=method, coarse=coarse, dce_threshold=dce_threshold, min_margin=min_margin
+        beta=beta,
+        method=method,
+        coarse=coarse,
+        dce_threshold=dce_threshold,
+        min_margin=min_margin,
+        choice=choice,
+        trim=trim,
     )
-    if opts.method == "dce":  # DCE pruning has no stage before it
-        opts = replace(opts, coarse=None)
+    if opts.method == "dce":  # DCE pruning has no stage before it, nor tips cut after it
+        opts = replace(opts, coarse=None, choice="argmin", trim=False)
     check_option("foreground", foreground)
     mask = np.asarray(mask)
     if mask.ndim != 2:
@@ -247,7 +280,14 @@ def prune(
     fg, taken = (mask != 0, None) if foreground == "nonzero" else select(mask, foreground)
     if not fg.any():
         raise EmptyMaskError("the mask has no foreground pixel")
-    result = PruneResult(mask=fg, method=opts.method, beta=opts.beta, coarse=opts.coarse)
+    result = PruneResult(
+        mask=fg,
+        method=opts.method,
+        beta=opts.beta,
+        coarse=opts.coarse,
+        choice=opts.choice,
+        trim=opts.trim,
+    )
     if taken is not None:
         result.foreground = taken
     for crop, origin in components(fg):

@@ -29,6 +29,7 @@ from typer.exceptions import TyperException
 
 from .errors import InvalidPolygonError, SkelpruneError
 from .options import (
+    CHOICES,
     COARSE,
     FOREGROUND_RULES,
     METHODS,
@@ -186,6 +187,9 @@ MethodOption = Annotated[Method, typer.Option(help=HELP["method"])]
 CoarseOption = Annotated[Coarse, typer.Option(help=HELP["coarse"])]
 ThresholdOption = Annotated[float | None, typer.Option(help=HELP["dce_threshold"])]
 MarginOption = Annotated[float | None, typer.Option(help=HELP["min_margin"])]
+TrimOption = Annotated[bool, typer.Option(help=HELP["trim"])]
+Choice = enum.Enum("Choice", {name: name for name in CHOICES}, type=str)
+ChoiceOption = Annotated[Choice, typer.Option(help=HELP["choice"])]
 ForegroundOption = Annotated[Rule, typer.Option(help=HELP["foreground"])]
 
 
@@ -204,6 +208,8 @@ def prune_command(
     coarse: CoarseOption = Coarse("dce"),
     dce_threshold: ThresholdOption = None,
     min_margin: MarginOption = None,
+    choice: ChoiceOption = Choice(PruneOptions.choice),
+    trim: TrimOption = PruneOptions.trim,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
     overlay: Annotated[
         Path | None, typer.Option(help="Write the overlay PNG here (one input file only).")
@@ -239,7 +245,9 @@ def prune_command(
 ) -> None:
     """Prune the skeleton of each shape and print the result as JSON."""
     # checked once, before any file is read
-    options, read = _options_or_exit(beta, method, coarse, dce_threshold, min_margin, foreground)
+    options, read = _options_or_exit(
+        beta, method, coarse, dce_threshold, min_margin, choice, trim, foreground
+    )
     try:
         raster = RasterOptions(
             pixel_size=pixel_size,
@@ -322,6 +330,8 @@ def _options_or_exit(
     coarse: Any,
     dce_threshold: float | None,
     min_margin: float | None,
+    choice: Any,
+    trim: bool,
     foreground: Any,
 ) -> tuple[PruneOptions, ReadOptions]:
     try:
@@ -332,6 +342,8 @@ def _options_or_exit(
                 coarse=coarse.value,
                 dce_threshold=dce_threshold,
                 min_margin=min_margin,
+                choice=choice.value,
+                trim=trim,
             ),
             ReadOptions(foreground=foreground.value),
         )
@@ -348,13 +360,17 @@ def match_command(
     coarse: CoarseOption = Coarse("dce"),
     dce_threshold: ThresholdOption = None,
     min_margin: MarginOption = None,
+    choice: ChoiceOption = Choice(PruneOptions.choice),
+    trim: TrimOption = PruneOptions.trim,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
 ) -> None:
     """Match the skeletons of two shapes (path similarity) and print distance and
     endpoint correspondence as JSON."""
     from .matching import match
 
-    options, read = _options_or_exit(beta, method, coarse, dce_threshold, min_margin, foreground)
+    options, read = _options_or_exit(
+        beta, method, coarse, dce_threshold, min_margin, choice, trim, foreground
+    )
     try:
         shapes = [_prune(str(p), read, options, RasterOptions(), False)[0] for p in (a, b)]
         res = match(*shapes)
@@ -374,6 +390,8 @@ def retrieve_command(
     coarse: CoarseOption = Coarse("dce"),
     dce_threshold: ThresholdOption = None,
     min_margin: MarginOption = None,
+    choice: ChoiceOption = Choice(PruneOptions.choice),
+    trim: TrimOption = PruneOptions.trim,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
     workers: Annotated[int, typer.Option(help="Worker processes (0: one a core).")] = 0,
 ) -> None:
@@ -383,7 +401,9 @@ def retrieve_command(
 
     from .matching import distance_matrix
 
-    options, read = _options_or_exit(beta, method, coarse, dce_threshold, min_margin, foreground)
+    options, read = _options_or_exit(
+        beta, method, coarse, dce_threshold, min_margin, choice, trim, foreground
+    )
     inputs = _expand(folder)
     if not inputs:
         typer.echo("error: no PNG file given", err=True)

@@ -15,6 +15,7 @@ implementations that do the same removals get bit-identical lengths.
 from __future__ import annotations
 
 import heapq
+import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -373,7 +374,74 @@ class BranchGraph:
             na, nd = na + pa, nd + pd
         return na, nd
 
+    def free_ends(self) -> list[tuple[int, int]]:
+        """``(branch, end)`` of every free end that a tip cut may shorten: the free end
+        of each end branch and both ends of a single path (of two points or more)."""
+        out = []
+        for b, br in enumerate(self.branches):
+            if not br.alive or br.loop:
+                continue
+            free = [e for e in (0, 1) if br.node[e] is None]
+            if len(free) == 1 or (len(free) == 2 and len(br.path()) > 1):
+                out.extend((b, e) for e in free)
+        return out
+
+    def free_end_point(self, b: int, e: int) -> int:
+        """The path point at end ``e`` of branch ``b``."""
+        path = self.branches[b].path()
+        return path[0] if e == 0 else path[-1]
+
+    def tip(self, b: int, e: int) -> tuple[list[int], list[int], list[int]]:
+        """Branch ``b`` seen from its free end ``e``, as a tip cut drops it.
+
+        Returns the branch's points, the drop index of each (a cut of ``k`` drops the
+        points whose index is below ``k``), and per step of the path from the end
+        whether it is diagonal. The path's ``i``-th point from the end has index ``i``;
+        a point beside the path (of a dissolved junction cluster) goes with the last
+        path point it touches, directly or through other such points, so that what a
+        cut leaves stays connected.
+        """
+        br = self.branches[b]
+        path = br.path()
+        if e == 1:
+            path = path[::-1]
+        index = {p: i for i, p in enumerate(path)}
+        side = [p for p in br.points if p not in index]
+        drop: dict[int, int] = {}
+        pending = list(side)
+        while pending:
+            left = []
+            for p in pending:
+                near = [index.get(int(q), drop.get(int(q), -1)) for q in self.nbr[p] if q >= 0]
+                best = max(near, default=-1)
+                if best < 0:
+                    left.append(p)
+                else:
+                    drop[p] = best
+            if len(left) == len(pending):  # touches nothing placed: never dropped
+                for p in left:
+                    drop[p] = len(path) - 1
+                break
+            pending = left
+        steps = [
+            int(self.rows[p] != self.rows[q] and self.cols[p] != self.cols[q])
+            for p, q in itertools.pairwise(path)
+        ]
+        return path + side, list(range(len(path))) + [drop[p] for p in side], steps
+
     # -- mutation -----------------------------------------------------------------
+    def cut_tip(self, b: int, e: int, gone: list[int], na: int, nd: int) -> None:
+        """Drop points ``gone`` from the free end ``e`` of branch ``b``, with their
+        ``na`` axial and ``nd`` diagonal steps (:func:`skelprune.pruning.tips.trim_tips`)."""
+        br = self.branches[b]
+        out = set(gone)
+        br.points = [p for p in br.points if p not in out]
+        br.side = [p for p in br.side if p not in out]
+        br.na -= na
+        br.nd -= nd
+        self.na -= na
+        self.nd -= nd
+
     def remove_end_branch(self, b: int) -> tuple[int, int, int] | None:
         """Remove end branch ``b``.
 

@@ -21,8 +21,10 @@ from typing import Any
 from .errors import InvalidOptionError, shown
 
 __all__ = [
+    "CHOICES",
     "COARSE",
     "DEFAULT_LONGEST_SIDE",
+    "DEFAULT_MIN_MARGIN",
     "DEFAULT_PIXELS_PER_WIDTH",
     "DEFAULT_PIXEL_BUDGET",
     "FOREGROUND_RULES",
@@ -45,6 +47,11 @@ MAX_BETA = 1_000_000_000
 FOREGROUND_RULES = ("auto", "nonzero", "zero")
 #: Spellings of ``coarse``: the name ``"none"`` is the full medial axis (``None``).
 COARSE = ("dce", "none")
+#: The margin below which the answer's end branches go unless told otherwise: chosen by
+#: the stability benchmark over noise models and sizes (docs/stability-findings.md).
+DEFAULT_MIN_MARGIN = 0.01
+#: How the answer is chosen from the sequence (:mod:`skelprune.pruning.floor`).
+CHOICES = ("argmin", "noise-floor")
 #: Pixels across the longer side of a polygon's bounding box at the least (a polygon's
 #: narrow parts may ask for more) ...
 DEFAULT_LONGEST_SIDE = 512
@@ -163,8 +170,9 @@ class PruneOptions:
 
     Examples
     --------
-    >>> PruneOptions(coarse="none")
-    PruneOptions(beta=9.0, method='bayesian', coarse=None, dce_threshold=None, min_margin=None)
+    >>> PruneOptions(coarse="none")  # doctest: +NORMALIZE_WHITESPACE
+    PruneOptions(beta=9.0, method='bayesian', coarse=None, dce_threshold=None,
+                 min_margin=None, choice='argmin', trim=True)
     >>> PruneOptions(beta=-1)
     Traceback (most recent call last):
     ...
@@ -197,9 +205,25 @@ class PruneOptions:
     min_margin: float | None = _option(
         None,
         "For method=bayesian: also drop the answer's end branches whose margin is "
-        "below this, >= 0, cheapest first, as the sequence goes on (default off: the "
-        "paper's answer).",
+        f"below this, >= 0, cheapest first, as the sequence goes on (default "
+        f"{DEFAULT_MIN_MARGIN:g}, chosen for endpoint stability under noise, turns and "
+        "scaling at every size; 0: the paper's answer, the argmin of λ).",
         _number(0, strict=False),
+    )
+    choice: str = _option(
+        "argmin",
+        "For method=bayesian: argmin (the paper's answer: the skeleton of least λ) or "
+        "noise-floor (least λ with the reconstruction error counted only deeper than the "
+        "boundary's one-pixel rim, which a one-pixel boundary move changes).",
+        _choice(CHOICES),
+        CHOICES,
+    )
+    trim: bool = _option(
+        True,
+        "For method=bayesian: cut each end branch of the answer back from its tip to the "
+        "point where the trade-off is best (true, the default), or keep the answer's "
+        "branches whole (false).",
+        _flag,
     )
 
     def __post_init__(self) -> None:

@@ -42,11 +42,15 @@ class Normalisation:
 def normalisation(graph: BranchGraph, r2: np.ndarray, beta: float) -> Normalisation:
     """Seed ``o`` (largest radius; ties: smallest (row, col)), ``ℓ̄`` and ``α``.
 
-    ``α`` is ``None`` where pruning is undefined: no end branch or ``ℓ̄ = 0``.
+    The end paths run to the endpoints of the end branches; a single path has none, and
+    its end paths run to its two ends (so that its tips can be cut by the trade-off).
+    ``α`` is ``None`` where it is undefined: a single point, a cycle, or ``ℓ̄ = 0``.
     """
     rows, cols = graph.rows, graph.cols
     seed = int(np.lexsort((cols, rows, -r2))[0])
     ends = sorted({graph.endpoint(b) for b in range(len(graph.branches)) if graph.is_end_branch(b)})
+    if not ends:
+        ends = sorted({graph.free_end_point(b, e) for b, e in graph.free_ends()})
     if not ends:
         return Normalisation(seed, 0.0, None)
     dist = _path_lengths(graph.nbr, seed)

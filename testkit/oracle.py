@@ -11,6 +11,7 @@ production formula is checked too.
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -94,3 +95,74 @@ def naive_sequence(
         lost = pick_lost
         lams.append(objective(lost, area, *total_length(), alpha, lbar))
     return removed, lams
+
+
+def naive_trim(
+    graph: BranchGraph, mask: np.ndarray, r2: np.ndarray, alpha: float, lbar: float
+) -> tuple[list[tuple[int, int, int]], float]:
+    """The tip cuts of docs/algorithm.md ("Tips") on the skeleton ``graph`` (changed in
+    place), recomputed from scratch: every candidate cut's skeleton painted anew.
+
+    Which points a cut drops is the graph's model (:meth:`BranchGraph.tip`, as the
+    topology is); lengths are counted again from the points' coordinates, areas painted
+    again, λ written again. Returns ``(branch, end, k)`` of every end in the order cut,
+    and the λ of the trimmed skeleton.
+    """
+    flat = mask.ravel()
+    area = int(flat.sum())
+    disks = disk_pixels(graph.rows, graph.cols, r2, mask.shape)
+    sqrt2 = math.sqrt(2.0)
+    na0 = sum(br.na for br in graph.branches if br.alive)
+    nd0 = sum(br.nd for br in graph.branches if br.alive)
+
+    def points_now() -> set[int]:
+        pts = {p for br in graph.branches if br.alive for p in br.points}
+        return pts | {p for j in graph.junctions if j.alive for p in j.points}
+
+    def cut_steps(path: list[int], k: int) -> tuple[int, int]:
+        """Axial and diagonal steps among the first ``k`` points of a path."""
+        na = nd = 0
+        for p, q in itertools.pairwise(path[: k + 1]):
+            dy, dx = abs(graph.rows[p] - graph.rows[q]), abs(graph.cols[p] - graph.cols[q])
+            assert max(dy, dx) == 1  # consecutive 8-neighbours
+            if dy and dx:
+                nd += 1
+            else:
+                na += 1
+        return na, nd
+
+    def best_cut(b: int, e: int, na: int, nd: int) -> tuple[int, float, int, int, list[int]]:
+        points, drop, steps = graph.tip(b, e)
+        n_path = len(steps) + 1
+        path = points[:n_path]
+        single = graph.branches[b].node[1 - e] is None  # keeps two points, two endpoints
+
+        assert drop[:n_path] == list(range(n_path))
+        here = points_now()
+        best = None
+        for k in range(n_path - 1 if single else n_path):
+            gone = {p for p, i in zip(points, drop, strict=True) if i < k}
+            lost = uncovered(flat, disks, sorted(here - gone))
+            ka, kd = cut_steps(path, k)
+            lam = objective(lost, area, na - ka, nd - kd, alpha, lbar)
+            if best is None or lam <= best[1]:  # ties: the shorter tip
+                best = (k, lam, ka, kd, sorted(gone))
+        assert best is not None
+        return best
+
+    order = []
+    for b, e in graph.free_ends():
+        k, _, ka, kd, _ = best_cut(b, e, na0, nd0)
+        p = graph.tip(b, e)[0][0]
+        order.append((-(ka + kd * sqrt2), int(graph.rows[p]), int(graph.cols[p]), b, e))
+    order.sort()
+    cuts = []
+    na, nd = na0, nd0
+    lam = objective(uncovered(flat, disks, sorted(points_now())), area, na, nd, alpha, lbar)
+    for *_, b, e in order:
+        k, lam_k, ka, kd, gone = best_cut(b, e, na, nd)
+        cuts.append((b, e, k))
+        if k:
+            graph.cut_tip(b, e, gone, ka, kd)
+            na, nd, lam = na - ka, nd - kd, lam_k
+    return cuts, lam

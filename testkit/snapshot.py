@@ -28,8 +28,12 @@ def _mask(path: Path) -> np.ndarray:
     return np.asarray(Image.open(path).convert("L")) >= 128
 
 
-def write_snapshot(out: Path, quick: bool = False) -> int:
-    """Write every document below ``out``; return how many files were written."""
+def write_snapshot(out: Path, quick: bool = False, **extra: object) -> int:
+    """Write every document below ``out``; return how many files were written.
+
+    ``extra`` options go to every ``prune`` call (``trim=False, min_margin=0``: the
+    paper's answers, untrimmed, as the library gave them before either option).
+    """
     out.mkdir(parents=True, exist_ok=True)
     written = 0
     for dataset in DATASETS:
@@ -39,17 +43,22 @@ def write_snapshot(out: Path, quick: bool = False) -> int:
         for path in paths:
             mask = _mask(path)
             for label, options in OPTION_SETS.items():
-                doc = skelprune.prune(mask, **options).to_dict()
+                kw = {**options, **extra}
+                if options.get("method") == "dce":  # neither applies to DCE pruning
+                    kw.pop("min_margin", None)
+                    kw.pop("trim", None)
+                doc = skelprune.prune(mask, **kw).to_dict()
                 name = f"{dataset.replace('/', '_')}__{path.stem}__{label}.json"
                 (out / name).write_text(json.dumps(doc, sort_keys=True))
                 written += 1
     for path in sorted(DATA.glob("kimia216/*.png"))[:: 40 if quick else 8]:
-        (out / f"overlay__{path.stem}.png").write_bytes(skelprune.prune(_mask(path)).overlay_png())
+        res = skelprune.prune(_mask(path), **extra)
+        (out / f"overlay__{path.stem}.png").write_bytes(res.overlay_png())
         written += 1
     polygon = json.loads((REPO / "examples" / "shape.geojson").read_text())
     for side in (64, 256):
         mask, frame = polygon_mask(polygon, longest_side=side)
-        geo = skelprune.prune(mask).to_geojson(frame)
+        geo = skelprune.prune(mask, **extra).to_geojson(frame)
         (out / f"examples_shape__{side}.geojson").write_text(json.dumps(geo, sort_keys=True))
         written += 1
     return written
@@ -59,8 +68,20 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("out", type=Path)
     parser.add_argument("--quick", action="store_true", help="every tenth shape only")
+    parser.add_argument(
+        "--no-trim", action="store_true", help="prune with trim=False (the untrimmed answers)"
+    )
+    parser.add_argument(
+        "--argmin", action="store_true", help="prune with min_margin=0 (the paper's argmin)"
+    )
     args = parser.parse_args()
-    print(f"{write_snapshot(args.out, args.quick)} documents in {args.out}")
+    parser_extra = {}
+    if args.no_trim:
+        parser_extra["trim"] = False
+    if args.argmin:
+        parser_extra["min_margin"] = 0.0
+    extra = parser_extra
+    print(f"{write_snapshot(args.out, args.quick, **extra)} documents in {args.out}")
 
 
 if __name__ == "__main__":

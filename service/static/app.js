@@ -147,8 +147,15 @@ function prepare(c) {
   removed.forEach((at, i) => { if (at !== Infinity) byStep[at].push(i); });
   const answer = new Map();  // "col,row" -> branch of the answer (for its margin)
   for (const b of c.skeleton.branches) for (const p of b.points) answer.set(`${col(p[0])},${row(p[1])}`, b);
+  // The answer is S(chosen) with its tips cut (trim): the pixels of S(chosen) it left out.
+  const kept = new Set(answer.keys());
+  for (const b of c.skeleton.branches) for (const p of b.off_path) kept.add(`${col(p[0])},${row(p[1])}`);
+  for (const nd of c.skeleton.nodes) for (const p of nd.points) kept.add(`${col(p[0])},${row(p[1])}`);
+  const tipCut = [];
+  px.forEach(([x, y], i) => { if (removed[i] > c.chosen_step && !kept.has(`${x},${y}`)) tipCut.push(i); });
   return {
     c, seq, n, px, removed, owner, world, byStep, answer, step: c.chosen_step,
+    tipCut, tipKeys: new Set(tipCut.map((i) => `${px[i][0]},${px[i][1]}`)), tipsOff: false,
     col, row, pixels: null,
     lines: seq.branches.map((b) => branchLine(seq, b).map((p) => [col(p[0]), row(p[1])])),
     medial: seq.coarse_removed.map((p) => [col(p[0]), row(p[1])]),
@@ -241,6 +248,7 @@ function select(ci) {
 function moveTo(k, target, redraw = true) {
   const W = state.width, H = state.height, cnt = state.cnt;
   target = Math.max(0, Math.min(k.n, target));
+  cutTips(k, false);
   while (k.step < target) {
     k.step++;
     for (const i of k.byStep[k.step]) paintDisk(cnt, W, H, k.px[i][0], k.px[i][1], k.px[i][2], -1);
@@ -249,7 +257,16 @@ function moveTo(k, target, redraw = true) {
     for (const i of k.byStep[k.step]) paintDisk(cnt, W, H, k.px[i][0], k.px[i][1], k.px[i][2], 1);
     k.step--;
   }
+  cutTips(k, k.step === k.c.chosen_step);
   if (redraw) drawAll();
+}
+
+// At the chosen step the answer's cut tips are off the skeleton (and their disks off R).
+function cutTips(k, off) {
+  if (k.tipsOff === off) return;
+  const W = state.width, H = state.height;
+  for (const i of k.tipCut) paintDisk(state.cnt, W, H, k.px[i][0], k.px[i][1], k.px[i][2], off ? -1 : 1);
+  k.tipsOff = off;
 }
 
 // One 32-bit RGBA word per pixel, in the platform's byte order (ImageData is RGBA bytes).
@@ -303,8 +320,9 @@ function drawSkeletons() {
       const g = el("g", { class: "branch", "data-component": ci, "data-branch": o }, gb);
       let longest = members[0];
       for (const b of members) {
+        const line = chosen ? k.lines[b].filter((p) => !k.tipKeys.has(`${p[0]},${p[1]}`)) : k.lines[b];
         el("polyline", {
-          points: k.lines[b].map((p) => p.join(",")).join(" "),
+          points: line.map((p) => p.join(",")).join(" "),
           "stroke-width": 2, "vector-effect": "non-scaling-stroke",
         }, g);
         if (k.lines[b].length > k.lines[longest].length) longest = b;
@@ -323,7 +341,17 @@ function drawSkeletons() {
       if (nd.kind === "junction") show = nd.dissolved_at === null || nd.dissolved_at > step;
       else show = seq.branches.some((b) => (b.source === nd.id || b.target === nd.id) && aliveAt(b, step));
       if (!show) continue;
-      const [x, y] = [k.col(nd.x), k.row(nd.y)];
+      let [x, y] = [k.col(nd.x), k.row(nd.y)];
+      if (chosen && nd.kind === "endpoint" && k.tipKeys.has(`${x},${y}`)) {
+        // the cut tip's endpoint: the answer's endpoint nearest to it
+        let best = Infinity;
+        for (const a of k.c.skeleton.nodes) {
+          if (a.kind !== "endpoint") continue;
+          const [ax, ay] = [k.col(a.x), k.row(a.y)];
+          const d = (ax - k.col(nd.x)) ** 2 + (ay - k.row(nd.y)) ** 2;
+          if (d < best) { best = d; [x, y] = [ax, ay]; }
+        }
+      }
       el("circle", { class: nd.kind, cx: x, cy: y, r: (nd.kind === "junction" ? 4 : 3.5) * u }, gn);
     }
   });
@@ -406,7 +434,8 @@ function drawNumbers() {
     : "Step 0 is the medial axis. ";
   const dce = doc.method === "dce"
     ? "With method=dce the steps are the DCE pruning's removals, in its order, and the answer is the last; λ is shown for comparison, it did not choose. "
-    : "The answer is the step with the smallest λ (ties to the later step). ";
+    : "The answer is the step with the smallest λ (ties to the later step), then further while the next step raises λ by less than min_margin" +
+      (doc.trim ? "; its end branches are then cut back from their tips to the point of least λ, which the chosen step shows. " : ". ");
   if (c.alpha === null) {
     $("sequence-note").textContent = start + "This component has no end branch to prune (or a mean end-path length of 0): α is undefined, the sequence has only step 0, and λ is LR alone.";
     return;

@@ -15,14 +15,16 @@ import shapely
 
 from .._orientation import Orientation
 from .._version import ALGORITHM_VERSION, __version__
-from ..graph import BranchGraph
+from ..graph import BranchGraph, step_length
 from ..io.foreground import Foreground
 from ..io.frame import IDENTITY, PixelFrame
 
 if TYPE_CHECKING:
     from ..io.polygon import PolygonRaster
 from ..pruning.bayesian import PruningSequence
+from ..pruning.bayesian import objective as target
 from ..pruning.margin import Margins
+from ..pruning.tips import Trim
 from ..reconstruction import reconstruction
 from ..skeleton import Skeleton
 from .lines import boundary_index, cut_end_forks, map_lines, mask_distance, recentre
@@ -48,9 +50,11 @@ class GraphSummary:
 class ComponentResult:
     """Pruned skeleton of one 8-connected component.
 
-    ``skeleton`` is the answer, ``S(chosen_step)`` of ``sequence``; its pixel coordinates
-    are in the component's padded crop seen in its canonical orientation, and
-    :meth:`image_coordinates` maps them to the image.
+    ``skeleton`` is the answer, ``S(chosen_step)`` of ``sequence`` with its tips cut
+    when ``trim`` is set (then ``rer``, ``ss``, ``objective`` and the curve's chosen point
+    are the trimmed skeleton's); its pixel coordinates are in the component's padded
+    crop seen in its canonical orientation, and :meth:`image_coordinates` maps them to
+    the image.
     """
 
     skeleton: Skeleton
@@ -59,6 +63,7 @@ class ComponentResult:
     chosen_step: int
     ma_rer: float
     margins: Margins = field(default_factory=Margins)
+    trim: Trim | None = None
 
     # the answer's parts, as the reporting below reads them
     @property
@@ -91,17 +96,35 @@ class ComponentResult:
     def alpha(self) -> float | None:
         return self.sequence.alpha
 
+    def chosen_point(self) -> tuple[float, float, float, float]:
+        """Length, ``AR``, ``LR`` and ``λ`` of the answer (trimmed, if it was)."""
+        seq, k, t = self.sequence, self.chosen_step, self.trim
+        if t is None or seq.alpha is None:
+            return (
+                float(seq.length[k]),
+                float(seq.ar[k]),
+                float(seq.lr[k]),
+                float(seq.objective[k]),
+            )
+        length = float(step_length(t.na, t.nd))
+        return (
+            length,
+            t.lost / seq.area,
+            float(np.log(length / seq.lbar + 1.0)),
+            target(t.lost, seq.area, t.na, t.nd, seq.alpha, seq.lbar),
+        )
+
     @property
     def rer(self) -> float:
-        return float(self.sequence.ar[self.chosen_step])
+        return self.chosen_point()[1]
 
     @property
     def ss(self) -> float:
-        return float(self.sequence.lr[self.chosen_step])
+        return self.chosen_point()[2]
 
     @property
     def objective(self) -> float:
-        return float(self.sequence.objective[self.chosen_step])
+        return self.chosen_point()[3]
 
     def points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Rows, cols (image frame) and squared radii of the pruned skeleton."""
@@ -221,7 +244,7 @@ class ComponentResult:
                 "branches": ma.branches,
             },
             "skeleton": {
-                "length": frame.distance(float(seq.length[self.chosen_step])),
+                "length": frame.distance(self.chosen_point()[0]),
                 "nodes": nodes,
                 "branches": branches,
                 "endpoints": [n["id"] for n in nodes if n["kind"] == "endpoint"],
@@ -241,6 +264,11 @@ class ComponentResult:
                     zip(seq.length, seq.ar, seq.lr, seq.objective, strict=True)
                 )
             ]
+            if self.trim is not None:  # the chosen point is the answer, tips cut
+                L, a, lr, o = self.chosen_point()
+                doc["curve"][self.chosen_step].update(
+                    length=frame.distance(L), ar=a, lr=lr, objective=o
+                )
         if sequence:
             table = self.sequence_table()
             map_graph(table["nodes"], table["branches"])
@@ -355,6 +383,10 @@ class PruneResult:
     method: str
     beta: float
     coarse: str | None
+    #: How the answers were chosen from their sequences (:mod:`skelprune.pruning.floor`).
+    choice: str = "argmin"
+    #: Whether the answers' tips were cut (:mod:`skelprune.pruning.tips`).
+    trim: bool = False
     components: list[ComponentResult] = field(default_factory=list)
     #: What was taken as the shape (:mod:`skelprune.io.foreground`); readers of images
     #: (:func:`skelprune.io.read_shape`) set theirs here.
@@ -422,6 +454,8 @@ class PruneResult:
             "method": self.method,
             "beta": float(self.beta),
             "coarse": self.coarse,
+            "choice": self.choice,
+            "trim": self.trim,
             "foreground": self.foreground.to_dict(),
             "components": [
                 c.to_dict(curve=curve, frame=frame, sequence=sequence) for c in self.components
@@ -543,7 +577,7 @@ class PruneResult:
                 )
         # A foreign member of the collection (RFC 7946 §6.1): the document's numbers.
         properties: dict[str, Any] = {
-            k: doc[k] for k in ("width", "height", "method", "beta", "coarse")
+            k: doc[k] for k in ("width", "height", "method", "beta", "coarse", "choice", "trim")
         }
         properties["components"] = summaries
         if self.raster is not None:

@@ -324,20 +324,25 @@ def cut_end_forks(
         # radius deep; and mostly on the shape: a notched end's chord runs outside it)
         if float(distance()[rows, cols].max()) > 1.5 + 0.5 * r or mask[rows, cols].mean() < 0.8:
             continue
-        # the line ends on the cut itself: from the chord's middle on to the background
-        ahead = (mid - j) / max(float(np.hypot(*(mid - j))), 1e-9)
-        for _ in range(int(4 * r)):
-            col, row = round(mid[0] + ahead[0] / 4), round(mid[1] + ahead[1] / 4)
-            if not (0 <= col < w and 0 <= row < h and mask[row, col]):
-                break
-            mid = mid + ahead / 4
         (rest,) = [b for b in degree[nid] if b not in (b1, b2)]
         if out[rest] is None or branches[rest]["source"] == branches[rest]["target"]:
             continue
         ln = out[rest]
         assert ln is not None
-        end_pt = np.array([[mid[0], mid[1], 0.0]])
         at_source = branches[rest]["source"] == nid
+        # The line ends on the cut itself, straight on from the remaining branch's
+        # direction into the junction: the tips' chord would tilt it, since the two
+        # tips are cut back from their corners by different amounts.
+        toward = ln[:, :2] if at_source else ln[::-1, :2]
+        back = toward[min(len(toward) - 1, max(2, round(4 * r)))]
+        ahead = (j - back) / max(float(np.hypot(*(j - back))), 1e-9)
+        mid = j.copy()
+        for _ in range(int(12 * r)):
+            col, row = round(mid[0] + ahead[0] / 4), round(mid[1] + ahead[1] / 4)
+            if not (0 <= col < w and 0 <= row < h and mask[row, col]):
+                break
+            mid = mid + ahead / 4
+        end_pt = np.array([[mid[0], mid[1], 0.0]])
         out[rest] = np.concatenate([end_pt, ln]) if at_source else np.concatenate([ln, end_pt])
         out[b1] = out[b2] = None
         ends_at[(rest, "source" if at_source else "target")] = t1

@@ -22,9 +22,13 @@ covers (what the choice reads anyway) and which branches merged.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from ..graph import BranchGraph
 from .bayesian import PruningSequence, objective
+
+if TYPE_CHECKING:
+    from .tips import Trim
 
 __all__ = ["Margins", "branch_margins"]
 
@@ -37,8 +41,12 @@ class Margins:
     removed_at: dict[int, int | None] = field(default_factory=dict)
 
 
-def branch_margins(graph: BranchGraph, seq: PruningSequence, chosen: int) -> Margins:
-    """Margins of the branches of ``graph``, which is ``S(chosen)`` of ``seq``.
+def branch_margins(
+    graph: BranchGraph, seq: PruningSequence, chosen: int, trim: Trim | None = None
+) -> Margins:
+    """Margins of the branches of ``graph``, which is ``S(chosen)`` of ``seq``, or its
+    tips cut (``trim``): then ``λ(Ŝ)`` and the end branches' areas are the trimmed
+    skeleton's.
 
     Parameters
     ----------
@@ -49,6 +57,8 @@ def branch_margins(graph: BranchGraph, seq: PruningSequence, chosen: int) -> Mar
         merges are all the margins need.
     chosen : int
         The answer's step.
+    trim : Trim, optional
+        The tips cut from ``S(chosen)``, when ``graph`` is the trimmed skeleton.
     """
     alive = [b for b, br in enumerate(graph.branches) if br.alive]
     removed_at = _removal_steps(seq, chosen, alive)
@@ -56,11 +66,17 @@ def branch_margins(graph: BranchGraph, seq: PruningSequence, chosen: int) -> Mar
         return Margins({b: None for b in alive}, removed_at)
     lam = seq.objective
     base = float(lam[chosen])
+    if trim is not None:
+        base = objective(trim.lost, seq.area, trim.na, trim.nd, seq.alpha, seq.lbar)
     margin: dict[int, float | None] = {}
     for b in alive:
         j = removed_at[b]
         margin[b] = None if j is None else float(lam[j]) - base
-    if chosen < len(seq.end_areas):
+    if trim is not None:
+        for b, d in trim.exclusive.items():
+            na, nd = graph.counts_without(b)
+            margin[b] = objective(trim.lost + d, seq.area, na, nd, seq.alpha, seq.lbar) - base
+    elif chosen < len(seq.end_areas):
         lost = seq.lost[chosen]
         ends, areas = seq.end_areas[chosen]
         for b, d in zip(ends.tolist(), areas.tolist(), strict=True):

@@ -16,6 +16,8 @@ from service.settings import Settings
 from skelprune._orientation import oriented
 from skelprune.api import components
 from skelprune.errors import InvalidOptionError
+from skelprune.options import DEFAULT_MIN_MARGIN
+from skelprune.pruning.bayesian import choose_step
 from skelprune.reconstruction import reconstruction
 from testkit.oracle import objective
 from testkit.shapes import blobs, dataset, load, rectangle_with_holes, two_components
@@ -39,13 +41,14 @@ def naive_lambda(comp, crop: np.ndarray, graph) -> float:
     return objective(lost, seq.area, graph.na, graph.nd, seq.alpha, seq.lbar)
 
 
+@pytest.mark.parametrize("trim", [True, False])
 @pytest.mark.parametrize("coarse", ["dce", None])
-def test_margins_follow_their_definition(coarse: str | None) -> None:
+def test_margins_follow_their_definition(coarse: str | None, trim: bool) -> None:
     """End branch: λ(Ŝ − E) − λ(Ŝ), with Ŝ − E repainted from scratch; inner branch: λ at
     the step that first removes its points, minus λ(Ŝ); never removed: None."""
     checked = {"end": 0, "inner": 0, "never": 0}
     for mask in shapes():
-        res = skelprune.prune(mask, coarse=coarse)
+        res = skelprune.prune(mask, coarse=coarse, trim=trim)
         doc = res.to_dict()
         for comp, cdoc, (crop, _) in zip(
             res.components, doc["components"], components(mask), strict=True
@@ -53,11 +56,16 @@ def test_margins_follow_their_definition(coarse: str | None) -> None:
             crop, _ = oriented(crop)
             g, k, lam = comp.graph, comp.chosen_step, comp.sequence.objective
             alive = [b for b, br in enumerate(g.branches) if br.alive]
+            base = comp.objective  # λ of the answer, its tips cut
             if comp.alpha is not None:
-                assert naive_lambda(comp, crop, g) == pytest.approx(lam[k], abs=1e-12)
+                assert naive_lambda(comp, crop, g) == pytest.approx(base, abs=1e-12)
+                assert base <= lam[k] + 1e-12
             # the sequence continued from Ŝ, as pixel sets
-            later = [set(g.alive_points().tolist())]
-            h = g.copy()
+            # (replayed on the untrimmed answer: a merge keeps the longer branch, which a
+            # cut tip may change)
+            g0 = comp.sequence.skeleton_at(k).graph
+            later = [set(g0.alive_points().tolist())]
+            h = g0.copy()
             for pick in comp.sequence.removed[k:]:
                 h.remove_end_branch(pick)
                 later.append(set(h.alive_points().tolist()))
@@ -71,17 +79,18 @@ def test_margins_follow_their_definition(coarse: str | None) -> None:
                     h = g.copy()
                     h.remove_end_branch(b)
                     assert bdoc["margin"] == pytest.approx(
-                        naive_lambda(comp, crop, h) - lam[k], abs=1e-12
+                        naive_lambda(comp, crop, h) - base, abs=1e-12
                     )
                     checked["end"] += 1
                 elif gone:
-                    assert bdoc["margin"] == lam[k + gone[0]] - lam[k] > 0
+                    assert bdoc["margin"] == pytest.approx(lam[k + gone[0]] - base, abs=1e-12)
+                    assert bdoc["margin"] > 0
                     checked["inner"] += 1
                 else:
                     assert bdoc["margin"] is None
                     checked["never"] += 1
             # the end branch the sequence takes next has the smallest rise it could find
-            if comp.alpha is not None and k < len(comp.sequence.removed):
+            if comp.alpha is not None and k < len(comp.sequence.removed) and comp.trim is None:
                 nxt = alive.index(comp.sequence.removed[k])
                 m = cdoc["skeleton"]["branches"][nxt]["margin"]
                 assert m == pytest.approx(lam[k + 1] - lam[k], abs=1e-12) and m > 0
@@ -122,9 +131,11 @@ def test_margin_in_geojson_and_none_for_dce() -> None:
 
 def test_min_margin_continues_the_sequence() -> None:
     for mask in shapes()[:12]:
-        base = skelprune.prune(mask)
-        assert skelprune.prune(mask, min_margin=0.0).to_dict() == base.to_dict()
-        for m in (0.01, 0.1, 1.0):
+        base = skelprune.prune(mask, min_margin=0.0)  # the paper's argmin
+        assert base.components[0].chosen_step == choose_step(base.components[0].sequence.objective)
+        default = skelprune.prune(mask).to_dict()
+        assert skelprune.prune(mask, min_margin=DEFAULT_MIN_MARGIN).to_dict() == default
+        for m in (0.003, 0.01, 0.1, 1.0):
             res = skelprune.prune(mask, min_margin=m)
             for c0, c in zip(base.components, res.components, strict=True):
                 lam = c.sequence.objective
@@ -200,3 +211,13 @@ def test_flip_matching_finds_every_branch_under_exact_turns() -> None:
             assert flips == 0 and total > 10, (p, kind)
         assert run.agreement(None, p) == 1.0 and run.agreement(0.1, p) == 1.0
     assert run.mean_endpoints(0.1) <= run.mean_endpoints(None)
+
+
+@pytest.mark.parametrize("size", [(10, 30), (20, 50), (30, 70), (60, 160)])
+def test_the_default_margin_keeps_a_rectangles_corner_branches(size) -> None:
+    h, w = size
+    mask = np.zeros((h + 10, w + 10), bool)
+    mask[5 : 5 + h, 5 : 5 + w] = True
+    res = skelprune.prune(mask)
+    assert res.n_endpoints() == 4
+    assert res.components[0].rer < 0.02

@@ -179,3 +179,31 @@ def test_overlay_scale_and_legend(client: TestClient) -> None:
         assert resp.status_code == 422 and "only apply to the overlay" in resp.text
     resp = client.post("/v1/prune", content=RECT, headers=png, params={"overlay_scale": "40"})
     assert resp.status_code == 422 and "overlay_scale" in resp.json()["detail"]
+
+
+def test_trim_and_choice_reach_the_library_from_query_and_body(client: TestClient) -> None:
+    import skelprune
+    from testkit.shapes import DRAWN
+
+    mask = DRAWN["stick_figure"]()
+    buf = io.BytesIO()
+    Image.fromarray(mask.astype(np.uint8) * 255).save(buf, "PNG")
+    png = buf.getvalue()
+    for opts in ({"trim": "false"}, {"choice": "noise-floor"}, {}):
+        query = client.post(
+            "/v1/prune", params={**opts, "curve": "false"}, content=png, headers=PNG
+        )
+        form = client.post(
+            "/v1/prune",
+            data={**opts, "curve": "false"},
+            files={"file": ("s.png", png, "image/png")},
+        )
+        kw = {"trim": opts.get("trim") != "false", "choice": opts.get("choice", "argmin")}
+        want = skelprune.prune(mask, **kw).to_dict(curve=False)
+        for resp in (query, form):
+            assert resp.status_code == 200, resp.text
+            doc = resp.json()
+            assert (doc["trim"], doc["choice"]) == (kw["trim"], kw["choice"])
+            assert doc["components"] == want["components"]
+    resp = client.post("/v1/prune", params={"trim": "maybe"}, content=png, headers=PNG)
+    assert resp.status_code == 422 and "trim" in resp.text

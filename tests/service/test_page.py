@@ -92,6 +92,17 @@ def _result(driver) -> dict[str, int]:
     }
 
 
+def _lost_at(comp, k: int) -> int:
+    """Pixels ``S(k)`` misses as the page shows it: the chosen step with its tips cut."""
+    if k == comp.chosen_step and comp.trim is not None:
+        return comp.trim.lost
+    return comp.sequence.lost[k]
+
+
+def _answer_lost(comp) -> int:
+    return _lost_at(comp, comp.chosen_step)
+
+
 def _shot(driver, name: str) -> Path:
     SHOTS.mkdir(parents=True, exist_ok=True)
     path = SHOTS / name
@@ -157,7 +168,7 @@ def test_a_shape_and_its_pruning_sequence(server: Running, browser, downloads: P
     assert shown["step"] == comp.chosen_step
     assert shown["drawn"] == shown["branches"] == comp.skeleton.n_branches
     assert shown["endpoints_drawn"] == comp.skeleton.n_endpoints
-    assert shown["error"] == shown["expected_error"] == seq.lost[comp.chosen_step]
+    assert shown["error"] == shown["expected_error"] == _answer_lost(comp)
     # a radius on hover: that of the endpoint under the pointer
     tip = browser.find_element(By.CSS_SELECTOR, "#nodes circle.endpoint")
     ActionChains(browser).move_to_element(tip).perform()
@@ -188,7 +199,7 @@ def test_a_shape_and_its_pruning_sequence(server: Running, browser, downloads: P
         assert shown["step"] == k
         assert shown["drawn"] == shown["branches"] == truth.n_branches, k
         assert shown["endpoints_drawn"] == truth.n_endpoints, k
-        assert shown["error"] == shown["expected_error"] == seq.lost[k], k
+        assert shown["error"] == shown["expected_error"] == _lost_at(comp, k), k
     _press(browser, Keys.HOME)
     assert "margin" not in browser.find_element(By.ID, "hover").text  # not the old step's
     _shot(browser, "bird-step0.png")
@@ -197,7 +208,7 @@ def test_a_shape_and_its_pruning_sequence(server: Running, browser, downloads: P
     shown = _result(browser)
     assert shown["step"] == n
     assert shown["drawn"] == seq.skeleton_at(n).n_branches
-    assert shown["error"] == seq.lost[n]
+    assert shown["error"] == _lost_at(comp, n)
     _shot(browser, "bird-last.png")
 
     # the medial axis the coarse stage pruned, on request
@@ -241,13 +252,13 @@ def test_several_components(server: Running, browser, tmp_path: Path) -> None:
     _upload(browser, base, path)
     shown = _result(browser)
     assert shown["drawn"] == sum(c.skeleton.n_branches for c in comps)
-    assert shown["error"] == comps[0].sequence.lost[comps[0].chosen_step]
+    assert shown["error"] == _answer_lost(comps[0])
     Select(browser.find_element(By.ID, "component")).select_by_index(1)
     _press(browser, Keys.HOME)
     shown = _result(browser)
     assert shown["step"] == 0
     assert shown["drawn"] == comps[0].skeleton.n_branches + comps[1].sequence.start.n_branches
-    assert shown["error"] == shown["expected_error"] == comps[1].sequence.lost[0]
+    assert shown["error"] == shown["expected_error"] == _lost_at(comps[1], 0)
     _shot(browser, "two-components.png")
 
 
@@ -261,7 +272,7 @@ def test_a_large_shape(server: Running, browser, tmp_path: Path) -> None:
     _upload(browser, base, path)
     shown = _result(browser)
     assert shown["drawn"] == comp.skeleton.n_branches
-    assert shown["error"] == shown["expected_error"] == comp.sequence.lost[comp.chosen_step]
+    assert shown["error"] == shown["expected_error"] == _answer_lost(comp)
     _shot(browser, "hand-x7-answer.png")
 
 
@@ -348,7 +359,7 @@ def test_shapes_with_nothing_to_prune(server: Running, browser, tmp_path: Path) 
     shown = _result(browser)
     assert shown["step"] == 0
     assert shown["drawn"] == sum(c.skeleton.n_branches for c in comps)
-    assert shown["error"] == shown["expected_error"] == comps[0].sequence.lost[0]
+    assert shown["error"] == shown["expected_error"] == _lost_at(comps[0], 0)
     assert browser.find_elements(By.CSS_SELECTOR, "#nodes circle.loop")
     severe = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
     assert not severe, severe  # no script error

@@ -1,0 +1,307 @@
+"""Tips cut where the trade-off says: the answer's end branches trimmed point by point.
+
+The greedy pruning removes whole end branches only, so a kept end branch still runs on
+to the boundary along whatever digital spur merged into it: a hook at a round end,
+length that reconstructs nothing. After the answer ``Ŝ`` is chosen, each of its end
+branches (both ends of a single path) is cut back from its endpoint to the cut that
+minimises ``λ = α·AR + LR`` along it:
+
+- drop the first ``k`` points of the tip, ``k = 0 … len − 1`` (a branch is never removed
+  whole, and a single path keeps two points, so the endpoint count does not change);
+- the length falls by the steps between those points, the lost area rises by the pixels
+  that only those points' disks covered (exact counts);
+- the smallest ``λ`` wins, ties to the shorter tip (the larger ``k``).
+
+Ends are cut one after another, each on the skeleton the earlier cuts left, in a fixed
+order: the longest cut first (as measured on ``Ŝ`` alone), then by endpoint (row, col).
+``λ`` of the answer can only fall: ``k = 0`` is always a candidate.
+
+The points a cut drops are those of :meth:`~skelprune.graph.BranchGraph.tip`: the branch's
+path from the endpoint, each pixel beside the path (a dissolved junction cluster's)
+going with the last path point it touches. The naive oracle (``testkit/oracle.py``)
+recomputes every candidate's area from scratch and must agree exactly.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..graph import BranchGraph, step_length
+from ..skeleton import Skeleton
+
+__all__ = ["Trim", "trim_tips"]
+
+
+@dataclass(frozen=True)
+class Trim:
+    """The trimmed answer and its numbers.
+
+    ``cuts`` lists ``(branch, end, k)`` for every end in the order it was cut (``k = 0``:
+    left as it was); ``lost``, ``na`` and ``nd`` are the trimmed skeleton's lost pixels
+    and length counts, from which its ``AR``, ``LR`` and ``λ`` follow.
+    """
+
+    skeleton: Skeleton
+    lost: int
+    na: int
+    nd: int
+    cuts: list[tuple[int, int, int]]
+    #: Per end branch of the trimmed skeleton: the pixels only its disks cover (what
+    #: removing it whole would lose), for its margin.
+    exclusive: dict[int, int]
+
+
+@njit(cache=True)
+def _paint_counts(h, w, rows, cols, r2):
+    """How many disks ``|p − s|² < r²`` cover each pixel."""
+    c = np.zeros((h, w), np.int32)
+    for k in range(rows.size):
+        r, q, v = rows[k], cols[k], r2[k]
+        rad = int(math.sqrt(v))
+        for dy in range(-rad, rad + 1):
+            rest = v - dy * dy
+            if rest <= 0:
+                continue
+            dx = int(math.sqrt(rest))
+            if dx * dx >= rest:  # strict inside: |dx|² < rest
+                dx -= 1
+            y = r + dy
+            for x in range(q - dx, q + dx + 1):
+                c[y, x] += 1
+    return c
+
+
+@njit(cache=True)
+def _losses(mask, c, rows, cols, r2, drop, n_drop, scratch, last):
+    """Pixels lost when the points with ``drop < k`` go, per ``k`` (index ``k − 1``).
+
+    A pixel is lost once every disk covering it is among the dropped points: all its
+    covers are in this list (``scratch`` counts them against ``c``) and the last of them
+    (``last``: the largest drop index) is gone. ``scratch`` and ``last`` come in zeroed
+    and are left zeroed.
+    """
+    loss = np.zeros(n_drop + 1, np.int64)
+    for pass_ in range(3):
+        for k in range(rows.size):
+            r, q, v, d = rows[k], cols[k], r2[k], drop[k]
+            rad = int(math.sqrt(v))
+            for dy in range(-rad, rad + 1):
+                rest = v - dy * dy
+                if rest <= 0:
+                    continue
+                dx = int(math.sqrt(rest))
+                if dx * dx >= rest:
+                    dx -= 1
+                y = r + dy
+                for x in range(q - dx, q + dx + 1):
+                    if pass_ == 0:
+                        scratch[y, x] += 1
+                        if d + 1 > last[y, x]:
+                            last[y, x] = d + 1
+                    elif pass_ == 1:
+                        if scratch[y, x] == c[y, x] and mask[y, x]:
+                            loss[last[y, x] - 1] += 1
+                        scratch[y, x] = -1  # counted once
+                    else:
+                        scratch[y, x] = 0
+                        last[y, x] = 0
+    return loss
+
+
+@njit(cache=True)
+def _candidates(mask, c, rows, cols, r2, pts, drop, diag, m, scratch, last):
+    """Per cut ``k < m``: pixels lost and (axial, diagonal) steps dropped; and the box
+    (top, left, bottom, right) the points' disks can reach."""
+    n = diag.size + 1
+    loss = _losses(mask, c, rows[pts], cols[pts], r2[pts], drop, n, scratch, last)
+    lost = np.zeros(m, np.int64)
+    cut = np.zeros((m, 2), np.int64)
+    for k in range(1, m):
+        lost[k] = lost[k - 1] + loss[k - 1]
+        cut[k, 0] = cut[k - 1, 0] + 1 - diag[k - 1]
+        cut[k, 1] = cut[k - 1, 1] + diag[k - 1]
+    box = np.empty(4, np.int64)
+    box[0] = box[1] = np.iinfo(np.int64).max
+    box[2] = box[3] = np.iinfo(np.int64).min
+    for p in pts:
+        rad = int(math.sqrt(r2[p])) + 1
+        box[0] = min(box[0], rows[p] - rad)
+        box[1] = min(box[1], cols[p] - rad)
+        box[2] = max(box[2], rows[p] + rad)
+        box[3] = max(box[3], cols[p] + rad)
+    return lost, cut, box
+
+
+@njit(cache=True)
+def _uncover(c, rows, cols, r2):
+    """Take the disks of these points off the counts."""
+    for k in range(rows.size):
+        r, q, v = rows[k], cols[k], r2[k]
+        rad = int(math.sqrt(v))
+        for dy in range(-rad, rad + 1):
+            rest = v - dy * dy
+            if rest <= 0:
+                continue
+            dx = int(math.sqrt(rest))
+            if dx * dx >= rest:
+                dx -= 1
+            y = r + dy
+            for x in range(q - dx, q + dx + 1):
+                c[y, x] -= 1
+
+
+class _Tips:
+    """The counts and the scratch arrays the cuts share."""
+
+    def __init__(self, sk: Skeleton, graph: BranchGraph) -> None:
+        self.sk, self.graph = sk, graph
+        idx = graph.alive_points()
+        h, w = sk.shape.shape
+        self.c = _paint_counts(h, w, sk.rows[idx], sk.cols[idx], sk.r2[idx])
+        self.scratch = np.zeros((h, w), np.int32)
+        self.last = np.zeros((h, w), np.int64)
+
+    def candidates(
+        self, b: int, e: int
+    ) -> tuple[list[int], np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int]]:
+        """The tip's points, their drop indices, per cut ``k = 0 … len − 1`` of the path
+        (``len − 2`` on a single path) the pixels lost and the (axial, diagonal) steps
+        dropped, and the box the tip's disks can reach."""
+        sk, graph = self.sk, self.graph
+        points, drop, steps = graph.tip(b, e)
+        # a single path keeps two points: one would be a single endpoint
+        m = len(steps) + (0 if graph.branches[b].node[1 - e] is None else 1)
+        pts = np.asarray(points, np.int64)
+        dr = np.asarray(drop, np.int64)
+        lost, cut, box = _candidates(
+            sk.shape,
+            self.c,
+            sk.rows,
+            sk.cols,
+            sk.r2,
+            pts,
+            dr,
+            np.asarray(steps, np.int64),
+            m,
+            self.scratch,
+            self.last,
+        )
+        return points, dr, lost, cut, (int(box[0]), int(box[1]), int(box[2]), int(box[3]))
+
+    def exclusive(self, b: int) -> int:
+        """Pixels only branch ``b``'s disks cover."""
+        sk, br = self.sk, self.graph.branches[b]
+        pts = np.asarray(br.points, np.int64)
+        # every point the same drop index: lost all together
+        loss = _losses(
+            sk.shape,
+            self.c,
+            sk.rows[pts],
+            sk.cols[pts],
+            sk.r2[pts],
+            np.zeros(pts.size, np.int64),
+            1,
+            self.scratch,
+            self.last,
+        )
+        return int(loss[0])
+
+
+@njit(cache=True)
+def _best(lost0, na0, nd0, cand_lost, cand_steps, area, alpha, lbar):
+    """``argmin λ`` over the cuts, ties to the larger ``k``; λ with exactly the operations
+    of :func:`~skelprune.pruning.bayesian.objective`, so that the choice is bit-identical
+    to the oracle's."""
+    best, best_lam = 0, math.inf
+    for k in range(cand_lost.size):
+        lam = alpha * (lost0 + cand_lost[k]) / area + math.log(
+            step_length(na0 - cand_steps[k, 0], nd0 - cand_steps[k, 1]) / lbar + 1.0
+        )
+        if lam <= best_lam:
+            best, best_lam = k, lam
+    return best
+
+
+def _meet(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> bool:
+    return a[0] <= b[2] and b[0] <= a[2] and a[1] <= b[3] and b[1] <= a[3]
+
+
+def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
+    """Cut every end of ``answer`` back to the point that minimises ``λ`` along it.
+
+    Parameters
+    ----------
+    answer : Skeleton
+        The chosen skeleton ``Ŝ`` (left as it is: the cuts work on a copy).
+    lost : int
+        ``Λ(D \\ R(Ŝ))``, the pixels ``Ŝ`` misses.
+    alpha, lbar : float
+        ``α`` and ``ℓ̄`` of the sequence ``Ŝ`` was chosen from.
+
+    Returns
+    -------
+    Trim
+
+    Examples
+    --------
+    A disc on a stick: the stick's axis ends in the disc, near its centre, instead of
+    turning to the boundary.
+
+    >>> yy, xx = np.mgrid[:40, :80]
+    >>> m = ((yy - 20) ** 2 + (xx - 58) ** 2 < 15**2) | ((abs(yy - 20) < 4) & (xx > 3) & (xx < 60))
+    >>> sk = Skeleton.medial_axis(np.pad(m, 1))
+    >>> norm = sk.normalisation(9.0)
+    >>> lost = int((sk.shape & ~sk.reconstruction()).sum())
+    >>> t = trim_tips(sk, lost, norm.alpha, norm.lbar)
+    >>> t.skeleton.n_endpoints == sk.n_endpoints, t.skeleton.n_points < sk.n_points
+    (True, True)
+    """
+    graph = answer.working_graph()
+    area = answer.area
+    tips = _Tips(answer, graph)
+    ends = graph.free_ends()
+    # The order: longest cut on Ŝ alone first, then endpoint (row, col).
+    keyed = []
+    first = {}
+    for b, e in ends:
+        cand = tips.candidates(b, e)
+        cl, cs = cand[2], cand[3]
+        k = _best(lost, graph.na, graph.nd, cl, cs, area, alpha, lbar)
+        p = graph.free_end_point(b, e)
+        first[b, e] = cand
+        keyed.append(
+            (
+                -step_length(int(cs[k, 0]), int(cs[k, 1])),
+                int(graph.rows[p]),
+                int(graph.cols[p]),
+                b,
+                e,
+            )
+        )
+    keyed.sort()
+    cuts: list[tuple[int, int, int]] = []
+    changed: list[tuple[int, int, int, int]] = []  # where earlier cuts changed the counts
+    cut_branches: set[int] = set()
+    for *_, b, e in keyed:
+        points, drop, cl, cs, box = first[b, e]
+        if b in cut_branches or any(_meet(box, c) for c in changed):
+            # an earlier cut changed what this tip's disks share: count again
+            points, drop, cl, cs, box = tips.candidates(b, e)
+        k = _best(lost, graph.na, graph.nd, cl, cs, area, alpha, lbar)
+        cuts.append((b, e, k))
+        if k == 0:
+            continue
+        gone = np.asarray(
+            [p for p, d in zip(points, drop.tolist(), strict=True) if d < k], np.int64
+        )
+        _uncover(tips.c, answer.rows[gone], answer.cols[gone], answer.r2[gone])
+        changed.append(box)  # (the whole tip's box holds the dropped points' disks)
+        cut_branches.add(b)
+        lost += int(cl[k])
+        graph.cut_tip(b, e, gone.tolist(), int(cs[k, 0]), int(cs[k, 1]))
+    exclusive = {b: tips.exclusive(b) for b in graph.end_branches()}
+    return Trim(answer.with_graph(graph), lost, graph.na, graph.nd, cuts, exclusive)

@@ -23,11 +23,39 @@ import numpy as np
 from .common import DATA, table, upscale
 
 SIZES = (1024, 2048, 4096)
-SHAPES = ("filled disk", "filled square", "heart-1", "brick-3", "bird-10", "car-6", "hammer-3")
+SHAPES = (
+    "filled disk",
+    "filled square",
+    "heart-1",
+    "brick-3",
+    "bird-10",
+    "car-6",
+    "hammer-3",
+    "apple",
+    "heart",
+    "cup",
+    "holed blob",
+)
+
+
+def _polar(size: int, radius) -> np.ndarray:
+    """The pixels within ``radius(θ)`` (a fraction of the half frame) of the centre."""
+    yy, xx = np.mgrid[:size, :size]
+    c = (size - 1) / 2
+    dy, dx = (yy - c) / (size / 2 - 2), (xx - c) / (size / 2 - 2)
+    return np.hypot(dy, dx) <= radius(np.arctan2(-dy, dx))
+
+
+#: Side at which the drawn silhouettes (apple, heart, cup, holed blob) are rasterised
+#: before they are scaled up like the kimia shapes: a scanned silhouette scaled up has
+#: the softened staircase boundary that makes many small branches with large disks.
+DRAWN = 160
 
 
 def blob(name: str, size: int) -> np.ndarray:
     """``name`` (a shape of SHAPES) filling a ``size``-px frame."""
+    if name in ("apple", "heart", "cup", "holed blob"):
+        return upscale(_drawn(name, DRAWN), size)
     if name == "filled disk":
         yy, xx = np.mgrid[:size, :size]
         c = (size - 1) / 2
@@ -40,6 +68,34 @@ def blob(name: str, size: int) -> np.ndarray:
 
     with Image.open(DATA / "kimia216" / f"{name}.png") as im:
         return upscale(np.asarray(im) > 0, size)
+
+
+def _drawn(name: str, size: int) -> np.ndarray:
+    yy, xx = np.mgrid[:size, :size] / (size / 2) - 1.0  # the frame as [-1, 1]²
+    if name == "apple":  # round, a dimple at the top and one at the bottom, a stem
+        body = _polar(
+            size,
+            lambda t: 0.86
+            - 0.16 * np.exp(-(((t - np.pi / 2) / 0.35) ** 2))
+            - 0.05 * np.exp(-(((t + np.pi / 2) / 0.3) ** 2))
+            + 0.04 * np.cos(2 * t),
+        )
+        stem = (np.abs(xx - 0.03 + 0.1 * (yy + 0.8)) < 0.03) & (yy > -0.95) & (yy < -0.6)
+        return body | stem
+    if name == "heart":  # the classic implicit heart curve
+        x, y = 1.15 * xx, -1.15 * yy + 0.15
+        return (x * x + y * y - 1) ** 3 - x * x * y**3 <= 0
+    if name == "cup":  # a tapered body with a ring handle: one hole
+        body = (np.abs(xx + 0.2) < 0.55 - 0.12 * (yy + 0.8) / 1.6) & (np.abs(yy) < 0.8)
+        ring = np.hypot(yy + 0.05, xx - 0.45) / 0.42
+        return body | ((ring > 0.6) & (ring < 1.0) & (xx > 0.2))
+    if name == "holed blob":  # a wobbly disc with three round holes
+        outer = _polar(size, lambda t: 0.85 + 0.08 * np.sin(3 * t) + 0.04 * np.cos(5 * t))
+        holes = np.zeros_like(outer)
+        for cy, cx, rad in ((-0.35, -0.3, 0.16), (0.3, -0.25, 0.12), (0.05, 0.4, 0.2)):
+            holes |= np.hypot(yy - cy, xx - cx) < rad
+        return outer & ~holes
+    raise ValueError(name)
 
 
 def _run(name: str, size: int, repeat: int, out: mp.Queue) -> None:

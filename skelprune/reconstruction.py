@@ -1,12 +1,13 @@
 """Reconstruction of a shape from skeleton disks, and its area term (docs/algorithm.md).
 
-Besides the plain reconstruction, :class:`Coverage` keeps, for every pixel, how many
-owners (branches or junction clusters) cover it with their disks and the sum of their
-labels: a pixel has one owner iff the count is 1, and the sum is then that owner. So
-the area each end branch alone covers, the area its removal would lose, is kept up to
-date exactly. Each owner's disks are held as one union, a set of row runs
-(:mod:`skelprune._intervals`): removing or merging an owner costs the area of its union
-once, not the area of every one of its overlapping disks.
+Besides the plain reconstruction, :class:`Coverage` keeps the area each owner (a branch
+or a junction cluster) alone covers with its disks, the area its removal would lose,
+exactly up to date. Each owner's disks are held as one union, a set of row runs
+(:mod:`skelprune._intervals`), and the shape is cut into square tiles: a tile that two
+owners cover whole holds no pixel with fewer than two owners, so it is only counted
+(how many owners cover it whole), and its pixels are looked at once that count falls
+below two. Work then follows the pixels near the owners' edges and the shape's
+boundary, not the owners' areas, which on a blob-like shape are huge and pile up.
 """
 
 from __future__ import annotations
@@ -17,7 +18,13 @@ from numba import njit
 from ._digital import disk_half_width, isqrt
 from ._intervals import owner_runs, union
 
-__all__ = ["Coverage", "count_covered", "reconstruction", "reconstruction_error"]
+__all__ = [
+    "COVER_TILE",
+    "Coverage",
+    "count_covered",
+    "reconstruction",
+    "reconstruction_error",
+]
 
 
 @njit(cache=True)
@@ -102,45 +109,238 @@ def _count_covered(py, px, rows, cols, r2):
     return n
 
 
-# Coverage counts owners, not disks: each owner (a branch, or a junction cluster) paints
-# the union of its disks once, as a run set (skelprune._intervals). Kernels index a 1-D
-# view of each row: measured faster than slice updates and 2-D indexing.
+# Coverage counts owners, not disks: each owner (a branch, or a junction cluster) is the
+# union of its disks, a run set (skelprune._intervals), held in one growing buffer
+# (``buf``; owner ``b``'s runs are ``buf[lo[b]:hi[b]]``). Per-pixel counts live in tiles
+# (``c``, ``s``: tile-major, so that a tile never looked at costs no memory), and only
+# in the tiles that are "open" (``opened``); a closed tile has ``full[t] >= 2`` owners
+# that cover it whole, so none of its pixels has fewer than two owners. Each owner also
+# lists the tiles it meets (``tiles``: tile * 2 + 1 if it covers the tile whole).
+
+#: Side of the square tiles of :class:`Coverage`.
+COVER_TILE = 32
 
 
 @njit(cache=True)
-def _paint_owners(c, s, runs, offsets):
-    for b in range(offsets.size - 1):
-        for i in range(offsets[b], offsets[b + 1]):
-            cr, sr = c[runs[i, 0]], s[runs[i, 0]]
-            for q in range(runs[i, 1], runs[i, 2] + 1):
-                cr[q] += 1
-                sr[q] += b
+def _grow_tiles(out, m, code):
+    if m == out.size:
+        bigger = np.empty(2 * out.size + 16, np.int64)
+        bigger[:m] = out[:m]
+        out = bigger
+    out[m] = code
+    return out, m + 1
 
 
 @njit(cache=True)
-def _remove_owner(c, s, runs, lab, excl):
-    """Take owner ``lab`` off the pixels of its run set; return the pixels left uncovered.
+def _owner_tiles(runs, offsets, tile, tw):
+    """Per owner, the tiles its runs meet, as ``tile_id * 2 + whole`` sorted by tile."""
+    n = offsets.size - 1
+    out = np.empty(max(16, runs.shape[0]), np.int64)
+    toff = np.zeros(n + 1, np.int64)
+    seen = np.full(tw, -1, np.int64)  # group stamp of each column of tiles
+    rows_whole = np.zeros(tw, np.int64)
+    met = np.empty(tw, np.int64)
+    m = 0
+    group = 0
+    for b in range(n):
+        i = offsets[b]
+        while i < offsets[b + 1]:
+            ty = runs[i, 0] // tile
+            k = 0
+            while i < offsets[b + 1] and runs[i, 0] // tile == ty:
+                a, e = runs[i, 1], runs[i, 2]
+                for tx in range(a // tile, e // tile + 1):
+                    if seen[tx] != group:
+                        seen[tx] = group
+                        rows_whole[tx] = 0
+                        met[k] = tx
+                        k += 1
+                    if a <= tx * tile and e >= tx * tile + tile - 1:
+                        rows_whole[tx] += 1  # a row has one run over a tile at most
+                i += 1
+            for tx in np.sort(met[:k]):
+                out, m = _grow_tiles(out, m, (ty * tw + tx) * 2 + (rows_whole[tx] == tile))
+            group += 1
+        toff[b + 1] = m
+    return out[:m].copy(), toff
 
-    Each pixel is visited once (a run set is disjoint), so the pixels left with one
-    owner are credited to it at once, without stamps.
-    """
+
+@njit(cache=True)
+def _tile_owners(tiles, toff, n_tiles):
+    """The owners meeting each tile (CSR: ``owners[start[t]:start[t + 1]]``), and how
+    many cover it whole."""
+    start = np.zeros(n_tiles + 1, np.int64)
+    full = np.zeros(n_tiles, np.int32)
+    for j in range(tiles.size):
+        start[(tiles[j] >> 1) + 1] += 1
+        full[tiles[j] >> 1] += tiles[j] & 1
+    for t in range(n_tiles):
+        start[t + 1] += start[t]
+    fill = start[:-1].copy()
+    owners = np.empty(tiles.size, np.int64)
+    for b in range(toff.size - 1):
+        for j in range(toff[b], toff[b + 1]):
+            t = tiles[j] >> 1
+            owners[fill[t]] = b
+            fill[t] += 1
+    return start, owners, full
+
+
+@njit(cache=True, inline="always")
+def _find(alias, b):
+    """The owner label ``b`` is now part of (labels merge into others)."""
+    root = b
+    while alias[root] != root:
+        root = alias[root]
+    while alias[b] != root:
+        alias[b], b = root, alias[b]
+    return root
+
+
+@njit(cache=True)
+def _open(t, tile, tw, mask, buf, lo, hi, start, owners, alias, alive, stamp, c, s, excl):
+    """Count the pixels of tile ``t`` (every owner meeting it, painted); credit the
+    pixels with one owner to it, and return those of the shape with none."""
+    ty, tx = t // tw, t % tw
+    y0, x0 = ty * tile, tx * tile
+    ct, st = c[t], s[t]
+    for j in range(start[t], start[t + 1]):
+        b = _find(alias, owners[j])
+        if not alive[b] or stamp[b] == t:
+            continue
+        stamp[b] = t
+        # the first run at or below row y0 (runs are sorted by row)
+        u, v = lo[b], hi[b]
+        while u < v:
+            mid = (u + v) // 2
+            if buf[mid, 0] < y0:
+                u = mid + 1
+            else:
+                v = mid
+        i = u
+        while i < hi[b] and buf[i, 0] < y0 + tile:
+            a, e = max(buf[i, 1], x0), min(buf[i, 2], x0 + tile - 1)
+            row_c, row_s = ct[buf[i, 0] - y0], st[buf[i, 0] - y0]
+            for q in range(a - x0, e - x0 + 1):
+                row_c[q] += 1
+                row_s[q] += b
+            i += 1
     lost = 0
-    for i in range(runs.shape[0]):
-        cr, sr = c[runs[i, 0]], s[runs[i, 0]]
-        for q in range(runs[i, 1], runs[i, 2] + 1):
-            cr[q] -= 1
-            sr[q] -= lab
-            n = cr[q]
-            if n == 0:
+    h, w = mask.shape
+    for y in range(y0, min(y0 + tile, h)):
+        row_c, row_s, row_m = ct[y - y0], st[y - y0], mask[y]
+        for x in range(x0, min(x0 + tile, w)):
+            n = row_c[x - x0]
+            if n == 1:
+                excl[row_s[x - x0]] += 1
+            elif n == 0 and row_m[x]:
                 lost += 1
-            elif n == 1:
-                excl[sr[q]] += 1
     return lost
 
 
 @njit(cache=True)
-def _merge_owner(c, s, moved, kept, old, new):
-    """Owner ``old`` (run set ``moved``) becomes owner ``new`` (run set ``kept``).
+def _open_thin_tiles(
+    tile, tw, mask, buf, lo, hi, start, owners, alias, alive, stamp, c, s, excl, full, opened
+):
+    lost = 0
+    for t in range(full.size):
+        if full[t] < 2:
+            opened[t] = True
+            lost += _open(
+                t, tile, tw, mask, buf, lo, hi, start, owners, alias, alive, stamp, c, s, excl
+            )
+    return lost
+
+
+@njit(cache=True)
+def _remove_owner(
+    old,
+    tile,
+    tw,
+    mask,
+    buf,
+    lo,
+    hi,
+    tiles,
+    tlo,
+    thi,
+    start,
+    owners,
+    alias,
+    alive,
+    stamp,
+    c,
+    s,
+    excl,
+    full,
+    opened,
+):
+    """Take owner ``old`` off the pixels of its run set; return the pixels left uncovered.
+
+    In open tiles each pixel is visited once (a run set is disjoint), so the pixels left
+    with one owner are credited to it at once; a closed tile loses one owner covering it
+    whole, if ``old`` was one, and is opened when fewer than two are left.
+    """
+    lost = 0
+    for i in range(lo[old], hi[old]):
+        r, a, e = buf[i, 0], buf[i, 1], buf[i, 2]
+        ty = r // tile
+        for tx in range(a // tile, e // tile + 1):
+            t = ty * tw + tx
+            if not opened[t]:
+                continue
+            x0 = tx * tile
+            row_c, row_s = c[t, r - ty * tile], s[t, r - ty * tile]
+            for q in range(max(a, x0) - x0, min(e, x0 + tile - 1) - x0 + 1):
+                row_c[q] -= 1
+                row_s[q] -= old
+                n = row_c[q]
+                if n == 0:
+                    lost += 1
+                elif n == 1:
+                    excl[row_s[q]] += 1
+    alive[old] = False
+    for j in range(tlo[old], thi[old]):
+        t = tiles[j] >> 1
+        if tiles[j] & 1 and not opened[t]:
+            full[t] -= 1
+            if full[t] < 2:
+                opened[t] = True
+                lost += _open(
+                    t, tile, tw, mask, buf, lo, hi, start, owners, alias, alive, stamp, c, s, excl
+                )
+    return lost
+
+
+@njit(cache=True, inline="always")
+def _merge_span(c, s, opened, tile, tw, r, a, e, both, old, d):
+    """Pixels ``a..e`` of row ``r`` pass from owner ``old`` to owner ``old + d``, in the
+    open tiles: where both cover them (``both``) they lose one owner, elsewhere they
+    change label. Returns how many are left with that one owner."""
+    single = 0
+    ty = r // tile
+    y = r - ty * tile
+    for tx in range(a // tile, e // tile + 1):
+        t = ty * tw + tx
+        if not opened[t]:
+            continue
+        x0 = tx * tile
+        row_c, row_s = c[t, y], s[t, y]
+        for q in range(max(a, x0) - x0, min(e, x0 + tile - 1) - x0 + 1):
+            if both:
+                row_c[q] -= 1
+                row_s[q] -= old
+            else:
+                row_s[q] += d
+            if row_c[q] == 1:
+                single += 1
+    return single
+
+
+@njit(cache=True)
+def _merge_pixels(c, s, opened, tile, tw, moved, kept, old, new):
+    """Owner ``old`` (run set ``moved``) becomes owner ``new`` (run set ``kept``), in the
+    open tiles.
 
     Pixels both cover lose one owner; the others change label. Returns how many pixels
     of ``moved`` are left with the single owner ``new``: none was before, as ``old``
@@ -154,29 +354,91 @@ def _merge_owner(c, s, moved, kept, old, new):
         # The first run of kept not wholly before this one (kept is sorted too).
         while j < kept.shape[0] and (kept[j, 0] < r or (kept[j, 0] == r and kept[j, 2] < lo)):
             j += 1
-        cr, sr = c[r], s[r]
         k = j
         q = lo
         while q <= hi:
             if k < kept.shape[0] and kept[k, 0] == r and kept[k, 1] <= q:
                 # q lies in kept[k]: covered by both owners
                 end = min(hi, kept[k, 2])
-                for p in range(q, end + 1):
-                    cr[p] -= 1
-                    sr[p] -= old
-                    if cr[p] == 1:
-                        single += 1
+                single += _merge_span(c, s, opened, tile, tw, r, q, end, True, old, d)
                 k += 1
             else:
                 end = hi
                 if k < kept.shape[0] and kept[k, 0] == r and kept[k, 1] <= hi:
                     end = kept[k, 1] - 1
-                for p in range(q, end + 1):
-                    sr[p] += d
-                    if cr[p] == 1:
-                        single += 1
+                single += _merge_span(c, s, opened, tile, tw, r, q, end, False, old, d)
             q = end + 1
     return single
+
+
+@njit(cache=True)
+def _merge_tiles(
+    out,
+    m,
+    old,
+    new,
+    tile,
+    tw,
+    mask,
+    buf,
+    lo,
+    hi,
+    tiles,
+    tlo,
+    thi,
+    start,
+    owners,
+    alias,
+    alive,
+    stamp,
+    c,
+    s,
+    excl,
+    full,
+    opened,
+):
+    """The tile list of ``new`` after it absorbed ``old``, written to ``out[m:]``; a closed
+    tile both covered whole loses one such owner (and opens when fewer than two are
+    left). Returns the new end of ``out`` and the pixels left uncovered (none: a merge
+    uncovers nothing, but opening a tile counts its pixels)."""
+    i, e_i = tlo[old], thi[old]
+    j, e_j = tlo[new], thi[new]
+    lost = 0
+    while i < e_i or j < e_j:
+        if j == e_j or (i < e_i and tiles[i] >> 1 < tiles[j] >> 1):
+            out[m] = tiles[i]
+            i += 1
+        elif i == e_i or tiles[j] >> 1 < tiles[i] >> 1:
+            out[m] = tiles[j]
+            j += 1
+        else:
+            t = tiles[i] >> 1
+            out[m] = tiles[i] | tiles[j]
+            if tiles[i] & tiles[j] & 1 and not opened[t]:
+                full[t] -= 1
+                if full[t] < 2:
+                    opened[t] = True
+                    lost += _open(
+                        t,
+                        tile,
+                        tw,
+                        mask,
+                        buf,
+                        lo,
+                        hi,
+                        start,
+                        owners,
+                        alias,
+                        alive,
+                        stamp,
+                        c,
+                        s,
+                        excl,
+                    )
+            i += 1
+            j += 1
+        m += 1
+    return m, lost
 
 
 class Coverage:
@@ -188,6 +450,11 @@ class Coverage:
     whole, by label (:meth:`remove_label`, :meth:`merge_label`): a branch's points always
     share its label, and a merge moves whole owners.
 
+    The counts are kept only in the tiles (``tile`` × ``tile`` pixels) that fewer than
+    two owners cover whole: elsewhere no pixel can have fewer than two owners, so the
+    tile only counts its whole-covering owners, and is opened (its pixels counted from
+    the owners' runs) once that count falls below two.
+
     Parameters
     ----------
     mask : (H, W) bool array
@@ -198,6 +465,8 @@ class Coverage:
         Owner label of each point, in ``1 .. n_labels - 1``.
     n_labels : int
         Size of the label space.
+    tile : int
+        Side of the tiles, default :data:`COVER_TILE`.
 
     Attributes
     ----------
@@ -206,8 +475,6 @@ class Coverage:
     exclusive : (n_labels,) int64
         Pixels covered by the disks of one label only: what removing it would lose.
         Exact for the labels still in use; stale for removed or merged ones.
-    c : (H, W) int32
-        Number of owners covering each pixel.
 
     Examples
     --------
@@ -222,7 +489,7 @@ class Coverage:
     (np.int64(26), 26, 108)
     """
 
-    def __init__(self, mask, rows, cols, r2, labels, n_labels: int) -> None:
+    def __init__(self, mask, rows, cols, r2, labels, n_labels: int, tile: int = COVER_TILE) -> None:
         runs, offsets = owner_runs(
             np.asarray(rows, np.int64),
             np.asarray(cols, np.int64),
@@ -230,29 +497,138 @@ class Coverage:
             np.asarray(labels, np.int64),
             n_labels,
         )
-        self.runs = [runs[offsets[b] : offsets[b + 1]] for b in range(n_labels)]
-        self.c = np.zeros(mask.shape, np.int32)
-        self.s = np.zeros(mask.shape, np.int64)
-        _paint_owners(self.c, self.s, runs, offsets)
-        self.exclusive = np.bincount(self.s[self.c == 1], minlength=n_labels).astype(np.int64)
-        self.lost = int((mask & (self.c == 0)).sum())
+        self.mask = np.ascontiguousarray(mask, dtype=np.bool_)
+        h, w = self.mask.shape
+        self.tile = tile
+        self.th, self.tw = -(-h // tile), -(-w // tile)
+        n_tiles = self.th * self.tw
+        self.buf, self.used = runs, runs.shape[0]
+        self.lo, self.hi = offsets[:-1].copy(), offsets[1:].copy()
+        self.tiles, toff = _owner_tiles(runs, offsets, tile, self.tw)
+        self.tused = self.tiles.size
+        self.tlo, self.thi = toff[:-1].copy(), toff[1:].copy()
+        self.start, self.owners, self.full = _tile_owners(self.tiles, toff, n_tiles)
+        self.alias = np.arange(n_labels, dtype=np.int64)
+        self.alive = np.ones(n_labels, np.bool_)
+        self.stamp = np.full(n_labels, -1, np.int64)
+        # zeroed lazily by the system: the pages of tiles never opened are never touched
+        self.c = np.zeros((n_tiles, tile, tile), np.int32)
+        self.s = np.zeros((n_tiles, tile, tile), np.int64)
+        self.opened = np.zeros(n_tiles, np.bool_)
+        self.exclusive = np.zeros(n_labels, np.int64)
+        self.lost = int(
+            _open_thin_tiles(tile, self.tw, self.mask, *self._state(), self.full, self.opened)
+        )
+
+    def _state(self) -> tuple:
+        return (
+            self.buf,
+            self.lo,
+            self.hi,
+            self.start,
+            self.owners,
+            self.alias,
+            self.alive,
+            self.stamp,
+            self.c,
+            self.s,
+            self.exclusive,
+        )
 
     def remove_label(self, old: int) -> int:
         """Remove the disks of all points labelled ``old``; returns the newly uncovered area.
 
         The pruning knows the label of the branch it removes, so no point is looked at.
         """
-        lost = _remove_owner(self.c, self.s, self.runs[old], old, self.exclusive)
-        self.runs[old] = self.runs[old][:0]
+        buf, lo, hi, start, owners, alias, alive, stamp, c, s, excl = self._state()
+        lost = int(
+            _remove_owner(
+                old,
+                self.tile,
+                self.tw,
+                self.mask,
+                buf,
+                lo,
+                hi,
+                self.tiles,
+                self.tlo,
+                self.thi,
+                start,
+                owners,
+                alias,
+                alive,
+                stamp,
+                c,
+                s,
+                excl,
+                self.full,
+                self.opened,
+            )
+        )
+        self.hi[old] = self.lo[old]
+        self.thi[old] = self.tlo[old]
         self.lost += lost
         return lost
 
     def merge_label(self, old: int, new: int) -> None:
         """Give all points labelled ``old`` the label ``new``."""
-        if old == new or len(self.runs[old]) == 0:
+        if old == new or self.hi[old] == self.lo[old]:
             return
-        self.exclusive[new] += _merge_owner(
-            self.c, self.s, self.runs[old], self.runs[new], old, new
+        moved = self.buf[self.lo[old] : self.hi[old]]
+        kept = self.buf[self.lo[new] : self.hi[new]]
+        self.exclusive[new] += _merge_pixels(
+            self.c, self.s, self.opened, self.tile, self.tw, moved, kept, old, new
         )
-        self.runs[new] = union(self.runs[new], self.runs[old])
-        self.runs[old] = self.runs[old][:0]
+        merged = union(kept, moved)
+        self._append_runs(new, merged)
+        self.alias[old] = new
+        self.alive[old] = False
+        need = self.thi[old] - self.tlo[old] + self.thi[new] - self.tlo[new]
+        if self.tused + need > self.tiles.size:
+            bigger = np.empty(2 * (self.tused + need), np.int64)
+            bigger[: self.tused] = self.tiles[: self.tused]
+            self.tiles = bigger
+        end, lost = _merge_tiles(
+            self.tiles,
+            self.tused,
+            old,
+            new,
+            self.tile,
+            self.tw,
+            self.mask,
+            *self._state()[:3],
+            self.tiles,
+            self.tlo,
+            self.thi,
+            *self._state()[3:],
+            self.full,
+            self.opened,
+        )
+        self.tlo[new], self.thi[new] = self.tused, end
+        self.tused = end
+        self.thi[old] = self.tlo[old]
+        self.hi[old] = self.lo[old]
+        self.lost += int(lost)
+
+    def _append_runs(self, owner: int, runs: np.ndarray) -> None:
+        if self.used + len(runs) > len(self.buf):
+            bigger = np.empty((2 * (self.used + len(runs)), 3), np.int64)
+            bigger[: self.used] = self.buf[: self.used]
+            self.buf = bigger
+        self.buf[self.used : self.used + len(runs)] = runs
+        self.lo[owner], self.hi[owner] = self.used, self.used + len(runs)
+        self.used += len(runs)
+
+    def counts(self) -> np.ndarray:
+        """Owners per pixel where the tiles are open, -1 in the closed ones (where every
+        pixel has two owners or more): for checks."""
+        h, w, t = self.mask.shape[0], self.mask.shape[1], self.tile
+        grid = self.c.reshape(self.th, self.tw, t, t).transpose(0, 2, 1, 3)
+        out = grid.reshape(self.th * t, self.tw * t).copy()
+        shut = np.repeat(np.repeat(~self.opened.reshape(self.th, self.tw), t, 0), t, 1)
+        out[shut] = -1
+        return out[:h, :w]
+
+    def uncovered(self) -> np.ndarray:
+        """Flat indices (raster order) of the pixels of ``D`` no disk covers."""
+        return np.flatnonzero(self.mask & (self.counts() == 0))

@@ -157,7 +157,7 @@ def bayesian_sequence(
         start, [], [cov.lost], [graph.na], [graph.nd], area, alpha, lbar, end=graph
     )
     if uncovered:
-        seq.uncovered = np.flatnonzero(mask & (cov.c == 0))
+        seq.uncovered = cov.uncovered()
     if alpha is None and order is None:
         return seq
     # Per-branch arrays, so that one compiled call ranks all candidates of a step.

@@ -113,21 +113,27 @@ def brute_state(rows, cols, r2, labels, alive, n_labels):
     return count, exclusive, int((count == 0).sum())
 
 
+@pytest.mark.parametrize("tile", [4, 8, 32])
 @pytest.mark.parametrize("seed", range(16))
-def test_coverage_against_brute_force(seed):
-    """Random removals and merges of whole owners keep the exact coverage."""
+def test_coverage_against_brute_force(seed, tile):
+    """Random removals and merges of whole owners keep the exact coverage: the counts of
+    the open tiles, two owners or more in the closed ones, the exclusive and lost areas."""
     rng = np.random.default_rng(300 + seed)
     n_labels = 8
     rows, cols, r2 = random_disks(rng, 60, walk=seed % 2 == 0)
     labels = rng.integers(1, n_labels, rows.size)
     mask = np.ones(SHAPE, bool)
-    cov = Coverage(mask, rows, cols, r2, labels, n_labels)
+    cov = Coverage(mask, rows, cols, r2, labels, n_labels, tile=tile)
     alive = np.ones(rows.size, bool)
     labels = labels.copy()
 
     def check():
         count, exclusive, lost = brute_state(rows, cols, r2, labels, alive, n_labels)
-        np.testing.assert_array_equal(cov.c, count)
+        counts = cov.counts()
+        shut = counts == -1
+        np.testing.assert_array_equal(counts[~shut], count[~shut])
+        assert (count[shut] >= 2).all()
+        np.testing.assert_array_equal(cov.uncovered(), np.flatnonzero(count == 0))
         live = np.unique(labels[alive])
         np.testing.assert_array_equal(cov.exclusive[live], exclusive[live])
         assert cov.lost == lost

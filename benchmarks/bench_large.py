@@ -75,10 +75,12 @@ def _drawn(name: str, size: int) -> np.ndarray:
     if name == "apple":  # round, a dimple at the top and one at the bottom, a stem
         body = _polar(
             size,
-            lambda t: 0.86
-            - 0.16 * np.exp(-(((t - np.pi / 2) / 0.35) ** 2))
-            - 0.05 * np.exp(-(((t + np.pi / 2) / 0.3) ** 2))
-            + 0.04 * np.cos(2 * t),
+            lambda t: (
+                0.86
+                - 0.16 * np.exp(-(((t - np.pi / 2) / 0.35) ** 2))
+                - 0.05 * np.exp(-(((t + np.pi / 2) / 0.3) ** 2))
+                + 0.04 * np.cos(2 * t)
+            ),
         )
         stem = (np.abs(xx - 0.03 + 0.1 * (yy + 0.8)) < 0.03) & (yy > -0.95) & (yy < -0.6)
         return body | stem

@@ -48,7 +48,9 @@ def coverage(shape_h: int, shape_w: int, rows, cols, r2s):
     """Counts of the disks ``(rows[k], cols[k], r2s[k])`` over an ``(h, w)`` grid.
 
     Painted as +1/-1 at the ends of every disk row and summed along the rows, so
-    the cost is the disks' heights, not their areas.
+    the cost is the disks' heights, not their areas. The disks are painted in raster
+    order of their centres: neighbours' disks write to the same cache lines, where an
+    order by radius scatters the writes over the whole array (3× slower on a blob).
 
     Returns
     -------
@@ -57,13 +59,18 @@ def coverage(shape_h: int, shape_w: int, rows, cols, r2s):
     nb = (shape_w + BLOCK - 1) // BLOCK
     wide = nb * BLOCK
     cover = np.zeros((shape_h, wide + 1), dtype=np.int32)
-    for k in range(rows.size):
+    for k in np.argsort((rows >> 4) * (wide + 1) + (cols >> 4)):
         r, c, v = rows[k], cols[k], r2s[k]
         h = isqrt(v - 1)
-        for dy in range(-h, h + 1):
-            w = disk_half_width(v, dy)
+        w = h  # the half width, walked down from the middle row: no square root a row
+        for dy in range(h + 1):
+            while w * w > v - 1 - dy * dy:
+                w -= 1
             cover[r + dy, c - w] += 1
             cover[r + dy, c + w + 1] -= 1
+            if dy:
+                cover[r - dy, c - w] += 1
+                cover[r - dy, c + w + 1] -= 1
     for y in range(shape_h):
         run = 0
         for x in range(wide):

@@ -11,11 +11,19 @@ simplicity and reconstruction error", Science China Information Sciences, 2013.
  'version', 'width']
 >>> doc["version"] == {"library": skelprune.__version__, "algorithm": ALGORITHM_VERSION}
 True
+
+The names below are imported when first used (``import skelprune`` alone loads neither
+numba nor scipy): a command line that prints its help, or a program that only needs the
+errors, does not pay for the pipeline.
 """
+
+import importlib
+import sys
+import types
+from typing import TYPE_CHECKING, Any
 
 from ._version import ALGORITHM_VERSION
 from ._version import __version__ as __version__
-from .api import components, prune
 from .errors import (
     EmptyMaskError,
     ImageTooLargeError,
@@ -24,12 +32,64 @@ from .errors import (
     InvalidPolygonError,
     SkelpruneError,
 )
-from .graph import BranchGraph
-from .io.frame import PixelFrame
-from .matching import Match, SkeletonDescriptor, UnmatchableShapeError, describe, match
-from .medial_axis import MedialAxis, medial_axis, squared_distance
-from .output.document import ComponentResult, PruneResult
-from .reconstruction import reconstruction, reconstruction_error
+
+if TYPE_CHECKING:
+    from .api import components, prune
+    from .graph import BranchGraph
+    from .io.frame import PixelFrame
+    from .matching import Match, SkeletonDescriptor, UnmatchableShapeError, describe, match
+    from .medial_axis import MedialAxis, medial_axis, squared_distance
+    from .output.document import ComponentResult, PruneResult
+    from .reconstruction import reconstruction, reconstruction_error
+
+#: Where each lazily imported name lives (a submodule of this package).
+_LAZY = {
+    "components": "api",
+    "prune": "api",
+    "BranchGraph": "graph",
+    "PixelFrame": "io.frame",
+    "Match": "matching",
+    "SkeletonDescriptor": "matching",
+    "UnmatchableShapeError": "matching",
+    "describe": "matching",
+    "match": "matching",
+    "MedialAxis": "medial_axis",
+    "medial_axis": "medial_axis",
+    "squared_distance": "medial_axis",
+    "ComponentResult": "output.document",
+    "PruneResult": "output.document",
+    "reconstruction": "reconstruction",
+    "reconstruction_error": "reconstruction",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
+
+class _Package(types.ModuleType):
+    """The package, whose names ``medial_axis`` and ``reconstruction`` stay the functions.
+
+    Importing a submodule binds it on its package; the submodules of these two names
+    would then hide the functions of the same names, which the package exported (and
+    bound last) when it imported everything at once.
+    """
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if isinstance(value, types.ModuleType) and _LAZY.get(name) == name:
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
 
 __all__ = [
     "ALGORITHM_VERSION",

@@ -7,8 +7,8 @@ from dataclasses import replace
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
-from scipy import ndimage
 
+from ._label import components8
 from .errors import EmptyMaskError, InvalidOptionError
 from .io.foreground import select
 from .options import DEFAULT_MIN_MARGIN, METHODS, PruneOptions, RasterOptions, check_option
@@ -32,8 +32,6 @@ if TYPE_CHECKING:
 
 __all__ = ["METHODS", "components", "prune", "prune_component", "prune_raster"]
 
-EIGHT = np.ones((3, 3), dtype=bool)
-
 
 def components(mask: np.ndarray) -> list[tuple[np.ndarray, tuple[int, int]]]:
     """8-connected components as padded crops with their origin in the image.
@@ -41,12 +39,7 @@ def components(mask: np.ndarray) -> list[tuple[np.ndarray, tuple[int, int]]]:
     Each crop has one background pixel all around (so shapes touching the image
     border work) and holds only its own component.
     """
-    labels, _n = ndimage.label(mask, structure=EIGHT)
-    out = []
-    for k, sl in enumerate(ndimage.find_objects(labels), start=1):
-        crop = np.pad(labels[sl] == k, 1)
-        out.append((crop, (sl[0].start - 1, sl[1].start - 1)))
-    return out
+    return components8(mask)
 
 
 def dce_support(medial: Skeleton, n_vertices: int | None, threshold: float | None) -> np.ndarray:

@@ -18,11 +18,9 @@ import enum
 import json
 import os
 import sys
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
-import numpy as np
 import typer
 import typer.core
 from typer.exceptions import TyperException
@@ -43,8 +41,15 @@ from .options import (
 if TYPE_CHECKING:
     from .output.document import PruneResult
 
+# A command imports what it uses, in its own body: `--help` and `--version` load typer and
+# the option definitions only (numpy, numba and the pipeline come with `prune` and co.).
+
+# rich_markup_mode=None: click's plain help, without importing rich (0.4 s of `--help`)
 app = typer.Typer(
-    add_completion=False, no_args_is_help=True, help="Parameter-free Bayesian skeleton pruning."
+    add_completion=False,
+    no_args_is_help=True,
+    rich_markup_mode=None,
+    help="Parameter-free Bayesian skeleton pruning.",
 )
 
 
@@ -292,6 +297,8 @@ def prune_command(
         return
     if overlay is not None:
         raise _usage("--overlay takes one input file")
+    from concurrent.futures import ProcessPoolExecutor
+
     from tqdm import tqdm
 
     n = workers or os.cpu_count() or 1
@@ -397,6 +404,9 @@ def retrieve_command(
 ) -> None:
     """Match every shape with every other and print, per shape, its closest ones as JSON
     lines: {"file", "top": [{"file", "distance"}, ...]} (or {"file", "error"})."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    import numpy as np
     from tqdm import tqdm
 
     from .matching import distance_matrix

@@ -22,9 +22,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 from numba.extending import register_jitable
-from scipy import ndimage
 
 from ._digital import NEIGHBOURS
+from ._label import label8
 
 __all__ = ["SQRT2", "Branch", "BranchGraph", "step_length"]
 
@@ -261,7 +261,7 @@ class BranchGraph:
         if jpix.size:
             img = np.zeros(shape, bool)
             img[self.rows[jpix], self.cols[jpix]] = True
-            lab, _ = ndimage.label(img, structure=np.ones((3, 3), bool))
+            lab, _ = label8(img)
             raw = lab[self.rows[jpix], self.cols[jpix]]
             _, first, inverse = np.unique(raw, return_index=True, return_inverse=True)
             order = np.argsort(np.argsort(first))

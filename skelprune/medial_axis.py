@@ -19,7 +19,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
-from scipy import ndimage
 
 from ._digital import (
     DEGREE,
@@ -64,6 +63,8 @@ def squared_distance(padded: np.ndarray) -> np.ndarray:
     """
     padded = np.asarray(padded, dtype=np.bool_)
     if padded.all():  # no background to measure from: scipy's convention
+        from scipy import ndimage
+
         d = ndimage.distance_transform_edt(padded)
         return np.rint(d * d).astype(np.int64)
     return _squared_edt(padded)

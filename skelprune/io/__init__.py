@@ -6,19 +6,56 @@ taking as the shape what :mod:`.foreground`'s rule says,
 :func:`polygon_mask` rasterises GeoJSON polygons (:mod:`.polygon`; :func:`polygon_raster`
 keeps the polygon and the topology check's warnings, :mod:`.fit` fits the pixel size), and
 :class:`PixelFrame` maps pixel results back to the polygon's coordinates (:mod:`.frame`).
+
+The names are imported when first used: the pipeline needs the frame and the foreground
+rules, not the polygon machinery (shapely, OpenCV).
 """
 
-from .foreground import Foreground
-from .frame import IDENTITY, PixelFrame
-from .png import PNG_SIGNATURE, check_png_size, png_size, read_mask, read_shape
-from .polygon import (
-    DEFAULT_LONGEST_SIDE,
-    PolygonRaster,
-    parse_geojson,
-    polygon_mask,
-    polygon_raster,
-    rasterize,
-)
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .foreground import Foreground
+    from .frame import IDENTITY, PixelFrame
+    from .png import PNG_SIGNATURE, check_png_size, png_size, read_mask, read_shape
+    from .polygon import (
+        DEFAULT_LONGEST_SIDE,
+        PolygonRaster,
+        parse_geojson,
+        polygon_mask,
+        polygon_raster,
+        rasterize,
+    )
+
+_LAZY = {
+    "Foreground": "foreground",
+    "IDENTITY": "frame",
+    "PixelFrame": "frame",
+    "PNG_SIGNATURE": "png",
+    "check_png_size": "png",
+    "png_size": "png",
+    "read_mask": "png",
+    "read_shape": "png",
+    "DEFAULT_LONGEST_SIDE": "polygon",
+    "PolygonRaster": "polygon",
+    "polygon_raster": "polygon",
+    "parse_geojson": "polygon",
+    "polygon_mask": "polygon",
+    "rasterize": "polygon",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "DEFAULT_LONGEST_SIDE",

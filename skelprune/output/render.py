@@ -6,8 +6,6 @@ from __future__ import annotations
 import io
 
 import numpy as np
-from PIL import Image
-from scipy import ndimage
 
 from ..reconstruction import reconstruction
 
@@ -59,7 +57,7 @@ def _mark(
 
 def _legend(img: np.ndarray, text: str) -> np.ndarray:
     """The image with a white strip below holding ``text`` (and the colour key)."""
-    from PIL import ImageDraw, ImageFont
+    from PIL import Image, ImageDraw, ImageFont
 
     width = img.shape[1]
     size = max(12, width // 45)
@@ -129,6 +127,8 @@ def render_overlay(
     line = np.zeros(mask.shape, bool)
     line[rows, cols] = True
     if widen:
+        from scipy import ndimage  # only for large pictures: kept off the import path
+
         line = ndimage.binary_dilation(line, iterations=widen)
     img[line] = COLOURS["skeleton"]
     if scale > 1:
@@ -142,6 +142,8 @@ def render_overlay(
 
 def encode_png(rgb: np.ndarray) -> bytes:
     """PNG bytes of an RGB image."""
+    from PIL import Image  # only when a picture is asked for: kept off the import path
+
     buf = io.BytesIO()
     Image.fromarray(rgb).save(buf, format="PNG", optimize=False)
     return buf.getvalue()

@@ -1,0 +1,160 @@
+"""8-connected components of a binary image, on its row runs.
+
+The pipeline needs the components of the input mask (each is pruned on its own) and the
+clusters of junction pixels of a skeleton. ``scipy.ndimage.label`` does both, but
+importing ``scipy.ndimage`` costs a fresh process a good share of its first ``prune()``;
+these kernels load from numba's cache with the others, and work on row runs (a run per
+row and component, not an array of labels per pixel).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["components8", "label8"]
+
+
+@njit(cache=True, inline="always")
+def _root(parent, i):
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+@njit(cache=True)
+def _runs(mask):
+    """Row runs of ``mask`` (row, first, last column) in raster order, and the component
+    of each, numbered in the raster order of the components' first pixels."""
+    h, w = mask.shape
+    n = 0
+    for y in range(h):
+        inside = False
+        for x in range(w):
+            if mask[y, x] and not inside:
+                n += 1
+            inside = mask[y, x]
+    runs = np.empty((n, 3), np.int64)
+    k = 0
+    for y in range(h):
+        x = 0
+        while x < w:
+            if mask[y, x]:
+                a = x
+                while x < w and mask[y, x]:
+                    x += 1
+                runs[k, 0], runs[k, 1], runs[k, 2] = y, a, x - 1
+                k += 1
+            else:
+                x += 1
+    parent = np.arange(n)
+    # runs of consecutive rows touch (8-connectivity) iff their columns overlap when
+    # widened by one: a sweep over the two rows
+    prev = 0  # the first run of the previous row
+    cur = 0
+    while cur < n:
+        y = runs[cur, 0]
+        end = cur
+        while end < n and runs[end, 0] == y:
+            end += 1
+        while prev < cur and runs[prev, 0] < y - 1:
+            prev += 1
+        i = prev
+        for j in range(cur, end):
+            while i < cur and runs[i, 2] + 1 < runs[j, 1]:
+                i += 1
+            t = i
+            while t < cur and runs[t, 1] <= runs[j, 2] + 1:
+                ra, rb = _root(parent, t), _root(parent, j)
+                if ra != rb:  # the smaller index (earlier run) stays the root
+                    parent[max(ra, rb)] = min(ra, rb)
+                t += 1
+        prev = cur
+        cur = end
+    comp = np.empty(n, np.int64)
+    count = 0
+    for k in range(n):
+        r = _root(parent, k)
+        if r == k:
+            comp[k] = count
+            count += 1
+        else:
+            comp[k] = comp[r]  # r < k: numbered already
+    return runs, comp, count
+
+
+def label8(mask: np.ndarray) -> tuple[np.ndarray, int]:
+    """Label the 8-connected components of ``mask`` 1, 2, … in the raster order of their
+    first pixels; 0 is the background. The labels of ``scipy.ndimage.label`` with a 3 × 3
+    structure.
+
+    Examples
+    --------
+    >>> m = np.array([[1, 0, 0, 1], [0, 1, 0, 1], [0, 0, 0, 0], [1, 1, 0, 0]], bool)
+    >>> lab, n = label8(m)
+    >>> n, lab.tolist()
+    (3, [[1, 0, 0, 2], [0, 1, 0, 2], [0, 0, 0, 0], [3, 3, 0, 0]])
+    """
+    runs, comp, n = _runs(np.ascontiguousarray(mask, dtype=np.bool_))
+    out = np.zeros(np.shape(mask), np.int32)
+    _paint(out, runs, comp)
+    return out, int(n)
+
+
+@njit(cache=True)
+def _paint(out, runs, comp):
+    for k in range(runs.shape[0]):
+        out[runs[k, 0], runs[k, 1] : runs[k, 2] + 1] = comp[k] + 1
+
+
+@njit(cache=True)
+def _crops(runs, comp, n):
+    """Each component's box (top, left, bottom, right) and its runs grouped (CSR)."""
+    box = np.empty((n, 4), np.int64)
+    box[:, 0] = box[:, 1] = np.iinfo(np.int64).max
+    box[:, 2] = box[:, 3] = -1
+    start = np.zeros(n + 1, np.int64)
+    for k in range(runs.shape[0]):
+        c = comp[k]
+        start[c + 1] += 1
+        box[c, 0] = min(box[c, 0], runs[k, 0])
+        box[c, 1] = min(box[c, 1], runs[k, 1])
+        box[c, 2] = max(box[c, 2], runs[k, 0])
+        box[c, 3] = max(box[c, 3], runs[k, 2])
+    for c in range(n):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    order = np.empty(runs.shape[0], np.int64)
+    for k in range(runs.shape[0]):
+        order[fill[comp[k]]] = k
+        fill[comp[k]] += 1
+    return box, start, order
+
+
+def components8(mask: np.ndarray) -> list[tuple[np.ndarray, tuple[int, int]]]:
+    """Each 8-connected component of ``mask`` (in :func:`label8`'s order) as a crop of its
+    bounding box padded with one background pixel all around, and the image position of
+    the crop's corner.
+
+    Examples
+    --------
+    >>> m = np.zeros((4, 5), bool); m[0, 0] = m[2, 2:4] = True
+    >>> [(c.shape, o) for c, o in components8(m)]
+    [((3, 3), (-1, -1)), ((3, 4), (1, 1))]
+    """
+    runs, comp, n = _runs(np.ascontiguousarray(mask, dtype=np.bool_))
+    box, start, order = _crops(runs, comp, n)
+    out = []
+    for c in range(n):
+        top, left, bottom, right = box[c].tolist()
+        crop = np.zeros((bottom - top + 3, right - left + 3), bool)
+        _paint_crop(crop, runs, order[start[c] : start[c + 1]], top - 1, left - 1)
+        out.append((crop, (top - 1, left - 1)))
+    return out
+
+
+@njit(cache=True)
+def _paint_crop(crop, runs, which, top, left):
+    for k in which:
+        crop[runs[k, 0] - top, runs[k, 1] - left : runs[k, 2] - left + 1] = True

@@ -9,14 +9,24 @@ process, so that its peak memory is its own; in the same process and on the same
 ``scipy.ndimage.distance_transform_edt`` is timed as the yardstick (the pipeline needs
 an exact distance transform anyway, so it cannot be faster than that).
 
-``python -m benchmarks large`` (about four minutes on one core).
+The drawn shapes (apple, heart, cup, holed blob) are rasterised small and scaled up, as
+a scanned silhouette is: their softened staircase boundary gives hundreds of branches
+with huge disks, the slow case for the pruning. After the table, the slowest shape is run
+once more under cProfile and its top entries printed.
+
+``python -m benchmarks large`` (about ten minutes on one core).
 """
 
 from __future__ import annotations
 
+import cProfile
+import io
 import multiprocessing as mp
+import pstats
 import resource
 import time
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -128,17 +138,43 @@ def _run(name: str, size: int, repeat: int, out: mp.Queue) -> None:
     out.put((float(np.median(total)), float(np.median(edt)), axis, rss))
 
 
-def main() -> None:
+def _profile(name: str, size: int, out: mp.Queue) -> None:
+    import skelprune
+
+    skelprune.prune(blob("filled square", 64))  # loads the compiled kernels
+    mask = blob(name, size)
+    prof = cProfile.Profile()
+    prof.enable()
+    skelprune.prune(mask).to_dict()
+    prof.disable()
+    text = io.StringIO()
+    pstats.Stats(prof, stream=text).sort_stats("tottime").print_stats(PROFILE_TOP)
+    out.put(text.getvalue())
+
+
+#: Entries of the slowest shape's profile that are printed.
+PROFILE_TOP = 10
+
+
+def _in_process(target: Callable[..., None], *args: object) -> Any:
+    """Run ``target(*args, queue)`` in a fresh process; return what it put."""
     ctx = mp.get_context("spawn")
+    out: mp.Queue = ctx.Queue()
+    proc = ctx.Process(target=target, args=(*args, out))
+    proc.start()
+    answer = out.get()
+    proc.join()
+    return answer
+
+
+def main() -> None:
     rows = []
+    slowest = (0.0, "", 0)
     for size in SIZES:
         repeat = 3 if size <= 2048 else 1
         for name in SHAPES:
-            out: mp.Queue = ctx.Queue()
-            proc = ctx.Process(target=_run, args=(name, size, repeat, out))
-            proc.start()
-            total, edt, axis, rss = out.get()
-            proc.join()
+            total, edt, axis, rss = _in_process(_run, name, size, repeat)
+            slowest = max(slowest, (total, name, size))
             rows.append(
                 [
                     f"{size} px",
@@ -165,3 +201,8 @@ def main() -> None:
         )
     )
     print("\nmedian of 3 runs at 1024 and 2048 px, one run at 4096 px; one core")
+    _, name, size = slowest
+    lines = _in_process(_profile, name, size).splitlines()
+    top = [line for line in lines if line.strip()][-PROFILE_TOP - 1 :]
+    print(f"\nslowest: {name} at {size} px, cProfile, top {PROFILE_TOP} by own time:\n")
+    print("\n".join(top))

@@ -24,9 +24,11 @@ def _root(parent, i):
 
 
 @njit(cache=True)
-def _runs(mask):
-    """Row runs of ``mask`` (row, first, last column) in raster order, and the component
-    of each, numbered in the raster order of the components' first pixels."""
+def _components(mask):
+    """Row runs of ``mask`` (row, first, last column) in raster order, the component of
+    each (numbered in the raster order of the components' first pixels), the count, and
+    each component's box (top, left, bottom, right). One kernel: each kernel a fresh
+    process loads from the cache costs it time."""
     h, w = mask.shape
     n = 0
     for y in range(h):
@@ -81,7 +83,25 @@ def _runs(mask):
             count += 1
         else:
             comp[k] = comp[r]  # r < k: numbered already
-    return runs, comp, count
+    box = np.empty((count, 4), np.int64)
+    for c in range(count):
+        box[c, 0] = box[c, 1] = h + w
+        box[c, 2] = box[c, 3] = -1
+    for k in range(n):
+        c = comp[k]
+        box[c, 0] = min(box[c, 0], runs[k, 0])
+        box[c, 1] = min(box[c, 1], runs[k, 1])
+        box[c, 2] = max(box[c, 2], runs[k, 0])
+        box[c, 3] = max(box[c, 3], runs[k, 2])
+    return runs, comp, count, box
+
+
+def _pixels(runs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rows and columns of the pixels of ``runs``, and the index of each one's run."""
+    lengths = runs[:, 2] - runs[:, 1] + 1
+    which = np.repeat(np.arange(len(runs)), lengths)
+    first = np.cumsum(lengths) - lengths
+    return runs[which, 0], runs[which, 1] + np.arange(which.size) - first[which], which
 
 
 def label8(mask: np.ndarray) -> tuple[np.ndarray, int]:
@@ -96,40 +116,11 @@ def label8(mask: np.ndarray) -> tuple[np.ndarray, int]:
     >>> n, lab.tolist()
     (3, [[1, 0, 0, 2], [0, 1, 0, 2], [0, 0, 0, 0], [3, 3, 0, 0]])
     """
-    runs, comp, n = _runs(np.ascontiguousarray(mask, dtype=np.bool_))
+    runs, comp, n, _ = _components(np.ascontiguousarray(mask, dtype=np.bool_))
     out = np.zeros(np.shape(mask), np.int32)
-    _paint(out, runs, comp)
+    rows, cols, which = _pixels(runs)
+    out[rows, cols] = comp[which] + 1
     return out, int(n)
-
-
-@njit(cache=True)
-def _paint(out, runs, comp):
-    for k in range(runs.shape[0]):
-        out[runs[k, 0], runs[k, 1] : runs[k, 2] + 1] = comp[k] + 1
-
-
-@njit(cache=True)
-def _crops(runs, comp, n):
-    """Each component's box (top, left, bottom, right) and its runs grouped (CSR)."""
-    box = np.empty((n, 4), np.int64)
-    box[:, 0] = box[:, 1] = np.iinfo(np.int64).max
-    box[:, 2] = box[:, 3] = -1
-    start = np.zeros(n + 1, np.int64)
-    for k in range(runs.shape[0]):
-        c = comp[k]
-        start[c + 1] += 1
-        box[c, 0] = min(box[c, 0], runs[k, 0])
-        box[c, 1] = min(box[c, 1], runs[k, 1])
-        box[c, 2] = max(box[c, 2], runs[k, 0])
-        box[c, 3] = max(box[c, 3], runs[k, 2])
-    for c in range(n):
-        start[c + 1] += start[c]
-    fill = start[:-1].copy()
-    order = np.empty(runs.shape[0], np.int64)
-    for k in range(runs.shape[0]):
-        order[fill[comp[k]]] = k
-        fill[comp[k]] += 1
-    return box, start, order
 
 
 def components8(mask: np.ndarray) -> list[tuple[np.ndarray, tuple[int, int]]]:
@@ -143,18 +134,14 @@ def components8(mask: np.ndarray) -> list[tuple[np.ndarray, tuple[int, int]]]:
     >>> [(c.shape, o) for c, o in components8(m)]
     [((3, 3), (-1, -1)), ((3, 4), (1, 1))]
     """
-    runs, comp, n = _runs(np.ascontiguousarray(mask, dtype=np.bool_))
-    box, start, order = _crops(runs, comp, n)
+    runs, comp, n, box = _components(np.ascontiguousarray(mask, dtype=np.bool_))
+    order = np.argsort(comp, kind="stable")
+    ends = np.searchsorted(comp[order], np.arange(n + 1))
     out = []
     for c in range(n):
         top, left, bottom, right = box[c].tolist()
         crop = np.zeros((bottom - top + 3, right - left + 3), bool)
-        _paint_crop(crop, runs, order[start[c] : start[c + 1]], top - 1, left - 1)
+        rows, cols, _ = _pixels(runs[order[ends[c] : ends[c + 1]]])
+        crop[rows - top + 1, cols - left + 1] = True
         out.append((crop, (top - 1, left - 1)))
     return out
-
-
-@njit(cache=True)
-def _paint_crop(crop, runs, which, top, left):
-    for k in which:
-        crop[runs[k, 0] - top, runs[k, 1] - left : runs[k, 2] - left + 1] = True

@@ -447,6 +447,111 @@ def _merge_tiles(
     return m, lost
 
 
+@njit(cache=True)
+def _build(rows, cols, r2, labels, n_labels, tile, tw, mask, c, s):
+    """Everything :class:`Coverage` starts with, in one kernel (each kernel a fresh
+    process loads from the cache costs it time). ``c`` and ``s`` come zeroed from the
+    caller, whose allocation leaves the pages of tiles never opened untouched."""
+    runs, offsets = owner_runs(rows, cols, r2, labels, n_labels)
+    tiles, toff = _owner_tiles(runs, offsets, tile, tw)
+    n_tiles = c.shape[0]
+    start, owners, full = _tile_owners(tiles, toff, n_tiles)
+    lo, hi = offsets[:-1].copy(), offsets[1:].copy()
+    tlo, thi = toff[:-1].copy(), toff[1:].copy()
+    alias = np.arange(n_labels)
+    alive = np.ones(n_labels, np.bool_)
+    stamp = np.full(n_labels, -1, np.int64)
+    opened = np.zeros(n_tiles, np.bool_)
+    excl = np.zeros(n_labels, np.int64)
+    lost = _open_thin_tiles(
+        tile, tw, mask, runs, lo, hi, start, owners, alias, alive, stamp, c, s, excl, full, opened
+    )
+    return (
+        runs,
+        lo,
+        hi,
+        tiles,
+        tlo,
+        thi,
+        start,
+        owners,
+        full,
+        alias,
+        alive,
+        stamp,
+        opened,
+        excl,
+        lost,
+    )
+
+
+@njit(cache=True)
+def _merge(
+    old,
+    new,
+    mlo,
+    mhi,
+    tile,
+    tw,
+    mask,
+    buf,
+    lo,
+    hi,
+    tiles,
+    tused,
+    tlo,
+    thi,
+    start,
+    owners,
+    alias,
+    alive,
+    stamp,
+    c,
+    s,
+    excl,
+    full,
+    opened,
+):
+    """Owner ``old`` joins owner ``new``, whose merged runs are ``buf[mlo:mhi]``: the
+    pixels of the open tiles, then the tiles (written from ``tiles[tused:]``). Returns
+    the new end of ``tiles`` and the pixels left uncovered by the tiles it opened."""
+    excl[new] += _merge_pixels(
+        c, s, opened, tile, tw, buf[lo[old] : hi[old]], buf[lo[new] : hi[new]], old, new
+    )
+    lo[new], hi[new] = mlo, mhi
+    alias[old] = new
+    alive[old] = False
+    end, lost = _merge_tiles(
+        tiles,
+        tused,
+        old,
+        new,
+        tile,
+        tw,
+        mask,
+        buf,
+        lo,
+        hi,
+        tiles,
+        tlo,
+        thi,
+        start,
+        owners,
+        alias,
+        alive,
+        stamp,
+        c,
+        s,
+        excl,
+        full,
+        opened,
+    )
+    tlo[new], thi[new] = tused, end
+    thi[old] = tlo[old]
+    hi[old] = lo[old]
+    return end, lost
+
+
 class Coverage:
     """Incremental coverage of a shape by labelled skeleton disks.
 
@@ -496,35 +601,44 @@ class Coverage:
     """
 
     def __init__(self, mask, rows, cols, r2, labels, n_labels: int, tile: int = COVER_TILE) -> None:
-        runs, offsets = owner_runs(
-            np.asarray(rows, np.int64),
-            np.asarray(cols, np.int64),
-            np.asarray(r2, np.int64),
-            np.asarray(labels, np.int64),
-            n_labels,
-        )
         self.mask = np.ascontiguousarray(mask, dtype=np.bool_)
         h, w = self.mask.shape
         self.tile = tile
         self.th, self.tw = -(-h // tile), -(-w // tile)
         n_tiles = self.th * self.tw
-        self.buf, self.used = runs, runs.shape[0]
-        self.lo, self.hi = offsets[:-1].copy(), offsets[1:].copy()
-        self.tiles, toff = _owner_tiles(runs, offsets, tile, self.tw)
-        self.tused = self.tiles.size
-        self.tlo, self.thi = toff[:-1].copy(), toff[1:].copy()
-        self.start, self.owners, self.full = _tile_owners(self.tiles, toff, n_tiles)
-        self.alias = np.arange(n_labels, dtype=np.int64)
-        self.alive = np.ones(n_labels, np.bool_)
-        self.stamp = np.full(n_labels, -1, np.int64)
         # zeroed lazily by the system: the pages of tiles never opened are never touched
         self.c = np.zeros((n_tiles, tile, tile), np.int32)
         self.s = np.zeros((n_tiles, tile, tile), np.int64)
-        self.opened = np.zeros(n_tiles, np.bool_)
-        self.exclusive = np.zeros(n_labels, np.int64)
-        self.lost = int(
-            _open_thin_tiles(tile, self.tw, self.mask, *self._state(), self.full, self.opened)
+        (
+            self.buf,
+            self.lo,
+            self.hi,
+            self.tiles,
+            self.tlo,
+            self.thi,
+            self.start,
+            self.owners,
+            self.full,
+            self.alias,
+            self.alive,
+            self.stamp,
+            self.opened,
+            self.exclusive,
+            lost,
+        ) = _build(
+            np.asarray(rows, np.int64),
+            np.asarray(cols, np.int64),
+            np.asarray(r2, np.int64),
+            np.asarray(labels, np.int64),
+            n_labels,
+            tile,
+            self.tw,
+            self.mask,
+            self.c,
+            self.s,
         )
+        self.used, self.tused = self.buf.shape[0], self.tiles.size
+        self.lost = int(lost)
 
     def _state(self) -> tuple:
         return (
@@ -580,50 +694,47 @@ class Coverage:
         """Give all points labelled ``old`` the label ``new``."""
         if old == new or self.hi[old] == self.lo[old]:
             return
-        moved = self.buf[self.lo[old] : self.hi[old]]
-        kept = self.buf[self.lo[new] : self.hi[new]]
-        self.exclusive[new] += _merge_pixels(
-            self.c, self.s, self.opened, self.tile, self.tw, moved, kept, old, new
-        )
-        merged = union(kept, moved)
-        self._append_runs(new, merged)
-        self.alias[old] = new
-        self.alive[old] = False
+        merged = union(self.buf[self.lo[new] : self.hi[new]], self.buf[self.lo[old] : self.hi[old]])
+        if self.used + len(merged) > len(self.buf):
+            bigger = np.empty((2 * (self.used + len(merged)), 3), np.int64)
+            bigger[: self.used] = self.buf[: self.used]
+            self.buf = bigger
+        mlo = self.used
+        self.buf[mlo : mlo + len(merged)] = merged
+        self.used += len(merged)
         need = self.thi[old] - self.tlo[old] + self.thi[new] - self.tlo[new]
         if self.tused + need > self.tiles.size:
             bigger = np.empty(2 * (self.tused + need), np.int64)
             bigger[: self.tused] = self.tiles[: self.tused]
             self.tiles = bigger
-        end, lost = _merge_tiles(
-            self.tiles,
-            self.tused,
+        buf, lo, hi, start, owners, alias, alive, stamp, c, s, excl = self._state()
+        self.tused, lost = _merge(
             old,
             new,
+            mlo,
+            self.used,
             self.tile,
             self.tw,
             self.mask,
-            *self._state()[:3],
+            buf,
+            lo,
+            hi,
             self.tiles,
+            self.tused,
             self.tlo,
             self.thi,
-            *self._state()[3:],
+            start,
+            owners,
+            alias,
+            alive,
+            stamp,
+            c,
+            s,
+            excl,
             self.full,
             self.opened,
         )
-        self.tlo[new], self.thi[new] = self.tused, end
-        self.tused = end
-        self.thi[old] = self.tlo[old]
-        self.hi[old] = self.lo[old]
         self.lost += int(lost)
-
-    def _append_runs(self, owner: int, runs: np.ndarray) -> None:
-        if self.used + len(runs) > len(self.buf):
-            bigger = np.empty((2 * (self.used + len(runs)), 3), np.int64)
-            bigger[: self.used] = self.buf[: self.used]
-            self.buf = bigger
-        self.buf[self.used : self.used + len(runs)] = runs
-        self.lo[owner], self.hi[owner] = self.used, self.used + len(runs)
-        self.used += len(runs)
 
     def counts(self) -> np.ndarray:
         """Owners per pixel where the tiles are open, -1 in the closed ones (where every

@@ -64,16 +64,19 @@ class SegmentRaster:
         pts = np.ascontiguousarray(np.asarray(points, dtype=np.int64).reshape(-1, 2))
         self.r2 = np.ascontiguousarray(np.asarray(r2, np.int64).reshape(len(pts)))
         self.tolerance = float(tolerance)
-        bp = np.ascontiguousarray(partition.points, dtype=np.int64)
-        o_r, o_c, h, w = _frame(bp, pts, self.r2, self.tolerance)
         # the smallest integer type that holds the segment ids: the rim scans read
         # these arrays a few pixels a row over thousands of rows, and a smaller type
         # keeps more of them in cache (int16 scans 2-3× faster than int64 at 2048 px)
         kind = np.int16 if partition.n_segments < np.iinfo(np.int16).max else np.int32
-        self.seg_lo = np.full((h, w), np.iinfo(kind).max, kind)
-        self.seg_hi = np.full((h, w), -1, kind)
-        _fill(self.seg_lo, self.seg_hi, bp, np.asarray(partition.segment, np.int64), o_r, o_c)
-        self.local = pts - np.array([o_r, o_c], np.int64)
+        self.seg_lo, self.seg_hi, self.local = _raster(
+            np.ascontiguousarray(partition.points, dtype=np.int64),
+            np.ascontiguousarray(partition.segment, dtype=np.int64),
+            pts,
+            self.r2,
+            self.tolerance,
+            np.zeros(0, kind),
+            np.iinfo(kind).max,
+        )
 
     def labels(self, index: np.ndarray, limit: int = 3) -> np.ndarray:
         """The distinct segment ids around the rims of points ``index``, up to ``limit``.
@@ -158,30 +161,37 @@ def generating_segments(
 
 
 @numba.njit(cache=True)
-def _frame(
-    bp: np.ndarray, pts: np.ndarray, r2: np.ndarray, tolerance: float
-) -> tuple[int, int, int, int]:
-    # The origin and size of a raster that holds the boundary and every point's scan
-    # square, whose half-side is at most ceil(r + tolerance) + 1.
+def _raster(
+    bp: np.ndarray,
+    seg: np.ndarray,
+    pts: np.ndarray,
+    r2: np.ndarray,
+    tolerance: float,
+    kind: np.ndarray,
+    none: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    # Segment labels, of ``kind``'s type, on a raster (a boundary pixel can border two
+    # segments: keep the smallest and largest label; ``none`` and -1 where no boundary
+    # pixel is) that holds every point's scan square, whose half-side is at most
+    # ceil(r + tolerance) + 1; and the points in the raster's frame.
     lo_r, lo_c = bp[:, 0].min(), bp[:, 1].min()
     hi_r, hi_c = bp[:, 0].max(), bp[:, 1].max()
     for k in range(pts.shape[0]):
         reach = int(np.ceil(np.sqrt(float(r2[k])) + tolerance)) + 1
         lo_r, hi_r = min(lo_r, pts[k, 0] - reach), max(hi_r, pts[k, 0] + reach)
         lo_c, hi_c = min(lo_c, pts[k, 1] - reach), max(hi_c, pts[k, 1] + reach)
-    return lo_r, lo_c, hi_r - lo_r + 1, hi_c - lo_c + 1
-
-
-@numba.njit(cache=True)
-def _fill(
-    seg_lo: np.ndarray, seg_hi: np.ndarray, bp: np.ndarray, seg: np.ndarray, o_r: int, o_c: int
-) -> None:
-    # Segment labels on the raster (a boundary pixel can border two segments: keep the
-    # smallest and largest label).
+    o_r, o_c = lo_r, lo_c
+    h, w = hi_r - lo_r + 1, hi_c - lo_c + 1
+    seg_lo = np.full((h, w), none, kind.dtype)
+    seg_hi = np.full((h, w), -1, kind.dtype)
     for k in range(bp.shape[0]):
         r, c = bp[k, 0] - o_r, bp[k, 1] - o_c
         seg_lo[r, c] = min(seg_lo[r, c], seg[k])
         seg_hi[r, c] = max(seg_hi[r, c], seg[k])
+    local = np.empty_like(pts)
+    local[:, 0] = pts[:, 0] - o_r
+    local[:, 1] = pts[:, 1] - o_c
+    return seg_lo, seg_hi, local
 
 
 @numba.njit(cache=True)

@@ -46,11 +46,15 @@ class PixelFrame:
         return float(v) if self == IDENTITY else float(round(v, self.decimals))
 
     def point(self, col: float, row: float) -> tuple[float, float]:
+        if self is IDENTITY:  # the same values, without a dataclass comparison each
+            return (float(col), float(row))
         x = self.x0 + col * self.pixel_size
         y = self.y0 - row * self.pixel_size if self.flip_y else self.y0 + row * self.pixel_size
         return (self._round(x), self._round(y))
 
     def distance(self, d: float) -> float:
+        if self is IDENTITY:
+            return float(d)
         return self._round(d * self.pixel_size)
 
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._digital import disk_half_width, isqrt
+from ._digital import isqrt
 
 __all__ = ["disk_runs", "owner_runs", "union"]
 
@@ -47,8 +47,12 @@ def _disk_runs_into(out, m, rows, cols, r2, pts, head, link, prow, plo, phi):
     for k in pts:
         v = r2[k]
         h = isqrt(v - 1)
+        w = 0  # the half width, walked up to the middle row and down again (no square root)
         for dy in range(-h, h + 1):
-            w = disk_half_width(v, dy)
+            while dy <= 0 and (w + 1) * (w + 1) <= v - 1 - dy * dy:
+                w += 1
+            while w * w > v - 1 - dy * dy:
+                w -= 1
             r = rows[k] + dy
             lo = cols[k] - w
             hi = cols[k] + w

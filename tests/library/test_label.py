@@ -50,7 +50,8 @@ def test_import_loads_no_pipeline_and_keeps_the_function_names():
         "heavy = [m for m in ('numba', 'scipy', 'PIL', 'cv2', 'shapely') if m in sys.modules]\n"
         "import skelprune.medial_axis, skelprune.reconstruction\n"
         "print(heavy, callable(skelprune.medial_axis), callable(skelprune.reconstruction),\n"
-        "      type(skelprune.prune).__name__, 'scipy.optimize' in sys.modules)\n"
+        "      type(skelprune.prune).__name__, 'scipy.optimize' in sys.modules,\n"
+        "      skelprune.api.prune is skelprune.prune, hasattr(skelprune, 'no_such_name'))\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert out.stdout.split() == ["[]", "True", "True", "function", "False"]
+    assert out.stdout.split() == ["[]", "True", "True", "function", "False", "True", "False"]

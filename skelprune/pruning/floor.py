@@ -12,11 +12,10 @@ step chosen may come later.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit
 
+from .._digital import disk_half_width, isqrt
 from ..medial_axis import squared_distance
 from .bayesian import PruningSequence, choose_step
 from .tips import _paint_counts
@@ -34,14 +33,9 @@ def _uncover_count(c, deep, rows, cols, r2):
     n = 0
     for k in range(rows.size):
         r, q, v = rows[k], cols[k], r2[k]
-        rad = int(math.sqrt(v))
+        rad = isqrt(v - 1)
         for dy in range(-rad, rad + 1):
-            rest = v - dy * dy
-            if rest <= 0:
-                continue
-            dx = int(math.sqrt(rest))
-            if dx * dx >= rest:
-                dx -= 1
+            dx = disk_half_width(v, dy)  # strictly inside: dx² < v − dy²
             y = r + dy
             for x in range(q - dx, q + dx + 1):
                 c[y, x] -= 1

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from .._digital import disk_half_width, isqrt
 from ..graph import BranchGraph, step_length
 from ..skeleton import Skeleton
 
@@ -61,14 +62,9 @@ def _paint_counts(h, w, rows, cols, r2):
     c = np.zeros((h, w), np.int32)
     for k in range(rows.size):
         r, q, v = rows[k], cols[k], r2[k]
-        rad = int(math.sqrt(v))
+        rad = isqrt(v - 1)
         for dy in range(-rad, rad + 1):
-            rest = v - dy * dy
-            if rest <= 0:
-                continue
-            dx = int(math.sqrt(rest))
-            if dx * dx >= rest:  # strict inside: |dx|² < rest
-                dx -= 1
+            dx = disk_half_width(v, dy)  # strictly inside: dx² < v − dy²
             y = r + dy
             for x in range(q - dx, q + dx + 1):
                 c[y, x] += 1
@@ -88,14 +84,9 @@ def _losses(mask, c, rows, cols, r2, drop, n_drop, scratch, last):
     for pass_ in range(3):
         for k in range(rows.size):
             r, q, v, d = rows[k], cols[k], r2[k], drop[k]
-            rad = int(math.sqrt(v))
+            rad = isqrt(v - 1)
             for dy in range(-rad, rad + 1):
-                rest = v - dy * dy
-                if rest <= 0:
-                    continue
-                dx = int(math.sqrt(rest))
-                if dx * dx >= rest:
-                    dx -= 1
+                dx = disk_half_width(v, dy)  # strictly inside: dx² < v − dy²
                 y = r + dy
                 for x in range(q - dx, q + dx + 1):
                     if pass_ == 0:
@@ -141,14 +132,9 @@ def _uncover(c, rows, cols, r2):
     """Take the disks of these points off the counts."""
     for k in range(rows.size):
         r, q, v = rows[k], cols[k], r2[k]
-        rad = int(math.sqrt(v))
+        rad = isqrt(v - 1)
         for dy in range(-rad, rad + 1):
-            rest = v - dy * dy
-            if rest <= 0:
-                continue
-            dx = int(math.sqrt(rest))
-            if dx * dx >= rest:
-                dx -= 1
+            dx = disk_half_width(v, dy)  # strictly inside: dx² < v − dy²
             y = r + dy
             for x in range(q - dx, q + dx + 1):
                 c[y, x] -= 1

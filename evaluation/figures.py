@@ -193,7 +193,7 @@ def curves_figure(shapes: Sequence[tuple[str, np.ndarray]], path: Path) -> None:
             [seq.objective[comp.chosen_step]],
             "o",
             color="tab:green",
-            label="chosen (argmin λ)",
+            label="chosen step",
         )
         ax.set_xlabel("pruning step", fontsize=8)
         ax.tick_params(labelsize=7)

@@ -11,7 +11,6 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import shapely
 
 from .._orientation import Orientation
 from .._version import ALGORITHM_VERSION, __version__
@@ -27,7 +26,6 @@ from ..pruning.margin import Margins
 from ..pruning.tips import Trim
 from ..reconstruction import reconstruction
 from ..skeleton import Skeleton
-from .lines import boundary_index, cut_end_forks, map_lines, mask_distance, recentre
 from .render import auto_scale, encode_png, render_overlay
 
 __all__ = ["ComponentResult", "PruneResult", "branch_line"]
@@ -490,6 +488,12 @@ class PruneResult:
         component's ``area``, ``alpha``, ``rer``, ``ss`` and ``objective``, and for a
         polygon the raster's ``warnings``.
         """
+        # imported here: the map lines pull shapely, OpenCV and scipy.spatial, which
+        # a prune() that never draws a map should not pay for at startup
+        import shapely
+
+        from .lines import boundary_index, cut_end_forks, map_lines, mask_distance, recentre
+
         frame = self.frame if frame is None else frame
         features: list[dict[str, Any]] = []
         doc = self.to_dict(curve=False, frame=IDENTITY)

@@ -20,7 +20,7 @@ from skelprune.errors import ImageTooLargeError, InvalidImageError, SkelpruneErr
 from skelprune.io import read_shape
 from skelprune.io.foreground import POLYGON_FOREGROUND, Foreground
 from skelprune.io.frame import PixelFrame
-from skelprune.io.polygon import PolygonRaster, parse_geojson, polygon_raster
+from skelprune.io.polygon import PolygonRaster, read_polygon
 from skelprune.output.render import auto_scale
 
 __all__ = ["Job", "JobResult", "answer_pixels", "dumps", "kernel_counts", "run_job", "warmup"]
@@ -138,13 +138,7 @@ def warmup(memory_budget: int | None = None) -> str:
 
 
 def _raster(job: Job) -> PolygonRaster:
-    raster = dict(job.raster)
-    geom = parse_geojson(
-        job.geojson or {},
-        max_vertices=raster.pop("max_vertices", None),
-        repair=raster.pop("repair", True),
-    )
-    return polygon_raster(geom, max_pixels=job.max_pixels, **raster)
+    return read_polygon(job.geojson or {}, max_pixels=job.max_pixels, **job.raster)
 
 
 def _mask(job: Job) -> tuple[np.ndarray, PixelFrame | None, Foreground]:

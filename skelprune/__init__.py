@@ -17,12 +17,11 @@ numba nor scipy): a command line that prints its help, or a program that only ne
 errors, does not pay for the pipeline.
 """
 
-import importlib
-import importlib.util
 import sys
 import types
 from typing import TYPE_CHECKING, Any
 
+from ._lazy import lazy_exports
 from ._version import ALGORITHM_VERSION
 from ._version import __version__ as __version__
 from .errors import (
@@ -64,20 +63,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    if name not in _LAZY:
-        # a submodule (``skelprune.api`` after ``import skelprune``), as when the package
-        # imported them all: importing it binds it
-        if not name.startswith("__") and importlib.util.find_spec(f"{__name__}.{name}"):
-            return importlib.import_module(f".{name}", __name__)
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, submodules=True)
 
 
 class _Package(types.ModuleType):

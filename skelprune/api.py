@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import replace
+from dataclasses import asdict, replace
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -227,7 +227,7 @@ def prune(
     'LineString'
     """
     if _is_polygon(mask):
-        from .io.polygon import parse_geojson, polygon_raster
+        from .io.polygon import read_polygon
 
         raster_opts = RasterOptions(
             pixel_size=pixel_size,
@@ -237,14 +237,7 @@ def prune(
             repair=repair,
         )
         obj = mask if isinstance(mask, Mapping) else mask.__geo_interface__
-        geom = parse_geojson(obj, repair=raster_opts.repair)
-        raster = polygon_raster(
-            geom,
-            pixel_size=raster_opts.pixel_size,
-            longest_side=raster_opts.longest_side,
-            pixels_per_width=raster_opts.pixels_per_width,
-            pixel_budget=raster_opts.pixel_budget,
-        )
+        raster = read_polygon(obj, **asdict(raster_opts))
         return prune_raster(
             raster,
             beta=beta,

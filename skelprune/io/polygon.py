@@ -59,6 +59,7 @@ __all__ = [
     "polygon_mask",
     "polygon_raster",
     "rasterize",
+    "read_polygon",
 ]
 
 DEFAULT_MARGIN = 2
@@ -481,3 +482,19 @@ def polygon_mask(
         pixels_per_width=pixels_per_width,
         pixel_budget=pixel_budget,
     )
+
+
+def read_polygon(
+    obj: Mapping[str, Any],
+    *,
+    max_vertices: int | None = None,
+    repair: bool = True,
+    **raster: Any,
+) -> PolygonRaster:
+    """Validate a GeoJSON polygon and rasterise it with its topology check:
+    :func:`parse_geojson` then :func:`polygon_raster` (``raster``: its keyword options).
+
+    The one way a polygon becomes a raster for pruning, in the library and the service.
+    """
+    geom = parse_geojson(obj, max_vertices=max_vertices, repair=repair)
+    return polygon_raster(geom, **raster)

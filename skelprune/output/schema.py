@@ -14,10 +14,26 @@ Examples
 >>> from typing import get_type_hints
 >>> list(get_type_hints(CurveStepDoc))
 ['step', 'length', 'ar', 'lr', 'objective']
+>>> problems({"step": 0, "length": 1.0, "ar": 0.5, "lr": "x"}, CurveStepDoc)
+['$.lr: expected float, got str', '$: missing key objective']
 """
 
+import functools
+import math
+import types
 from dataclasses import dataclass
-from typing import Annotated, Literal, NotRequired, TypedDict
+from typing import (
+    Annotated,
+    Any,
+    Literal,
+    NotRequired,
+    TypedDict,
+    Union,
+    get_args,
+    get_origin,
+    get_type_hints,
+    is_typeddict,
+)
 
 __all__ = [
     "BranchDoc",
@@ -28,6 +44,7 @@ __all__ = [
     "PruneDocument",
     "SequenceDoc",
     "SkeletonGeoJSON",
+    "problems",
 ]
 
 
@@ -384,3 +401,62 @@ class SkeletonGeoJSON(TypedDict):
     type: Literal["FeatureCollection"]
     properties: CollectionPropertiesDoc
     features: list[BranchFeatureDoc | NodeFeatureDoc]
+
+
+# ------------------------------------------------------------------------- the check
+@functools.cache
+def _hints(td: Any) -> dict[str, Any]:
+    return get_type_hints(td, include_extras=True)
+
+
+def problems(value: Any, hint: Any = PruneDocument, at: str = "$") -> list[str]:
+    """Where ``value`` departs from the type ``hint`` (by default the whole document):
+    one message per wrong type, missing or unknown key, list of the wrong length or
+    value outside its ``Literal``; empty when it conforms. As strict as the service's
+    models: an int may stand for a float (JSON does not tell them apart), but a bool is
+    no number, and NaN and infinities are not JSON numbers.
+    """
+    origin, args = get_origin(hint), get_args(hint)
+    if origin is NotRequired:
+        return problems(value, args[0], at)
+    if origin is Annotated:
+        out = problems(value, args[0], at)
+        for m in args[1:]:
+            n = len(value) if isinstance(m, Len) and isinstance(value, list) else None
+            if n is not None and not (m.min or 0) <= n <= (n if m.max is None else m.max):
+                out.append(f"{at}: length {len(value)} outside [{m.min}, {m.max}]")
+        return out
+    if origin in (Union, types.UnionType):
+        tries = [problems(value, a, at) for a in args]
+        return [] if any(not t for t in tries) else min(tries, key=len)
+    if origin is Literal:
+        return (
+            []
+            if value in args and type(value) is type(args[0])
+            else [f"{at}: {value!r} not in {args}"]
+        )
+    if hint is type(None):
+        return [] if value is None else [f"{at}: expected null, got {type(value).__name__}"]
+    if is_typeddict(hint):
+        if not isinstance(value, dict):
+            return [f"{at}: expected an object, got {type(value).__name__}"]
+        out = []
+        hints = _hints(hint)
+        for key, h in hints.items():
+            if key in value:
+                out += problems(value[key], h, f"{at}.{key}")
+            elif key in hint.__required_keys__:
+                out.append(f"{at}: missing key {key}")
+        out += [f"{at}: unknown key {key}" for key in value if key not in hints]
+        return out
+    if origin is list:
+        if not isinstance(value, list):
+            return [f"{at}: expected a list, got {type(value).__name__}"]
+        return [p for i, v in enumerate(value) for p in problems(v, args[0], f"{at}[{i}]")]
+    ok = {
+        float: lambda v: type(v) in (float, int) and math.isfinite(v),
+        int: lambda v: type(v) is int,
+        bool: lambda v: type(v) is bool,
+        str: lambda v: type(v) is str,
+    }[hint](value)
+    return [] if ok else [f"{at}: expected {hint.__name__}, got {type(value).__name__}"]

@@ -10,7 +10,7 @@ import shapely
 
 from ..io.frame import PixelFrame
 from .lines import boundary_index, cut_end_forks, map_lines, mask_distance, recentre
-from .table import frame_distances
+from .table import frame_distances, frame_points
 
 if TYPE_CHECKING:
     from ..io.polygon import PolygonRaster
@@ -69,6 +69,7 @@ def skeleton_geojson(
         removed = [None if k < 0 else k for k in t.removed_at.tolist()]
         used: set[int] = set()
         for i, line in zip(kept, simple, strict=True):
+            fx, fy = frame_points(frame, line[:, 0], line[:, 1])
             src = ends_at.get((i, "source"), source[i])
             dst = ends_at.get((i, "target"), target[i])
             used.update((src, dst))
@@ -77,7 +78,7 @@ def skeleton_geojson(
                     "type": "Feature",
                     "geometry": {
                         "type": "LineString",
-                        "coordinates": [list(frame.point(x, y)) for x, y, _ in line.tolist()],
+                        "coordinates": np.column_stack([fx, fy]).tolist(),
                     },
                     "properties": {
                         "component": ci,
@@ -86,7 +87,7 @@ def skeleton_geojson(
                         "source": src,
                         "target": dst,
                         "length": length[i],
-                        "radii": [frame.distance(r) for r in line[:, 2].tolist()],
+                        "radii": frame_distances(frame, line[:, 2]).tolist(),
                         "margin": margin[i],
                         "removed_at": removed[i],
                         **numbers,

@@ -35,7 +35,14 @@ if TYPE_CHECKING:
     from ..pruning.margin import Margins
     from ..skeleton import Skeleton
 
-__all__ = ["KINDS", "BranchTable", "branch_table", "frame_distances", "frame_points"]
+__all__ = [
+    "KINDS",
+    "BranchTable",
+    "branch_table",
+    "frame_distances",
+    "frame_points",
+    "round_like_python",
+]
 
 #: Node kinds, by their code in :attr:`BranchTable.node_kind`.
 KINDS = ("endpoint", "junction", "loop")
@@ -44,9 +51,9 @@ _ENDPOINT, _JUNCTION, _LOOP = range(3)
 
 def _csr(parts: list[list[int]]) -> tuple[np.ndarray, np.ndarray]:
     """Concatenated index lists and their offsets (``offsets[i]:offsets[i + 1]``)."""
-    offsets = np.zeros(len(parts) + 1, np.int64)
-    np.cumsum([len(p) for p in parts], out=offsets[1:])
-    return np.fromiter(itertools.chain.from_iterable(parts), np.int64, int(offsets[-1])), offsets
+    ends = list(itertools.accumulate(map(len, parts), initial=0))
+    flat = np.fromiter(itertools.chain.from_iterable(parts), np.int64, ends[-1])
+    return flat, np.array(ends, np.int64)
 
 
 def frame_points(frame: PixelFrame, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -67,11 +74,39 @@ def frame_distances(frame: PixelFrame, d: np.ndarray) -> np.ndarray:
     return _rounded(d * frame.pixel_size, frame)
 
 
+def round_like_python(v: np.ndarray, n: int) -> np.ndarray:
+    """``round(a, n)`` of every element, exactly as Python rounds a float, without a
+    Python call for each.
+
+    Python rounds correctly (the exact binary value, ties to even); ``np.round`` scales,
+    rounds and unscales, and differs in the last place now and then. Here the scaled
+    value ``p = v·10ⁿ`` is rounded to an integer ``m`` and ``m / 10ⁿ`` (one correctly
+    rounded division) is the double nearest the decimal ``m·10⁻ⁿ``, which is what Python
+    returns; ``p`` carries a rounding error of half an ulp, so only where ``p`` lies that
+    close to a half-integer could ``m`` be the wrong neighbour, and those few elements
+    (and any the scaling cannot hold exactly) go to Python's own ``round``.
+
+    >>> v = np.array([2.675, 0.125, 1.0000000000000002, -3.14159, 15.049999999999997])
+    >>> round_like_python(v, 2).tolist() == [round(a, 2) for a in v.tolist()]
+    True
+    """
+    v = np.asarray(v, np.float64)
+    if n < 0 or n > 22:  # 10ⁿ exact only for 0 ≤ n ≤ 22
+        return np.array([round(a, n) for a in v.tolist()], np.float64).reshape(v.shape)
+    scale = float(10**n)
+    p = v * scale
+    m = np.rint(p)
+    near_half = np.abs(np.abs(p - np.floor(p)) - 0.5) <= np.abs(p) * 2.3e-16 + 1e-300
+    doubt = near_half | ~(np.abs(p) < 2.0**52)
+    out = m / scale
+    for i in np.flatnonzero(doubt).tolist():
+        out.flat[i] = round(float(v.flat[i]), n)
+    return out
+
+
 def _rounded(v: np.ndarray, frame: PixelFrame) -> np.ndarray:
-    # Python's round (correctly rounded), not np.round (scale, rint, unscale): the two
-    # differ in the last place now and then, and the document's numbers must not move.
-    n = frame.decimals
-    return np.array([round(a, n) for a in v.tolist()], np.float64).reshape(v.shape)
+    # correctly rounded as Python's round: the document's numbers must not move
+    return round_like_python(v, frame.decimals)
 
 
 @dataclass(frozen=True)
@@ -175,6 +210,8 @@ def branch_table(sk: Skeleton, margins: Margins | None) -> BranchTable:
     """
     g, r2 = sk.graph, sk.r2
     rows, cols = sk.image_coordinates(g.rows, g.cols)
+    # (Python lists: a junction is a few pixels, too few for numpy's per-call cost)
+    neg_r2, grow, gcol = (-r2).tolist(), g.rows.tolist(), g.cols.tolist()
     node_point: list[int] = []
     node_kind: list[int] = []
     node_junction: list[int] = []
@@ -184,10 +221,8 @@ def branch_table(sk: Skeleton, margins: Margins | None) -> BranchTable:
         if not junc.alive:
             continue
         pts = sorted(junc.points)
-        p = np.asarray(pts)
-        first = np.lexsort((g.cols[p], g.rows[p], -r2[p]))[0]
         junction_node[j] = len(node_point)
-        node_point.append(pts[first])
+        node_point.append(min(pts, key=lambda p: (neg_r2[p], grow[p], gcol[p])))
         node_kind.append(_JUNCTION)
         node_junction.append(j)
         members.append(pts)

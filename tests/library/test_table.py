@@ -13,6 +13,7 @@ from PIL import Image
 import skelprune
 from skelprune.io.frame import IDENTITY, PixelFrame
 from skelprune.output.schema import PruneDocument, SkeletonGeoJSON, problems
+from skelprune.output.table import round_like_python
 from testkit.document_oracle import branch_line, component_dict
 from testkit.shapes import dataset
 
@@ -103,3 +104,16 @@ def test_the_schema_check_finds_what_departs() -> None:
     assert any("unknown key extra" in p for p in found)
     assert any("missing key chosen_step" in p for p in found)
     assert any(".points[0]: length 2" in p for p in found)
+
+
+def test_frame_rounding_is_pythons_round_exactly() -> None:
+    rng = np.random.default_rng(7)
+    for n in range(0, 9):
+        v = rng.normal(0, 10.0 ** rng.integers(-3, 6), 20000)
+        # decimal halves and their neighbours: where scaled rounding goes wrong
+        half = (np.round(v * 10**n) + 0.5) / 10**n
+        for a in (v, half, np.nextafter(half, np.inf), np.nextafter(half, -np.inf), -half):
+            got = round_like_python(a, n)
+            want = np.array([round(x, n) for x in a.tolist()])
+            assert np.array_equal(got, want) and np.array_equal(np.signbit(got), np.signbit(want))
+    assert round_like_python(np.array([1234.5]), -1).tolist() == [round(1234.5, -1)]

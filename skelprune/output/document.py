@@ -1,7 +1,9 @@
 """Results of pruning and their serialisation (docs/graph.md).
 
-``ComponentResult`` holds arrays (skan's "data" side); ``to_dict`` and
-``to_geojson`` are the reporting side, producing plain JSON types.
+``ComponentResult`` holds the answer and its sequence, and reads the answer once into a
+:class:`~skelprune.output.table.BranchTable` (skan's "data" side); ``to_dict``,
+``to_geojson``, ``to_networkx`` and the overlay are views of those tables, producing
+plain JSON types (:mod:`skelprune.output.schema`).
 """
 
 from __future__ import annotations

@@ -33,9 +33,8 @@ from service.errors import (
 )
 from service.jobs import warmup
 from service.match_job import MatchDocument, MatchPolygons
-from service.page import router as page_router
 from service.pool import WorkerPool
-from service.routes import router
+from service.routes import ROUTERS
 from service.schemas import Problem, PruneDocument, SkeletonGeoJSON, polygon_request_adapter
 from service.security import (
     OPEN_PATHS,
@@ -337,8 +336,8 @@ def create_app(
     app.state.pool = pool
     app.state.pool_failure = None  # why the pool did not start, if it did not
     app.state.metrics = _metrics(registry, pool)
-    app.include_router(router)
-    app.include_router(page_router)
+    for router in ROUTERS:
+        app.include_router(router)
     _offline_docs(app)
     install_error_handlers(app, retry_after=settings.retry_after)
     Instrumentator(registry=registry, excluded_handlers=["/metrics"]).instrument(app)

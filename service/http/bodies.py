@@ -30,6 +30,7 @@ __all__ = [
     "JSON_TYPES",
     "Form",
     "batch_size",
+    "body_errors",
     "content_type",
     "parse_json_list",
     "parse_pair",

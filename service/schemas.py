@@ -3,13 +3,28 @@
 Request bodies are validated strictly (no coercion; unknown fields refused). The
 response models describe the output documents exactly (``extra="forbid"``), so the
 OpenAPI schema is a contract that tests and schemathesis check the answers against.
+The document's and the GeoJSON's models are built from the library's own types
+(:mod:`skelprune.output.schema`), so that the two cannot drift.
 """
 
 from __future__ import annotations
 
+import functools
 import json
+import operator
 from dataclasses import fields as dataclass_fields
-from typing import Annotated, Any, Literal, get_args, get_type_hints
+from types import UnionType
+from typing import (
+    Annotated,
+    Any,
+    Literal,
+    NotRequired,
+    Union,
+    get_args,
+    get_origin,
+    get_type_hints,
+    is_typeddict,
+)
 
 from pydantic import (
     BaseModel,
@@ -24,6 +39,8 @@ from pydantic import (
 )
 
 from skelprune.options import GROUPS, RasterOptions, ReadOptions, check_option
+from skelprune.output import schema
+from skelprune.output.schema import Doc, Len
 
 __all__ = [
     "POLYGON_ONLY",
@@ -199,329 +216,69 @@ PolygonRequest = Annotated[
 polygon_request_adapter: TypeAdapter[Any] = TypeAdapter(PolygonRequest)
 
 
-# ----------------------------------------------------------------- output: document
-Point3 = Annotated[list[float], Field(min_length=3, max_length=3, description="[x, y, radius]")]
+# ----------------------------------------------------------- output: document, GeoJSON
+def _wire(hint: Any) -> Any:
+    """A library type hint as a pydantic one: each ``TypedDict`` its model, ``Doc`` and
+    ``Len`` metadata as ``Field`` constraints; everything else as it is."""
+    if is_typeddict(hint):
+        return _model(hint)
+    origin, args = get_origin(hint), get_args(hint)
+    if origin is Annotated:
+        return Annotated[_wire(args[0]), _field_info(args[1:])]
+    if origin is list:
+        return list[_wire(args[0])]  # type: ignore[misc]
+    if origin in (UnionType, Union):
+        return functools.reduce(operator.or_, (_wire(a) for a in args))
+    return hint
 
 
-class Node(BaseModel):
-    model_config = STRICT
-    id: int
-    x: float
-    y: float
-    radius: float
-    kind: Literal["endpoint", "junction", "loop"]
-    points: list[Point3] = Field(description="Pixels of a junction cluster; empty otherwise.")
+def _field_info(meta: tuple[Any, ...], **kw: Any) -> Any:
+    for m in meta:
+        if isinstance(m, Doc):
+            kw["description"] = m.text
+        elif isinstance(m, Len):
+            kw.update(
+                {k: v for k, v in (("min_length", m.min), ("max_length", m.max)) if v is not None}
+            )
+    return Field(**kw)
 
 
-class Branch(BaseModel):
-    model_config = STRICT
-    id: int
-    source: int
-    target: int
-    length: float = Field(
-        description="Step length of the path (1 axial, √2 diagonal), "
-        "with the step into each junction cluster and a loop's closing step."
+_MODELS: dict[type, type[BaseModel]] = {}
+
+
+def _model(td: type) -> type[BaseModel]:
+    """The strict response model of a library ``TypedDict`` (memoised: one model a type).
+
+    A key the library may leave out (``NotRequired``) is optional and nullable here."""
+    if td in _MODELS:
+        return _MODELS[td]
+    fields: dict[str, Any] = {}
+    for key, hint in get_type_hints(td, include_extras=True).items():
+        # (NotRequired read from the hint: with postponed annotations, the TypedDict's
+        # own __required_keys__ holds every key)
+        required = get_origin(hint) is not NotRequired
+        if not required:
+            (hint,) = get_args(hint)
+        meta: tuple[Any, ...] = ()
+        if get_origin(hint) is Annotated:
+            hint, *rest = get_args(hint)
+            meta = tuple(rest)
+        kind = _wire(hint)
+        if required:
+            fields[key] = (kind, _field_info(meta))
+        else:
+            fields[key] = (kind | None, _field_info(meta, default=None))
+    model = create_model(
+        td.__name__.removesuffix("Doc"), __config__=STRICT, __doc__=td.__doc__, **fields
     )
-    points: list[Point3] = Field(
-        description="The path, in order from the source node to the "
-        "target node; consecutive points are 8-neighbours."
-    )
-    off_path: list[Point3] = Field(
-        description="Skeleton pixels of the branch beside its path "
-        "(kept for reconstruction), sorted by (x, y)."
-    )
-    margin: float | None = Field(
-        description="How clearly the trade-off keeps the branch: "
-        "λ(Ŝ − E) − λ(Ŝ) for an end branch E, λ at the step that "
-        "removes it minus λ(Ŝ) for an inner one; null if never "
-        "removed, for method=dce and degenerate shapes."
-    )
-    removed_at: int | None = Field(
-        description="Step of the pruning sequence that removes the branch (null: never)."
-    )
+    _MODELS[td] = model
+    return model
 
 
-class Skeleton(BaseModel):
-    model_config = STRICT
-    length: float
-    nodes: list[Node]
-    branches: list[Branch]
-    endpoints: list[int]
-
-
-class MedialAxisSummary(BaseModel):
-    model_config = STRICT
-    rer: float
-    length: float
-    endpoints: int
-    branches: int
-
-
-class CurveStep(BaseModel):
-    model_config = STRICT
-    step: int
-    length: float
-    ar: float
-    lr: float
-    objective: float
-
-
-Point2 = Annotated[list[float], Field(min_length=2, max_length=2, description="[x, y]")]
-
-
-class SequenceNode(Node):
-    """A node of the sequence's starting skeleton S(0), and what the sequence does to it."""
-
-    removed_at: int | None = Field(
-        None,
-        description="Junctions only: step whose removal takes the cluster's pixels (null: never).",
-    )
-    dissolved_at: int | None = Field(
-        None,
-        description="Junctions only: step at which it "
-        "stops being a junction (two branch ends left).",
-    )
-    dissolved_into: int | None = Field(
-        None, description="Junctions only: the sequence branch its pixels then belong to."
-    )
-
-
-class SequenceBranch(BaseModel):
-    """A branch of S(0) and what the sequence does to it."""
-
-    model_config = STRICT
-    id: int
-    source: int
-    target: int
-    length: float
-    points: list[Point3] = Field(description="Its path in S(0), from source to target.")
-    off_path: list[Point3]
-    removed_at: int | None = Field(
-        description="Step whose removal takes its pixels "
-        "(its own, or that of the branch it became part of); "
-        "null: never."
-    )
-    absorbed_at: int | None = Field(
-        description="Step at which it became part of another "
-        "branch (a junction dissolved between them); null: never."
-    )
-    absorbed_into: int | None = Field(description="The branch it became part of.")
-
-
-class SequenceFrame(BaseModel):
-    """Pixel centre (col, row) -> (x, y) of this document: x = x0 + col·pixel_size,
-    y = y0 ∓ row·pixel_size (minus when flip_y)."""
-
-    model_config = STRICT
-    x0: float
-    y0: float
-    pixel_size: float
-    flip_y: bool
-
-
-class Sequence(BaseModel):
-    """The pruning sequence S(0) … S(n), one entry per step of ``curve``: S(k) is S(0)
-    without the pixels of every branch and junction whose ``removed_at`` ≤ k."""
-
-    model_config = STRICT
-    start: Literal["medial_axis", "coarse"] = Field(
-        description="What S(0) is: the medial axis, or the coarse skeleton (coarse=dce)."
-    )
-    nodes: list[SequenceNode]
-    branches: list[SequenceBranch]
-    uncovered: list[Point2] = Field(
-        description="Pixels of the shape S(0) does not reconstruct (the error of step 0)."
-    )
-    coarse_removed: list[Point3] = Field(
-        description="Medial-axis pixels the coarse stage "
-        "removed before step 0 (empty if S(0) is the "
-        "medial axis)."
-    )
-    frame: SequenceFrame
-
-
-class Component(BaseModel):
-    model_config = STRICT
-    area: int = Field(description="Λ(D) in pixels of the raster.")
-    alpha: float | None
-    rer: float
-    ss: float
-    objective: float
-    medial_axis: MedialAxisSummary
-    skeleton: Skeleton
-    curve: list[CurveStep] | None = Field(None, description="Absent when curve=false.")
-    chosen_step: int
-    sequence: Sequence | None = Field(None, description="Only with sequence=true.")
-
-
-class ForegroundTaken(BaseModel):
-    """What was taken as the shape."""
-
-    model_config = STRICT
-    rule: Literal["auto", "nonzero", "zero"] | None = Field(
-        description="The rule asked for; null for polygon input."
-    )
-    shape: Literal["nonzero", "zero", "light", "dark", "opaque", "polygon"] = Field(
-        description="Pixels taken: non-zero / zero ones, grey values above (`light`) or at "
-        "or below (`dark`) `threshold`, alpha above `threshold` (`opaque`), or the polygon."
-    )
-    threshold: float | None = Field(description="The mid-range split, for light/dark/opaque.")
-    border: float | None = Field(
-        description="Share of the image border on the background side (auto, grey values)."
-    )
-
-
-class Versions(BaseModel):
-    """What made an answer."""
-
-    model_config = STRICT
-    library: str = Field(description="The skelprune package version.")
-    algorithm: str = Field(
-        description="The results' version: it changes whenever the same "
-        "input and options may give a different skeleton or numbers."
-    )
-
-
-class RasterInfo(BaseModel):
-    """How a polygon was rasterised (polygon input only)."""
-
-    model_config = STRICT
-    pixel_size: float = Field(description="Side of a pixel, in the polygon's units.")
-    width: int
-    height: int
-    fitted: bool = Field(
-        description="True when the pixel size was fitted to the polygon (neither "
-        "pixel_size nor longest_side given)."
-    )
-    parts: int = Field(description="Parts of the (repaired) polygon.")
-
-
-class RasterWarningItem(BaseModel):
-    """A part of the polygon that the raster does not hold as it is."""
-
-    model_config = STRICT
-    kind: Literal["vanished", "split", "merged", "holes"]
-    message: str
-    part: int | None = Field(description="The polygon part meant, if one is.")
-    pixel_size: float | None = Field(
-        description="A pixel size that holds it (null: none found within the limits)."
-    )
-
-
-class PruneDocument(BaseModel):
-    """The output document."""
-
-    model_config = STRICT
-    version: Versions
-    width: int
-    height: int
-    method: Literal["bayesian", "dce"]
-    beta: float
-    coarse: Literal["dce"] | None
-    choice: Literal["argmin", "noise-floor"] = Field(
-        description="How the answer was chosen from the pruning sequence."
-    )
-    trim: bool = Field(description="Whether the answer's end branches were cut back at their tips.")
-    foreground: ForegroundTaken
-    components: list[Component]
-    raster: RasterInfo | None = Field(None, description="Polygon input only.")
-    warnings: list[RasterWarningItem] | None = Field(
-        None,
-        description="Polygon input only: parts the raster does not hold as they are "
-        "(vanished, split, merged with another, holes lost or added); empty when it holds "
-        "them all.",
-    )
-    overlay_png: str | None = Field(None, description="Base64 PNG; only with overlay=true.")
-
-
-# ------------------------------------------------------------------ output: GeoJSON
-class LineString(BaseModel):
-    model_config = STRICT
-    type: Literal["LineString"]
-    coordinates: Annotated[
-        list[Annotated[list[float], Field(min_length=2, max_length=2)]], Field(min_length=2)
-    ]
-
-
-class PointGeometry(BaseModel):
-    model_config = STRICT
-    type: Literal["Point"]
-    coordinates: Annotated[list[float], Field(min_length=2, max_length=2)]
-
-
-class BranchProperties(BaseModel):
-    model_config = STRICT
-    component: int
-    kind: Literal["branch"]
-    id: int
-    source: int
-    target: int
-    length: float
-    radii: list[float]
-    margin: float | None
-    removed_at: int | None
-    rer: float = Field(description="RER of the feature's component.")
-    ss: float = Field(description="SS of the feature's component.")
-
-
-class NodeProperties(BaseModel):
-    model_config = STRICT
-    component: int
-    kind: Literal["endpoint", "junction", "loop"]
-    id: int
-    radius: float
-    rer: float = Field(description="RER of the feature's component.")
-    ss: float = Field(description="SS of the feature's component.")
-
-
-class BranchFeature(BaseModel):
-    model_config = STRICT
-    type: Literal["Feature"]
-    geometry: LineString
-    properties: BranchProperties
-
-
-class NodeFeature(BaseModel):
-    model_config = STRICT
-    type: Literal["Feature"]
-    geometry: PointGeometry
-    properties: NodeProperties
-
-
-class ComponentSummary(BaseModel):
-    model_config = STRICT
-    component: int
-    area: int
-    alpha: float | None
-    rer: float
-    ss: float
-    objective: float
-
-
-class CollectionProperties(BaseModel):
-    """The document's options and numbers (a foreign member of the collection)."""
-
-    model_config = STRICT
-    width: int
-    height: int
-    method: Literal["bayesian", "dce"]
-    beta: float
-    coarse: Literal["dce"] | None
-    choice: Literal["argmin", "noise-floor"]
-    trim: bool
-    components: list[ComponentSummary]
-    warnings: list[RasterWarningItem] | None = Field(
-        None, description="Polygon input only, as in the JSON document."
-    )
-
-
-class SkeletonGeoJSON(BaseModel):
-    """The skeleton as GeoJSON: branches as LineStrings, nodes as Points."""
-
-    model_config = STRICT
-    type: Literal["FeatureCollection"]
-    properties: CollectionProperties
-    features: list[BranchFeature | NodeFeature]
+#: The output document (:class:`skelprune.output.schema.PruneDocument`).
+PruneDocument = _model(schema.PruneDocument)
+#: The skeleton's GeoJSON (:class:`skelprune.output.schema.SkeletonGeoJSON`).
+SkeletonGeoJSON = _model(schema.SkeletonGeoJSON)
 
 
 # ------------------------------------------------------------------- output: misc

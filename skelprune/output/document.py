@@ -1,13 +1,16 @@
 """Results of pruning and their serialisation (docs/graph.md).
 
-``ComponentResult`` holds arrays (skan's "data" side); ``to_dict`` and
-``to_geojson`` are the reporting side, producing plain JSON types.
+``ComponentResult`` holds the answer and its sequence, and reads the answer once into a
+:class:`~skelprune.output.table.BranchTable` (skan's "data" side); ``to_dict``,
+``to_geojson``, ``to_networkx`` and the overlay are views of those tables, producing
+plain JSON types (:mod:`skelprune.output.schema`).
 """
 
 from __future__ import annotations
 
 import base64
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -24,9 +27,11 @@ from ..pruning.bayesian import PruningSequence
 from ..pruning.bayesian import objective as target
 from ..pruning.margin import Margins
 from ..pruning.tips import Trim
-from ..reconstruction import reconstruction
 from ..skeleton import Skeleton
 from .render import auto_scale, encode_png, render_overlay
+from .schema import ComponentDoc, SequenceDoc
+from .table import BranchTable, branch_table, frame_distances
+from .views import branch_dicts, node_dicts, sequence_dict, to_networkx
 
 __all__ = ["ComponentResult", "PruneResult", "branch_line"]
 
@@ -130,111 +135,35 @@ class ComponentResult:
         rows, cols = self.image_coordinates(self.graph.rows[idx], self.graph.cols[idx])
         return rows, cols, self.r2[idx]
 
+    @cached_property
+    def table(self) -> BranchTable:
+        """The pruned skeleton's nodes and branches as flat arrays, in image pixel
+        coordinates (:mod:`skelprune.output.table`): what every output reads."""
+        return branch_table(self.skeleton, self.margins)
+
     def skeleton_table(self) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
         """Nodes and branches of the pruned skeleton, in image pixel coordinates
         (the ``skeleton`` part of the document before any frame is applied)."""
-        nodes, branches, _, _ = _graph_table(self.skeleton, self.margins)
-        return nodes, branches
+        return node_dicts(self.table), branch_dicts(self.table)  # type: ignore[return-value]
 
-    def sequence_table(self) -> dict[str, Any]:
-        """The pruning sequence as a viewer needs it (image pixel coordinates).
-
-        ``S(0)``'s nodes and branches (ids of their own), each branch with the step whose
-        removal takes its pixels (``removed_at``) and, where a junction dissolved into a
-        merge, the step and the branch it became part of (``absorbed_at``,
-        ``absorbed_into``); each junction node with the step that dissolved it and the
-        branch its pixels joined. Replayed on a copy of the start's graph, so the events
-        are exactly those of :attr:`sequence`. ``uncovered`` lists the shape's pixels
-        ``S(0)`` misses, so that ``D \\ R(S(k))`` follows from the disks alone, and
-        ``coarse_removed`` the medial axis's pixels the coarse stage took before step 0.
-        """
-        seq = self.sequence
-        start = seq.start
-        nodes, branches, branch_id, junction_id = _graph_table(start, None)
-        for b in branches:  # margins belong to the answer; here: the events
-            del b["margin"]
-            b.update(removed_at=None, absorbed_at=None, absorbed_into=None)
-        for n in nodes:
-            if n["kind"] == "junction":
-                n.update(removed_at=None, dissolved_at=None, dissolved_into=None)
-        # Owners as the sequence goes: a graph branch holds the S(0) branches and
-        # junctions merged into it.
-        held: dict[int, tuple[list[int], list[int]]] = {
-            gb: ([db], []) for gb, db in branch_id.items()
-        }
-        graph = start.working_graph()
-        for step, pick in enumerate(seq.removed, start=1):
-            merged = graph.remove_end_branch(pick)
-            own_b, own_j = held.pop(pick)
-            for db in own_b:
-                branches[db]["removed_at"] = step
-            for nid in own_j:
-                nodes[nid]["removed_at"] = step
-            if merged is None:
-                continue
-            kept, absorbed, jid = merged
-            nid = junction_id[jid]
-            nodes[nid]["dissolved_at"] = step
-            nodes[nid]["dissolved_into"] = branch_id[kept]
-            held[kept][1].append(nid)
-            if absorbed != kept:
-                branches[branch_id[absorbed]]["absorbed_at"] = step
-                branches[branch_id[absorbed]]["absorbed_into"] = branch_id[kept]
-                more_b, more_j = held.pop(absorbed)
-                held[kept][0].extend(more_b)
-                held[kept][1].extend(more_j)
-        idx = start.points()
-        covered = reconstruction(start.shape.shape, start.rows[idx], start.cols[idx], start.r2[idx])
-        miss_r, miss_c = np.nonzero(start.shape & ~covered)
-        miss_r, miss_c = self.image_coordinates(miss_r, miss_c)
-        gone = np.ones(start.rows.size, bool)
-        gone[idx] = False
-        gone_r, gone_c = self.image_coordinates(start.rows[gone], start.cols[gone])
-        return {
-            "start": "medial_axis" if not gone.any() else "coarse",
-            "nodes": nodes,
-            "branches": branches,
-            "uncovered": [
-                [float(x), float(y)] for y, x in zip(miss_r.tolist(), miss_c.tolist(), strict=True)
-            ],
-            "coarse_removed": [
-                [float(x), float(y), float(r)]
-                for y, x, r in zip(
-                    gone_r.tolist(),
-                    gone_c.tolist(),
-                    np.sqrt(start.r2[gone].astype(float)).tolist(),
-                    strict=True,
-                )
-            ],
-        }
+    def sequence_table(self, frame: PixelFrame = IDENTITY) -> SequenceDoc:
+        """The pruning sequence as a viewer needs it (:func:`~.views.sequence_dict`)."""
+        return sequence_dict(self.sequence, self.skeleton, frame)
 
     def to_dict(
         self, curve: bool = True, frame: PixelFrame = IDENTITY, sequence: bool = False
-    ) -> dict[str, Any]:
-        nodes, branches = self.skeleton_table()
-
-        def mapped(pts: list[list[float]]) -> list[list[float]]:
-            return [[*frame.point(x, y), frame.distance(r)] for x, y, r in pts]
-
-        def map_graph(nodes: list[dict[str, Any]], branches: list[dict[str, Any]]) -> None:
-            for n in nodes:
-                n["x"], n["y"] = frame.point(n["x"], n["y"])
-                n["radius"] = frame.distance(n["radius"])
-                n["points"] = mapped(n["points"])
-            for b in branches:
-                b["length"] = frame.distance(b["length"])
-                b["points"] = mapped(b["points"])
-                b["off_path"] = mapped(b["off_path"])
-
-        map_graph(nodes, branches)
+    ) -> ComponentDoc:
+        view = self.table.framed(frame)
+        nodes = node_dicts(view)
         ma = self.medial_axis
         seq = self.sequence
-        doc: dict[str, Any] = {
+        chosen = self.chosen_point()
+        doc: ComponentDoc = {
             "area": self.area,
             "alpha": None if self.alpha is None else float(self.alpha),
-            "rer": self.rer,
-            "ss": self.ss,
-            "objective": self.objective,
+            "rer": chosen[1],
+            "ss": chosen[2],
+            "objective": chosen[3],
             "medial_axis": {
                 "rer": float(self.ma_rer),
                 "length": frame.distance(ma.length),
@@ -242,117 +171,35 @@ class ComponentResult:
                 "branches": ma.branches,
             },
             "skeleton": {
-                "length": frame.distance(self.chosen_point()[0]),
+                "length": frame.distance(chosen[0]),
                 "nodes": nodes,
-                "branches": branches,
+                "branches": branch_dicts(view),
                 "endpoints": [n["id"] for n in nodes if n["kind"] == "endpoint"],
             },
             "chosen_step": self.chosen_step,
         }
         if curve:
+            length = frame_distances(frame, np.asarray(seq.length, np.float64)).tolist()
             doc["curve"] = [
-                {
-                    "step": i,
-                    "length": frame.distance(float(L)),
-                    "ar": float(a),
-                    "lr": float(lr),
-                    "objective": float(o),
-                }
+                {"step": i, "length": L, "ar": a, "lr": lr, "objective": o}
                 for i, (L, a, lr, o) in enumerate(
-                    zip(seq.length, seq.ar, seq.lr, seq.objective, strict=True)
+                    zip(
+                        length,
+                        np.asarray(seq.ar, np.float64).tolist(),
+                        np.asarray(seq.lr, np.float64).tolist(),
+                        np.asarray(seq.objective, np.float64).tolist(),
+                        strict=True,
+                    )
                 )
             ]
             if self.trim is not None:  # the chosen point is the answer, tips cut
-                L, a, lr, o = self.chosen_point()
+                L, a, lr, o = chosen
                 doc["curve"][self.chosen_step].update(
                     length=frame.distance(L), ar=a, lr=lr, objective=o
                 )
         if sequence:
-            table = self.sequence_table()
-            map_graph(table["nodes"], table["branches"])
-            table["uncovered"] = [list(frame.point(x, y)) for x, y in table["uncovered"]]
-            table["coarse_removed"] = mapped(table["coarse_removed"])
-            # how to get back to the raster's pixels (the error is painted on them)
-            table["frame"] = {
-                "x0": frame.x0,
-                "y0": frame.y0,
-                "pixel_size": frame.pixel_size,
-                "flip_y": frame.flip_y,
-            }
-            doc["sequence"] = table
+            doc["sequence"] = self.sequence_table(frame)
         return doc
-
-
-def _graph_table(
-    sk: Skeleton, margins: Margins | None
-) -> tuple[list[dict[str, Any]], list[dict[str, Any]], dict[int, int], dict[int, int]]:
-    """Nodes and branches of a skeleton's graph in image pixel coordinates, with the
-    document id of each live graph branch and junction."""
-    g, r2 = sk.graph, sk.r2
-    rows, cols = sk.image_coordinates(g.rows, g.cols)
-    xs = cols.astype(float).tolist()
-    ys = rows.astype(float).tolist()
-    rs = np.sqrt(r2.astype(float)).tolist()
-
-    def xyr(p: int) -> list[float]:
-        return [xs[p], ys[p], rs[p]]
-
-    nodes: list[dict[str, Any]] = []
-    junction_node: dict[int, int] = {}
-    for j, junc in enumerate(g.junctions):
-        if not junc.alive:
-            continue
-        pts = sorted(junc.points, key=lambda p: (-r2[p], g.rows[p], g.cols[p]))
-        x, y, r = xyr(pts[0])
-        junction_node[j] = len(nodes)
-        nodes.append(
-            {
-                "id": len(nodes),
-                "x": x,
-                "y": y,
-                "radius": r,
-                "kind": "junction",
-                "points": [xyr(p) for p in sorted(junc.points)],
-            }
-        )
-
-    def new_node(p: int, kind: str) -> int:
-        x, y, r = xyr(p)
-        nodes.append({"id": len(nodes), "x": x, "y": y, "radius": r, "kind": kind, "points": []})
-        return len(nodes) - 1
-
-    branches: list[dict[str, Any]] = []
-    branch_id: dict[int, int] = {}
-    for b, br in enumerate(g.branches):
-        if not br.alive:
-            continue
-        path = br.path()
-        if br.loop:
-            src = dst = new_node(path[0], "loop")
-        else:
-            ends = []
-            for e, p in ((0, path[0]), (1, path[-1])):
-                if br.node[e] is not None:
-                    ends.append(junction_node[br.node[e]])
-                elif e == 1 and len(path) == 1 and br.node[0] is None:
-                    ends.append(ends[0])  # a single point: one node
-                else:
-                    ends.append(new_node(p, "endpoint"))
-            src, dst = ends
-        branches.append(
-            {
-                "id": len(branches),
-                "source": src,
-                "target": dst,
-                "length": float(br.length),
-                "points": [xyr(p) for p in path],
-                "off_path": [xyr(p) for p in sorted(br.side)],
-                "margin": None if margins is None else margins.margin.get(b),
-                "removed_at": None if margins is None else margins.removed_at.get(b),
-            }
-        )
-        branch_id[b] = len(branches) - 1
-    return nodes, branches, branch_id, junction_node
 
 
 def branch_line(skeleton: dict[str, Any], branch: dict[str, Any]) -> list[list[float]]:
@@ -490,103 +337,38 @@ class PruneResult:
         """
         # imported here: the map lines pull shapely, OpenCV and scipy.spatial, which
         # a prune() that never draws a map should not pay for at startup
-        import shapely
+        from .geojson import skeleton_geojson
 
-        from .lines import boundary_index, cut_end_forks, map_lines, mask_distance, recentre
-
-        frame = self.frame if frame is None else frame
-        features: list[dict[str, Any]] = []
-        doc = self.to_dict(curve=False, frame=IDENTITY)
-        polygon = None
-        if self.raster is not None and simplify > 0:
-            f = self.raster.frame
-            sign = -1.0 if f.flip_y else 1.0
-            polygon = shapely.transform(
-                self.raster.geometry,
-                lambda xy: np.stack(
-                    [(xy[:, 0] - f.x0) / f.pixel_size, sign * (xy[:, 1] - f.y0) / f.pixel_size],
-                    axis=1,
-                ),
-            )
-        index = None if polygon is None else boundary_index(polygon)
-        distance = mask_distance(self.mask)
-        summaries = []
-        for ci, comp in enumerate(doc["components"]):
-            sk = comp["skeleton"]
-            nodes, branches = sk["nodes"], sk["branches"]
-            # on every feature too: GIS tools show a feature's properties, not the collection's
-            numbers = {"rer": comp["rer"], "ss": comp["ss"]}
-            summaries.append(
-                {
-                    "component": ci,
-                    "area": comp["area"],
-                    "alpha": comp["alpha"],
-                    **numbers,
-                    "objective": comp["objective"],
-                }
-            )
-            lines: list[Any] = [np.asarray(branch_line(sk, br), float) for br in branches]
-            ends_at: dict[tuple[int, str], int] = {}
-            moved: dict[int, tuple[float, float]] = {}
-            if cut_ends:
-                lines, ends_at, moved = cut_end_forks(nodes, branches, lines, self.mask, distance)
-            kept = [i for i, ln in enumerate(lines) if ln is not None]
-            exact = [lines[i] for i in kept]
-            # the exact polygon gives sub-pixel medial positions
-            chosen = exact if index is None else recentre(exact, index)
-            simple = map_lines(chosen, simplify, self.mask, polygon, exact)
-            used: set[int] = set()
-            for i, line in zip(kept, simple, strict=True):
-                br = branches[i]
-                src = ends_at.get((i, "source"), br["source"])
-                dst = ends_at.get((i, "target"), br["target"])
-                used.update((src, dst))
-                features.append(
-                    {
-                        "type": "Feature",
-                        "geometry": {
-                            "type": "LineString",
-                            "coordinates": [list(frame.point(x, y)) for x, y, _ in line.tolist()],
-                        },
-                        "properties": {
-                            "component": ci,
-                            "kind": "branch",
-                            "id": br["id"],
-                            "source": src,
-                            "target": dst,
-                            "length": frame.distance(br["length"]),
-                            "radii": [frame.distance(r) for r in line[:, 2].tolist()],
-                            "margin": br["margin"],
-                            "removed_at": br["removed_at"],
-                            **numbers,
-                        },
-                    }
-                )
-            for nd in nodes:
-                if cut_ends and nd["id"] not in used:
-                    continue  # a fork's junction and second tip, gone with the fork
-                x, y = moved.get(nd["id"], (nd["x"], nd["y"]))
-                features.append(
-                    {
-                        "type": "Feature",
-                        "geometry": {"type": "Point", "coordinates": list(frame.point(x, y))},
-                        "properties": {
-                            "component": ci,
-                            "kind": nd["kind"],
-                            "id": nd["id"],
-                            "radius": 0.0 if nd["id"] in moved else frame.distance(nd["radius"]),
-                            **numbers,
-                        },
-                    }
-                )
-        # A foreign member of the collection (RFC 7946 §6.1): the document's numbers.
-        properties: dict[str, Any] = {
-            k: doc[k] for k in ("width", "height", "method", "beta", "coarse", "choice", "trim")
+        summaries: list[Any] = [
+            {
+                "component": ci,
+                "area": c.area,
+                "alpha": None if c.alpha is None else float(c.alpha),
+                "rer": c.rer,
+                "ss": c.ss,
+                "objective": c.objective,
+            }
+            for ci, c in enumerate(self.components)
+        ]
+        header = {
+            "width": self.width,
+            "height": self.height,
+            "method": self.method,
+            "beta": float(self.beta),
+            "coarse": self.coarse,
+            "choice": self.choice,
+            "trim": self.trim,
         }
-        properties["components"] = summaries
-        if self.raster is not None:
-            properties["warnings"] = self.warnings
-        return {"type": "FeatureCollection", "properties": properties, "features": features}
+        return skeleton_geojson(  # type: ignore[return-value]
+            [c.table for c in self.components],
+            summaries,
+            self.mask,
+            header,
+            self.frame if frame is None else frame,
+            simplify,
+            cut_ends,
+            self.raster,
+        )
 
     def to_networkx(self, frame: PixelFrame | None = None) -> Any:
         """The skeleton as a ``networkx.MultiGraph`` (needs the optional ``networkx``).
@@ -604,31 +386,8 @@ class PruneResult:
         >>> g.number_of_nodes(), g.number_of_edges(), sorted(d for _, d in g.degree())
         (6, 5, [1, 1, 1, 1, 3, 3])
         """
-        try:
-            import networkx as nx
-        except ImportError:  # an optional dependency: say how to get it
-            raise ImportError(
-                "to_networkx needs networkx: pip install 'skelprune[graph]'"
-            ) from None
-        g = nx.MultiGraph()
-        for ci, comp in enumerate(self.to_dict(curve=False, frame=frame)["components"]):
-            sk = comp["skeleton"]
-            for nd in sk["nodes"]:
-                g.add_node(
-                    (ci, nd["id"]), component=ci, **{k: v for k, v in nd.items() if k != "id"}
-                )
-            for br in sk["branches"]:
-                g.add_edge(
-                    (ci, br["source"]),
-                    (ci, br["target"]),
-                    key=br["id"],
-                    component=ci,
-                    length=br["length"],
-                    points=br["points"],
-                    off_path=br["off_path"],
-                    line=branch_line(sk, br),
-                )
-        return g
+        frame = self.frame if frame is None else frame
+        return to_networkx([c.table.framed(frame) for c in self.components])
 
     def render_overlay(self, scale: int = 1, legend: bool = False) -> np.ndarray:
         """RGB overlay (:func:`~skelprune.output.render.render_overlay`), ``scale`` times
@@ -642,11 +401,12 @@ class PruneResult:
         (20, 40, 3)
         """
         rows, cols, r2 = self.skeleton_points()
-        marks: dict[str, list[tuple[int, int]]] = {"endpoint": [], "junction": []}
+        marks: dict[str, list[np.ndarray]] = {"endpoint": [], "junction": []}
         for comp in self.components:
-            for n in comp.skeleton_table()[0]:
-                if n["kind"] in marks:
-                    marks[n["kind"]].append((int(n["y"]), int(n["x"])))
+            t = comp.table
+            at = np.column_stack([t.y[t.node_point], t.x[t.node_point]]).astype(int)
+            for kind, code in (("endpoint", 0), ("junction", 1)):
+                marks[kind].append(at[t.node_kind == code])
         text = None
         if legend:
             text = "   ".join(
@@ -659,8 +419,8 @@ class PruneResult:
             rows,
             cols,
             r2,
-            np.array(marks["endpoint"], int).reshape(-1, 2),
-            np.array(marks["junction"], int).reshape(-1, 2),
+            np.concatenate([np.zeros((0, 2), int), *marks["endpoint"]]),
+            np.concatenate([np.zeros((0, 2), int), *marks["junction"]]),
             scale=scale,
             legend=text,
         )

@@ -1,7 +1,7 @@
 """Lines for maps: a skeleton's branches simplified, still meeting, still inside.
 
 The document lists every pixel of a branch; a map wants a few vertices per width. Each
-branch's line (from its source node to its target node, :func:`branch_line`) is
+branch's line (from its source node to its target node, :meth:`BranchTable.lines`) is
 simplified by Douglas–Peucker within ``tolerance`` pixels, keeping its two ends (a loop
 keeps three points round it), so that lines still meet exactly at their nodes and the
 network keeps its connections and its rings. A simplified line that leaves the shape,
@@ -26,6 +26,8 @@ import numpy as np
 import shapely
 from scipy.spatial import cKDTree
 from shapely.geometry import LineString
+
+from .table import BranchTable
 
 __all__ = [
     "boundary_index",
@@ -263,8 +265,7 @@ def _crossing(out: list[np.ndarray], exact: list[np.ndarray]) -> set[int]:
 
 
 def cut_end_forks(
-    nodes: list[dict[str, Any]],
-    branches: list[dict[str, Any]],
+    table: BranchTable,
     lines: list[np.ndarray],
     mask: np.ndarray,
     distance: Callable[[], np.ndarray] | None = None,
@@ -280,34 +281,39 @@ def cut_end_forks(
     """
     distance = distance or mask_distance(mask)
     h, w = mask.shape
+    kinds = table.kinds()
+    node_x = table.x[table.node_point].tolist()
+    node_y = table.y[table.node_point].tolist()
+    node_r = table.radius[table.node_point].tolist()
+    source, target = table.source.tolist(), table.target.tolist()
+    length = table.length.tolist()
     degree: dict[int, list[int]] = {}
-    for b, br in enumerate(branches):
-        for end in (br["source"], br["target"]):
+    for b, ends in enumerate(zip(source, target, strict=True)):
+        for end in ends:
             degree.setdefault(end, []).append(b)
     out: list[np.ndarray | None] = list(lines)
     moved: dict[int, tuple[float, float]] = {}
     ends_at: dict[tuple[int, str], int] = {}
-    for nid, node in enumerate(nodes):
-        if node["kind"] != "junction" or len(degree.get(nid, [])) != 3:
+    for nid, kind in enumerate(kinds):
+        if kind != "junction" or len(degree.get(nid, [])) != 3:
             continue
         tips = []
         for b in degree[nid]:
-            br = branches[b]
-            other = br["target"] if br["source"] == nid else br["source"]
-            if nodes[other]["kind"] == "endpoint" and len(degree.get(other, [])) == 1:
+            other = target[b] if source[b] == nid else source[b]
+            if kinds[other] == "endpoint" and len(degree.get(other, [])) == 1:
                 tips.append((b, other))
         if len(tips) == 3:  # a lone junction: the fork is its two short branches
-            tips.sort(key=lambda bt: branches[bt[0]]["length"])
-            if branches[tips[2][0]]["length"] < 3 * branches[tips[1][0]]["length"]:
+            tips.sort(key=lambda bt: length[bt[0]])
+            if length[tips[2][0]] < 3 * length[tips[1][0]]:
                 continue
             tips = tips[:2]
         if len(tips) != 2:
             continue
         (b1, t1), (b2, t2) = tips
-        a = np.array([nodes[t1]["x"], nodes[t1]["y"]], float)
-        c = np.array([nodes[t2]["x"], nodes[t2]["y"]], float)
-        j = np.array([node["x"], node["y"]], float)
-        r = float(node["radius"])
+        a = np.array([node_x[t1], node_y[t1]], float)
+        c = np.array([node_x[t2], node_y[t2]], float)
+        j = np.array([node_x[nid], node_y[nid]], float)
+        r = float(node_r[nid])
         span = float(np.hypot(*(c - a)))
         mid = (a + c) / 2
         if r < 2 or not 1.0 * r <= span <= 2.8 * r:
@@ -325,11 +331,11 @@ def cut_end_forks(
         if float(distance()[rows, cols].max()) > 1.5 + 0.5 * r or mask[rows, cols].mean() < 0.8:
             continue
         (rest,) = [b for b in degree[nid] if b not in (b1, b2)]
-        if out[rest] is None or branches[rest]["source"] == branches[rest]["target"]:
+        if out[rest] is None or source[rest] == target[rest]:
             continue
         ln = out[rest]
         assert ln is not None
-        at_source = branches[rest]["source"] == nid
+        at_source = source[rest] == nid
         # The line ends on the cut itself, straight on from the remaining branch's
         # direction into the junction: the tips' chord would tilt it, since the two
         # tips are cut back from their corners by different amounts.

@@ -1,0 +1,462 @@
+"""The output document and the skeleton's GeoJSON, as types (docs/graph.md).
+
+The one definition of what :meth:`~skelprune.output.document.PruneResult.to_dict` and
+:meth:`~skelprune.output.document.PruneResult.to_geojson` return: ``TypedDict``s, with
+each field's description and each list's length bounds as ``Annotated`` metadata
+(:class:`Doc`, :class:`Len`). A type checker reads them as they are; the service builds
+its response models (and so its OpenAPI schema) from them, field by field, so that the
+two cannot drift. A key that may be absent is ``NotRequired`` (annotations are
+evaluated, so that ``__required_keys__`` says so at run time too). Each type's name, less a
+trailing ``Doc``, is its name in the OpenAPI schema.
+
+Examples
+--------
+>>> from typing import get_type_hints
+>>> list(get_type_hints(CurveStepDoc))
+['step', 'length', 'ar', 'lr', 'objective']
+>>> problems({"step": 0, "length": 1.0, "ar": 0.5, "lr": "x"}, CurveStepDoc)
+['$.lr: expected float, got str', '$: missing key objective']
+"""
+
+import functools
+import math
+import types
+from dataclasses import dataclass
+from typing import (
+    Annotated,
+    Any,
+    Literal,
+    NotRequired,
+    TypedDict,
+    Union,
+    get_args,
+    get_origin,
+    get_type_hints,
+    is_typeddict,
+)
+
+__all__ = [
+    "BranchDoc",
+    "ComponentDoc",
+    "Doc",
+    "Len",
+    "NodeDoc",
+    "PruneDocument",
+    "SequenceDoc",
+    "SkeletonGeoJSON",
+    "problems",
+]
+
+
+@dataclass(frozen=True)
+class Doc:
+    """A field's (or a list item's) description."""
+
+    text: str
+
+
+@dataclass(frozen=True)
+class Len:
+    """Bounds of a list's length (None: no bound)."""
+
+    min: int | None = None
+    max: int | None = None
+
+
+Point3 = Annotated[list[float], Len(3, 3), Doc("[x, y, radius]")]
+Point2 = Annotated[list[float], Len(2, 2), Doc("[x, y]")]
+NodeKind = Literal["endpoint", "junction", "loop"]
+Method = Literal["bayesian", "dce"]
+Coarse = Literal["dce"] | None
+Choice = Literal["argmin", "noise-floor"]
+
+
+# ------------------------------------------------------------------------ the document
+class NodeDoc(TypedDict):
+    id: int
+    x: float
+    y: float
+    radius: float
+    kind: NodeKind
+    points: Annotated[list[Point3], Doc("Pixels of a junction cluster; empty otherwise.")]
+
+
+class BranchDoc(TypedDict):
+    id: int
+    source: int
+    target: int
+    length: Annotated[
+        float,
+        Doc(
+            "Step length of the path (1 axial, √2 diagonal), "
+            "with the step into each junction cluster and a loop's closing step."
+        ),
+    ]
+    points: Annotated[
+        list[Point3],
+        Doc(
+            "The path, in order from the source node to the "
+            "target node; consecutive points are 8-neighbours."
+        ),
+    ]
+    off_path: Annotated[
+        list[Point3],
+        Doc(
+            "Skeleton pixels of the branch beside its path "
+            "(kept for reconstruction), sorted by (x, y)."
+        ),
+    ]
+    margin: Annotated[
+        float | None,
+        Doc(
+            "How clearly the trade-off keeps the branch: "
+            "λ(Ŝ − E) − λ(Ŝ) for an end branch E, λ at the step that "
+            "removes it minus λ(Ŝ) for an inner one; null if never "
+            "removed, for method=dce and degenerate shapes."
+        ),
+    ]
+    removed_at: Annotated[
+        int | None,
+        Doc("Step of the pruning sequence that removes the branch (null: never)."),
+    ]
+
+
+class SkeletonDoc(TypedDict):
+    length: float
+    nodes: list[NodeDoc]
+    branches: list[BranchDoc]
+    endpoints: list[int]
+
+
+class MedialAxisSummaryDoc(TypedDict):
+    rer: float
+    length: float
+    endpoints: int
+    branches: int
+
+
+class CurveStepDoc(TypedDict):
+    step: int
+    length: float
+    ar: float
+    lr: float
+    objective: float
+
+
+class SequenceNodeDoc(NodeDoc):
+    """A node of the sequence's starting skeleton S(0), and what the sequence does to it."""
+
+    removed_at: NotRequired[
+        Annotated[
+            int | None,
+            Doc("Junctions only: step whose removal takes the cluster's pixels (null: never)."),
+        ]
+    ]
+    dissolved_at: NotRequired[
+        Annotated[
+            int | None,
+            Doc("Junctions only: step at which it stops being a junction (two branch ends left)."),
+        ]
+    ]
+    dissolved_into: NotRequired[
+        Annotated[int | None, Doc("Junctions only: the sequence branch its pixels then belong to.")]
+    ]
+
+
+class SequenceBranchDoc(TypedDict):
+    """A branch of S(0) and what the sequence does to it."""
+
+    id: int
+    source: int
+    target: int
+    length: float
+    points: Annotated[list[Point3], Doc("Its path in S(0), from source to target.")]
+    off_path: list[Point3]
+    removed_at: Annotated[
+        int | None,
+        Doc(
+            "Step whose removal takes its pixels "
+            "(its own, or that of the branch it became part of); "
+            "null: never."
+        ),
+    ]
+    absorbed_at: Annotated[
+        int | None,
+        Doc(
+            "Step at which it became part of another "
+            "branch (a junction dissolved between them); null: never."
+        ),
+    ]
+    absorbed_into: Annotated[int | None, Doc("The branch it became part of.")]
+
+
+class SequenceFrameDoc(TypedDict):
+    """Pixel centre (col, row) -> (x, y) of this document: x = x0 + col·pixel_size,
+    y = y0 ∓ row·pixel_size (minus when flip_y)."""
+
+    x0: float
+    y0: float
+    pixel_size: float
+    flip_y: bool
+
+
+class SequenceDoc(TypedDict):
+    """The pruning sequence S(0) … S(n), one entry per step of ``curve``: S(k) is S(0)
+    without the pixels of every branch and junction whose ``removed_at`` ≤ k."""
+
+    start: Annotated[
+        Literal["medial_axis", "coarse"],
+        Doc("What S(0) is: the medial axis, or the coarse skeleton (coarse=dce)."),
+    ]
+    nodes: list[SequenceNodeDoc]
+    branches: list[SequenceBranchDoc]
+    uncovered: Annotated[
+        list[Point2], Doc("Pixels of the shape S(0) does not reconstruct (the error of step 0).")
+    ]
+    coarse_removed: Annotated[
+        list[Point3],
+        Doc(
+            "Medial-axis pixels the coarse stage "
+            "removed before step 0 (empty if S(0) is the "
+            "medial axis)."
+        ),
+    ]
+    frame: SequenceFrameDoc
+
+
+class ComponentDoc(TypedDict):
+    area: Annotated[int, Doc("Λ(D) in pixels of the raster.")]
+    alpha: float | None
+    rer: float
+    ss: float
+    objective: float
+    medial_axis: MedialAxisSummaryDoc
+    skeleton: SkeletonDoc
+    curve: NotRequired[Annotated[list[CurveStepDoc], Doc("Absent when curve=false.")]]
+    chosen_step: int
+    sequence: NotRequired[Annotated[SequenceDoc, Doc("Only with sequence=true.")]]
+
+
+class ForegroundTakenDoc(TypedDict):
+    """What was taken as the shape."""
+
+    rule: Annotated[
+        Literal["auto", "nonzero", "zero"] | None,
+        Doc("The rule asked for; null for polygon input."),
+    ]
+    shape: Annotated[
+        Literal["nonzero", "zero", "light", "dark", "opaque", "polygon"],
+        Doc(
+            "Pixels taken: non-zero / zero ones, grey values above (`light`) or at "
+            "or below (`dark`) `threshold`, alpha above `threshold` (`opaque`), or the polygon."
+        ),
+    ]
+    threshold: Annotated[float | None, Doc("The mid-range split, for light/dark/opaque.")]
+    border: Annotated[
+        float | None, Doc("Share of the image border on the background side (auto, grey values).")
+    ]
+
+
+class VersionsDoc(TypedDict):
+    """What made an answer."""
+
+    library: Annotated[str, Doc("The skelprune package version.")]
+    algorithm: Annotated[
+        str,
+        Doc(
+            "The results' version: it changes whenever the same "
+            "input and options may give a different skeleton or numbers."
+        ),
+    ]
+
+
+class RasterInfoDoc(TypedDict):
+    """How a polygon was rasterised (polygon input only)."""
+
+    pixel_size: Annotated[float, Doc("Side of a pixel, in the polygon's units.")]
+    width: int
+    height: int
+    fitted: Annotated[
+        bool,
+        Doc(
+            "True when the pixel size was fitted to the polygon (neither "
+            "pixel_size nor longest_side given)."
+        ),
+    ]
+    parts: Annotated[int, Doc("Parts of the (repaired) polygon.")]
+
+
+class RasterWarningItemDoc(TypedDict):
+    """A part of the polygon that the raster does not hold as it is."""
+
+    kind: Literal["vanished", "split", "merged", "holes"]
+    message: str
+    part: Annotated[int | None, Doc("The polygon part meant, if one is.")]
+    pixel_size: Annotated[
+        float | None, Doc("A pixel size that holds it (null: none found within the limits).")
+    ]
+
+
+class PruneDocument(TypedDict):
+    """The output document."""
+
+    version: VersionsDoc
+    width: int
+    height: int
+    method: Method
+    beta: float
+    coarse: Coarse
+    choice: Annotated[Choice, Doc("How the answer was chosen from the pruning sequence.")]
+    trim: Annotated[bool, Doc("Whether the answer's end branches were cut back at their tips.")]
+    foreground: ForegroundTakenDoc
+    components: list[ComponentDoc]
+    raster: NotRequired[Annotated[RasterInfoDoc, Doc("Polygon input only.")]]
+    warnings: NotRequired[
+        Annotated[
+            list[RasterWarningItemDoc],
+            Doc(
+                "Polygon input only: parts the raster does not hold as they are "
+                "(vanished, split, merged with another, holes lost or added); empty when it "
+                "holds them all."
+            ),
+        ]
+    ]
+    overlay_png: NotRequired[Annotated[str, Doc("Base64 PNG; only with overlay=true.")]]
+
+
+# ------------------------------------------------------------------------- the GeoJSON
+class LineStringDoc(TypedDict):
+    type: Literal["LineString"]
+    coordinates: Annotated[list[Annotated[list[float], Len(2, 2)]], Len(2)]
+
+
+class PointGeometryDoc(TypedDict):
+    type: Literal["Point"]
+    coordinates: Annotated[list[float], Len(2, 2)]
+
+
+class BranchPropertiesDoc(TypedDict):
+    component: int
+    kind: Literal["branch"]
+    id: int
+    source: int
+    target: int
+    length: float
+    radii: list[float]
+    margin: float | None
+    removed_at: int | None
+    rer: Annotated[float, Doc("RER of the feature's component.")]
+    ss: Annotated[float, Doc("SS of the feature's component.")]
+
+
+class NodePropertiesDoc(TypedDict):
+    component: int
+    kind: NodeKind
+    id: int
+    radius: float
+    rer: Annotated[float, Doc("RER of the feature's component.")]
+    ss: Annotated[float, Doc("SS of the feature's component.")]
+
+
+class BranchFeatureDoc(TypedDict):
+    type: Literal["Feature"]
+    geometry: LineStringDoc
+    properties: BranchPropertiesDoc
+
+
+class NodeFeatureDoc(TypedDict):
+    type: Literal["Feature"]
+    geometry: PointGeometryDoc
+    properties: NodePropertiesDoc
+
+
+class ComponentSummaryDoc(TypedDict):
+    component: int
+    area: int
+    alpha: float | None
+    rer: float
+    ss: float
+    objective: float
+
+
+class CollectionPropertiesDoc(TypedDict):
+    """The document's options and numbers (a foreign member of the collection)."""
+
+    width: int
+    height: int
+    method: Method
+    beta: float
+    coarse: Coarse
+    choice: Choice
+    trim: bool
+    components: list[ComponentSummaryDoc]
+    warnings: NotRequired[
+        Annotated[list[RasterWarningItemDoc], Doc("Polygon input only, as in the JSON document.")]
+    ]
+
+
+class SkeletonGeoJSON(TypedDict):
+    """The skeleton as GeoJSON: branches as LineStrings, nodes as Points."""
+
+    type: Literal["FeatureCollection"]
+    properties: CollectionPropertiesDoc
+    features: list[BranchFeatureDoc | NodeFeatureDoc]
+
+
+# ------------------------------------------------------------------------- the check
+@functools.cache
+def _hints(td: Any) -> dict[str, Any]:
+    return get_type_hints(td, include_extras=True)
+
+
+def problems(value: Any, hint: Any = PruneDocument, at: str = "$") -> list[str]:
+    """Where ``value`` departs from the type ``hint`` (by default the whole document):
+    one message per wrong type, missing or unknown key, list of the wrong length or
+    value outside its ``Literal``; empty when it conforms. As strict as the service's
+    models: an int may stand for a float (JSON does not tell them apart), but a bool is
+    no number, and NaN and infinities are not JSON numbers.
+    """
+    origin, args = get_origin(hint), get_args(hint)
+    if origin is NotRequired:
+        return problems(value, args[0], at)
+    if origin is Annotated:
+        out = problems(value, args[0], at)
+        for m in args[1:]:
+            n = len(value) if isinstance(m, Len) and isinstance(value, list) else None
+            if n is not None and not (m.min or 0) <= n <= (n if m.max is None else m.max):
+                out.append(f"{at}: length {len(value)} outside [{m.min}, {m.max}]")
+        return out
+    if origin in (Union, types.UnionType):
+        tries = [problems(value, a, at) for a in args]
+        return [] if any(not t for t in tries) else min(tries, key=len)
+    if origin is Literal:
+        return (
+            []
+            if value in args and type(value) is type(args[0])
+            else [f"{at}: {value!r} not in {args}"]
+        )
+    if hint is type(None):
+        return [] if value is None else [f"{at}: expected null, got {type(value).__name__}"]
+    if is_typeddict(hint):
+        if not isinstance(value, dict):
+            return [f"{at}: expected an object, got {type(value).__name__}"]
+        out = []
+        hints = _hints(hint)
+        for key, h in hints.items():
+            if key in value:
+                out += problems(value[key], h, f"{at}.{key}")
+            elif key in hint.__required_keys__:
+                out.append(f"{at}: missing key {key}")
+        out += [f"{at}: unknown key {key}" for key in value if key not in hints]
+        return out
+    if origin is list:
+        if not isinstance(value, list):
+            return [f"{at}: expected a list, got {type(value).__name__}"]
+        return [p for i, v in enumerate(value) for p in problems(v, args[0], f"{at}[{i}]")]
+    ok = {
+        float: lambda v: type(v) in (float, int) and math.isfinite(v),
+        int: lambda v: type(v) is int,
+        bool: lambda v: type(v) is bool,
+        str: lambda v: type(v) is str,
+    }[hint](value)
+    return [] if ok else [f"{at}: expected {hint.__name__}, got {type(value).__name__}"]

@@ -1,0 +1,119 @@
+"""The branch table and its views: the document's skeleton and sequence, the networkx
+graph and the lines, against the point-by-point reference on every Kimia shape; the
+documents against the library's own schema."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import skelprune
+from skelprune.io.frame import IDENTITY, PixelFrame
+from skelprune.output.schema import PruneDocument, SkeletonGeoJSON, problems
+from skelprune.output.table import round_like_python
+from testkit.document_oracle import branch_line, component_dict
+from testkit.shapes import dataset
+
+#: A frame with a flip, an offset and a pixel size whose products need rounding.
+FRAME = PixelFrame(x0=1.5, y0=-2.25, pixel_size=0.37, flip_y=True)
+SHAPES = dataset("kimia216") + dataset("kimia99")
+
+
+def _mask(path) -> np.ndarray:
+    return np.asarray(Image.open(path).convert("L")) >= 128
+
+
+def _same(a: object, b: object) -> bool:
+    # as JSON: 1 and 1.0 differ there, and must not swap
+    return json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)
+
+
+@pytest.mark.parametrize("frame", [IDENTITY, FRAME], ids=["pixels", "framed"])
+def test_views_equal_the_point_by_point_document_on_every_kimia_shape(frame) -> None:
+    for path in SHAPES:
+        res = skelprune.prune(_mask(path), coarse=None if path.stem.endswith("1") else "dce")
+        for comp in res.components:
+            doc = comp.to_dict(frame=frame, sequence=True)
+            ref = component_dict(comp, frame)
+            sk, seq = doc["skeleton"], dict(doc["sequence"])
+            assert _same(sk["nodes"], ref["nodes"]), path.stem
+            assert _same(sk["branches"], ref["branches"]), path.stem
+            assert sk["endpoints"] == [n["id"] for n in ref["nodes"] if n["kind"] == "endpoint"]
+            del seq["frame"]
+            assert _same(seq, ref["sequence"]), path.stem
+            lines = [ln.tolist() for ln in comp.table.framed(frame).lines()]
+            assert lines == [branch_line(ref["nodes"], b) for b in ref["branches"]], path.stem
+
+
+def test_the_table_is_flat_and_consistent() -> None:
+    res = skelprune.prune(_mask(dataset("kimia216")[5]))
+    t = res.components[0].table
+    assert t.path_offsets[0] == 0 and t.path_offsets[-1] == t.paths.size
+    assert np.all(np.diff(t.path_offsets) >= 1)  # every branch has a path
+    assert t.source.size == t.target.size == t.length.size == t.n_branches
+    # consecutive path pixels are 8-neighbours, in image coordinates
+    for j in range(t.n_branches):
+        p = t.path(j)
+        assert np.all(np.abs(np.diff(p[:, :2], axis=0)) <= 1)
+    # the identity frame is no copy; another maps the coordinates, not the topology
+    assert t.framed(IDENTITY) is t
+    f = t.framed(FRAME)
+    assert np.array_equal(f.source, t.source) and np.array_equal(f.paths, t.paths)
+    assert f.x[0] == FRAME.point(t.x[0], t.y[0])[0] and f.radius[3] == FRAME.distance(t.radius[3])
+
+
+def test_networkx_is_a_view_of_the_table() -> None:
+    res = skelprune.prune(_mask(dataset("kimia216")[40]))
+    g = res.to_networkx(frame=FRAME)
+    ref = component_dict(res.components[0], FRAME)
+    assert g.number_of_nodes() == len(ref["nodes"])
+    for b in ref["branches"]:
+        data = g.get_edge_data((0, b["source"]), (0, b["target"]), key=b["id"])
+        assert data["points"] == b["points"] and data["line"] == branch_line(ref["nodes"], b)
+
+
+def test_documents_conform_to_the_library_schema() -> None:
+    for path in dataset("kimia216")[::20]:
+        res = skelprune.prune(_mask(path))
+        assert problems(res.to_dict(sequence=True, overlay=True)) == []
+        assert problems(res.to_dict(curve=False), PruneDocument) == []
+        assert problems(res.to_geojson(cut_ends=True), SkeletonGeoJSON) == []
+    polygon = {"type": "Polygon", "coordinates": [[[0, 0], [30, 0], [30, 8], [0, 8], [0, 0]]]}
+    res = skelprune.prune(polygon)
+    doc = res.to_dict(sequence=True)
+    assert "raster" in doc and problems(doc) == []
+    assert problems(res.to_geojson(), SkeletonGeoJSON) == []
+
+
+def test_the_schema_check_finds_what_departs() -> None:
+    m = np.zeros((20, 40), bool)
+    m[5:15, 5:35] = True
+    doc = skelprune.prune(m).to_dict()
+    comp = doc["components"][0]
+    comp["skeleton"]["nodes"][0]["kind"] = "fork"
+    comp["skeleton"]["branches"][0]["points"][0] = [1.0, 2.0]
+    comp["rer"] = True
+    del comp["chosen_step"]
+    doc["extra"] = 1
+    doc["beta"] = float("nan")
+    found = problems(doc)
+    assert len(found) == 6, found
+    assert any("unknown key extra" in p for p in found)
+    assert any("missing key chosen_step" in p for p in found)
+    assert any(".points[0]: length 2" in p for p in found)
+
+
+def test_frame_rounding_is_pythons_round_exactly() -> None:
+    rng = np.random.default_rng(7)
+    for n in range(0, 9):
+        v = rng.normal(0, 10.0 ** rng.integers(-3, 6), 20000)
+        # decimal halves and their neighbours: where scaled rounding goes wrong
+        half = (np.round(v * 10**n) + 0.5) / 10**n
+        for a in (v, half, np.nextafter(half, np.inf), np.nextafter(half, -np.inf), -half):
+            got = round_like_python(a, n)
+            want = np.array([round(x, n) for x in a.tolist()])
+            assert np.array_equal(got, want) and np.array_equal(np.signbit(got), np.signbit(want))
+    assert round_like_python(np.array([1234.5]), -1).tolist() == [round(1234.5, -1)]

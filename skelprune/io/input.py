@@ -94,7 +94,7 @@ def _guess(source: Any) -> tuple[Kind, Any]:
         path = Path(source)
         if path.name.lower().endswith(GEOJSON_SUFFIXES):
             try:
-                return "geojson", path.read_bytes()
+                return "geojson", _geojson(path.read_bytes(), "a GeoJSON file")
             except OSError as exc:
                 raise InvalidPolygonError(
                     f"cannot read {os.fspath(source)!r}: {exc.strerror}"
@@ -103,7 +103,7 @@ def _guess(source: Any) -> tuple[Kind, Any]:
     return "image", np.asarray(source)  # an array-like (nested lists)
 
 
-def _geojson(source: Any) -> Mapping[str, Any]:
+def _geojson(source: Any, what: str = "GeoJSON text") -> Mapping[str, Any]:
     if isinstance(source, Mapping):
         return source
     if hasattr(source, "__geo_interface__"):  # shapely and the like
@@ -112,7 +112,7 @@ def _geojson(source: Any) -> Mapping[str, Any]:
         try:
             obj = json.loads(bytes(source) if not isinstance(source, str) else source)
         except (ValueError, UnicodeDecodeError) as exc:
-            raise InvalidPolygonError(f"not GeoJSON: {exc}") from None
+            raise InvalidPolygonError(f"not {what}: {exc}") from None
         if not isinstance(obj, dict):
             raise InvalidPolygonError("not a GeoJSON object")
         return obj

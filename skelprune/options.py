@@ -149,12 +149,19 @@ def _flag(name: str, value: Any) -> bool:
 
 def _check_fields(options: Any) -> None:
     """Check (and normalise) every field of a frozen options object in place; a field
-    whose default is None may be left unset."""
+    whose default is None may be left unset. Every refused field is named in the error
+    (:attr:`InvalidOptionError.errors`), not only the first."""
+    errors: list[tuple[str, str]] = []
     for f in fields(options):
         value = getattr(options, f.name)
         if value is None and f.default is None:
             continue
-        object.__setattr__(options, f.name, f.metadata["check"](f.name, value))
+        try:
+            object.__setattr__(options, f.name, f.metadata["check"](f.name, value))
+        except InvalidOptionError as exc:
+            errors.append((f.name, str(exc)))
+    if errors:
+        raise InvalidOptionError("; ".join(message for _, message in errors), errors)
 
 
 @dataclass(frozen=True)

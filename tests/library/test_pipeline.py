@@ -246,3 +246,13 @@ def test_an_input_refuses_what_is_not_a_mask() -> None:
     with pytest.raises(InvalidImageError, match="2-D"):
         Input(np.zeros((2, 2, 2, 2)))
     assert replace(Input(rectangle()), frame=IDENTITY).mask.dtype == bool
+
+
+def test_an_options_value_names_every_option_it_refuses() -> None:
+    with pytest.raises(InvalidOptionError) as info:
+        PruneOptions(beta=-1.0, method="x", trim=True)
+    assert [name for name, _ in info.value.errors] == ["beta", "method"]
+    assert "beta must be" in str(info.value) and "method must be" in str(info.value)
+    with pytest.raises(InvalidOptionError) as info:
+        RasterOptions(pixel_size=1.0, longest_side=64)  # refused together: no one option
+    assert info.value.errors == []

@@ -21,21 +21,15 @@ from fastapi.staticfiles import StaticFiles
 from prometheus_client import CollectorRegistry, Gauge, Histogram
 from prometheus_fastapi_instrumentator import Instrumentator
 from pydantic.json_schema import models_json_schema
-from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from service import __version__, examples
 from service.budget import cap_address_space
-from service.errors import (
-    BodyTooLargeError,
-    RequestTimeoutError,
-    install_error_handlers,
-    problem,
-)
+from service.errors import install_error_handlers
+from service.http.middleware import BodyLimitMiddleware, HeadMiddleware
 from service.jobs import warmup
 from service.match_job import MatchDocument, MatchPolygons
-from service.page import router as page_router
 from service.pool import WorkerPool
-from service.routes import router
+from service.routes import ROUTERS
 from service.schemas import Problem, PruneDocument, SkeletonGeoJSON, polygon_request_adapter
 from service.security import (
     OPEN_PATHS,
@@ -45,79 +39,12 @@ from service.security import (
 )
 from service.settings import Settings
 
-__all__ = ["BodyLimitMiddleware", "HeadMiddleware", "Metrics", "create_app"]
+__all__ = ["Metrics", "create_app"]
 
 REF_TEMPLATE = "#/components/schemas/{model}"
 DOCS_ASSETS = "/docs-assets"  # Swagger UI's and ReDoc's scripts
 
 log = logging.getLogger("service")
-
-
-class BodyLimitMiddleware:
-    """Refuse request bodies over ``limit`` bytes with 413, streamed or not, and bodies
-    that take longer than ``timeout`` seconds to arrive with 408.
-
-    A declared ``Content-Length`` over the limit is answered before anything is read;
-    a chunked body is counted as it arrives and stopped at the limit. The deadline runs
-    from the request's start until its body is complete (later receives, such as the
-    wait for a disconnect while an answer streams, are not bounded).
-    """
-
-    def __init__(self, app: ASGIApp, limit: int, timeout: float | None = None) -> None:
-        self.app = app
-        self.limit = limit
-        self.timeout = timeout
-
-    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] != "http":
-            await self.app(scope, receive, send)
-            return
-        declared = dict(scope["headers"]).get(b"content-length")
-        message = f"request body exceeds the limit of {self.limit} bytes"
-        if declared is not None and declared.isdigit() and int(declared) > self.limit:
-            response = problem(
-                BodyTooLargeError(f"{message} (Content-Length: {int(declared)})"),
-                instance=scope.get("path"),
-            )
-            await response(scope, receive, send)
-            return
-        received = 0
-        complete = False
-        loop = asyncio.get_running_loop()
-        deadline = None if self.timeout is None else loop.time() + self.timeout
-
-        async def limited() -> Message:
-            nonlocal received, complete
-            if complete or deadline is None:
-                msg = await receive()
-            else:
-                try:
-                    msg = await asyncio.wait_for(receive(), max(0.0, deadline - loop.time()))
-                except TimeoutError:
-                    raise RequestTimeoutError(
-                        f"the request body took longer than {self.timeout:g} s to arrive"
-                    ) from None
-            if msg["type"] == "http.request":
-                received += len(msg.get("body", b""))
-                complete = not msg.get("more_body", False)
-                if received > self.limit:
-                    raise BodyTooLargeError(message)
-            return msg
-
-        await self.app(scope, limited, send)
-
-
-class HeadMiddleware:
-    """``HEAD`` on any path is its ``GET`` without the body (uvicorn drops the body of a
-    ``HEAD`` answer and keeps its headers): probes and caches may ask with ``HEAD``."""
-
-    def __init__(self, app: ASGIApp) -> None:
-        self.app = app
-
-    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] == "http" and scope["method"] == "HEAD":
-            scope = {**scope, "method": "GET"}  # a copy: the server's own says HEAD
-        await self.app(scope, receive, send)
 
 
 @dataclass
@@ -337,8 +264,8 @@ def create_app(
     app.state.pool = pool
     app.state.pool_failure = None  # why the pool did not start, if it did not
     app.state.metrics = _metrics(registry, pool)
-    app.include_router(router)
-    app.include_router(page_router)
+    for router in ROUTERS:
+        app.include_router(router)
     _offline_docs(app)
     install_error_handlers(app, retry_after=settings.retry_after)
     Instrumentator(registry=registry, excluded_handlers=["/metrics"]).instrument(app)

@@ -9,14 +9,10 @@ from typing import Any
 from pydantic import BaseModel, ConfigDict, Field
 
 from service.budget import check_budget, estimate, out_of_memory
-from service.examples import SQUARE_POLYGON
 from service.jobs import Job, _mask, dumps
 from service.schemas import GeoJSONInput
 
 __all__ = [
-    "MATCH_DESCRIPTION",
-    "MATCH_REQUEST_BODY",
-    "MATCH_RESPONSES",
     "MatchDocument",
     "MatchJob",
     "MatchPolygons",
@@ -103,66 +99,3 @@ def _run_match_job(job: MatchJob) -> MatchResult:
     frames = {k: f for k, f in (("frame_a", frame_a), ("frame_b", frame_b)) if f is not None}
     body = dumps(res.to_dict(**frames))
     return MatchResult(body=body, media_type="application/json", prune_seconds=elapsed)
-
-
-MATCH_DESCRIPTION = """
-Match the skeletons of two shapes by path similarity (Bai & Latecki 2008): the distance
-(0 for the same skeleton, symmetric, unchanged by turning, mirroring and scaling up to
-what pixels change) and which endpoint of `a` corresponds to which of `b`.
-
-**Input** (by `Content-Type`):
-- `multipart/form-data`: two PNG masks in the fields `a` and `b`;
-- `application/json`: `{"a": <GeoJSON>, "b": <GeoJSON>}`, each a `Polygon`,
-  `MultiPolygon`, `Feature` or `FeatureCollection`; positions in the answer are in each
-  polygon's own frame.
-
-Pruning options (`beta`, `method`, `coarse`, …) go in the query and apply to both
-shapes; so do `foreground` (PNG) and the raster options (polygons). Each shape's largest
-component is matched. A skeleton with fewer than two endpoints (a ring, a disk reduced
-to a point) cannot be matched: 422 `unmatchable-shape`.
-"""
-
-MATCH_REQUEST_BODY: dict[str, Any] = {
-    "required": True,
-    "content": {
-        "multipart/form-data": {
-            "schema": {
-                "type": "object",
-                "required": ["a", "b"],
-                "properties": {
-                    "a": {"type": "string", "format": "binary", "description": "PNG mask a."},
-                    "b": {"type": "string", "format": "binary", "description": "PNG mask b."},
-                },
-            },
-            "encoding": {"a": {"contentType": "image/png"}, "b": {"contentType": "image/png"}},
-        },
-        "application/json": {
-            "schema": {"$ref": "#/components/schemas/MatchPolygons"},
-            "example": {"a": SQUARE_POLYGON, "b": SQUARE_POLYGON},
-        },
-    },
-}
-
-MATCH_EXAMPLE = {
-    "distance": 0.0,
-    "mirrored": False,
-    "endpoints": [4, 4],
-    "correspondence": [
-        {
-            "a": {"component": 0, "node": 2, "x": 1.0, "y": 1.0},
-            "b": {"component": 0, "node": 2, "x": 1.0, "y": 1.0},
-        },
-    ],
-}
-
-MATCH_RESPONSES: dict[int | str, dict[str, Any]] = {
-    200: {
-        "description": "The distance and the endpoint correspondence.",
-        "content": {
-            "application/json": {
-                "schema": {"$ref": "#/components/schemas/MatchDocument"},
-                "example": MATCH_EXAMPLE,
-            }
-        },
-    },
-}

@@ -10,7 +10,7 @@ import pytest
 from fastapi.testclient import TestClient
 from PIL import Image
 
-from service.routes import BATCH_MAX_ITEMS
+from service.http.bodies import BATCH_MAX_ITEMS
 from service.schemas import Problem, PruneDocument
 
 pytestmark = pytest.mark.timeout(300)
@@ -98,7 +98,7 @@ def test_a_batch_never_starves_single_requests() -> None:
     import time
 
     from service.app import create_app
-    from service.routes import job_function
+    from service.routes.prune import job_function
     from service.settings import Settings
 
     app = create_app(Settings(workers=2, queue_size=8))

@@ -29,7 +29,7 @@ import service.security
 from service.app import create_app
 from service.jobs import Job, run_job
 from service.logs import JsonFormatter
-from service.routes import job_function
+from service.routes.prune import job_function
 from service.schemas import PolygonJob, Problem, PruneQuery
 from service.settings import Settings
 from skelprune.errors import InvalidImageError

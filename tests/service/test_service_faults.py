@@ -20,7 +20,7 @@ from fastapi.testclient import TestClient
 from service.app import create_app
 from service.jobs import Job, JobResult, run_job
 from service.logs import JsonFormatter
-from service.routes import job_function
+from service.routes.prune import job_function
 from service.settings import Settings
 from testkit import DATA
 

@@ -1,6 +1,6 @@
-"""The query options of ``POST /v1/prune``: ``routes.parse_query`` against FastAPI's own
-handling of ``Annotated[PruneQuery, Query()]``, which it replaces (same values, same
-errors), and its place before every other check of the request."""
+"""The query options of ``POST /v1/prune``: ``service.http.query.parse_query`` against
+FastAPI's own handling of ``Annotated[PruneQuery, Query()]``, which it replaces (same
+values, same errors), and its place before every other check of the request."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from starlette.datastructures import QueryParams
 
 from service.app import create_app
-from service.routes import parse_query
+from service.http.query import parse_query
 from service.schemas import PruneQuery
 from service.settings import Settings
 

@@ -1,0 +1,251 @@
+"""Request bodies: the content type, the guards, JSON bodies and multipart forms.
+
+Every endpoint reads its body through here, so that a body is refused the same way
+whichever endpoint it was sent to (the problems are mapped to statuses in
+:data:`service.errors.PROBLEMS`).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, TypeVar
+
+from fastapi import Request
+from fastapi.exceptions import RequestValidationError
+from pydantic import ValidationError
+from starlette.datastructures import QueryParams, UploadFile
+
+from service.errors import BodyTooLargeError, UnsupportedMediaTypeError
+from service.http.query import parse_query, validation_error
+from service.match_job import MatchPolygons
+from service.schemas import PolygonJob, PruneQuery, polygon_request_adapter
+from skelprune.errors import InvalidOptionError, InvalidPolygonError
+
+__all__ = [
+    "BATCH_MAX_ITEMS",
+    "BIG_JSON",
+    "JSON_TYPES",
+    "Form",
+    "batch_size",
+    "body_errors",
+    "content_type",
+    "parse_json_list",
+    "parse_pair",
+    "parse_polygon",
+    "polygon_item",
+    "read_form",
+    "refuse_encoding",
+    "validate_json",
+]
+
+T = TypeVar("T")
+
+JSON_TYPES = ("application/json", "application/geo+json")
+BIG_JSON = 256 * 1024  # bytes of JSON above which validation moves to a thread
+#: Most shapes in one batch request (more: 413 before any is pruned).
+BATCH_MAX_ITEMS = 32
+#: Tags of the JSON body's union: pydantic puts them in error locations, the user's body
+#: has no such level.
+BODY_TAGS = frozenset({"Polygon", "MultiPolygon", "Feature", "FeatureCollection", "job"})
+
+
+def content_type(request: Request) -> str:
+    """The request's media type, lower case, without parameters (``""`` if none)."""
+    return request.headers.get("content-type", "").split(";")[0].strip().lower()
+
+
+def refuse_encoding(request: Request) -> None:
+    """Refuse a compressed body: never decode what was meant to be inflated.
+
+    Raises
+    ------
+    UnsupportedMediaTypeError
+        When ``Content-Encoding`` is other than ``identity``.
+    """
+    encoding = request.headers.get("content-encoding", "").strip().lower()
+    if encoding not in ("", "identity"):
+        raise UnsupportedMediaTypeError(
+            f"Content-Encoding {encoding!r} is not supported; send the body uncompressed"
+        )
+
+
+async def validate_json(parse: Callable[[bytes], T], body: bytes) -> T:
+    """``parse(body)``; a big body takes a while to validate: off the event loop, so that
+    other requests (health checks included) keep being served meanwhile."""
+    if len(body) > BIG_JSON:
+        return await asyncio.to_thread(parse, body)
+    return parse(body)
+
+
+def body_errors(errors: list[Any]) -> list[dict[str, Any]]:
+    """Validation errors located in the user's body, without pydantic's union tags."""
+    shown = []
+    for e in errors:
+        loc = tuple(p for p in e.get("loc", ()) if p not in BODY_TAGS)
+        if e.get("type") == "union_tag_invalid":
+            given = (e.get("ctx") or {}).get("tag")
+            e = {
+                **e,
+                "msg": f"GeoJSON type {given!r} is not accepted: send a Polygon, "
+                "MultiPolygon, Feature or FeatureCollection, or "
+                '{"geojson": <one of those>, <options>}',
+            }
+        elif e.get("type") == "model_type":  # pydantic names the model class here
+            e = {**e, "msg": "Input should be a JSON object"}
+        shown.append({**e, "loc": loc})
+    return shown
+
+
+def parse_polygon(body: bytes) -> tuple[PolygonJob | None, dict[str, Any]]:
+    """Validate a JSON body: (envelope with options or None, GeoJSON as plain data)."""
+    try:
+        parsed = polygon_request_adapter.validate_json(body)
+    except ValidationError as exc:
+        raise validation_error(body_errors(exc.errors(include_url=False)), ("body",)) from None
+    envelope = parsed if isinstance(parsed, PolygonJob) else None
+    shape = parsed.geojson if envelope is not None else parsed
+    return envelope, shape.model_dump(mode="json", exclude_none=True)
+
+
+def parse_pair(body: bytes) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Validate the JSON body of a match: the GeoJSON of ``a`` and ``b`` as plain data."""
+    try:
+        parsed = MatchPolygons.model_validate_json(body)
+    except ValidationError as exc:
+        raise validation_error(exc.errors(include_url=False), ("body",)) from None
+    return (
+        parsed.a.model_dump(mode="json", exclude_none=True),
+        parsed.b.model_dump(mode="json", exclude_none=True),
+    )
+
+
+def parse_json_list(body: bytes) -> list[Any]:
+    """A batch's JSON body: a list, its items not validated yet (one bad item fails alone)."""
+    try:
+        # UTF-8 only, as POST /v1/prune reads JSON (json.loads would guess UTF-16/32)
+        items = json.loads(body.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise RequestValidationError(
+            [
+                {
+                    "loc": ("body",),
+                    "type": "json_invalid",
+                    "msg": f"invalid JSON: not UTF-8 (byte {exc.start})",
+                }
+            ]
+        ) from None
+    except ValueError as exc:
+        raise RequestValidationError(
+            [{"loc": ("body",), "type": "json_invalid", "msg": f"invalid JSON: {exc}"}]
+        ) from None
+    except RecursionError:  # nesting deeper than the parser's stack
+        raise RequestValidationError(
+            [{"loc": ("body",), "type": "json_invalid", "msg": "invalid JSON: nested too deep"}]
+        ) from None
+    if not isinstance(items, list):
+        raise RequestValidationError(
+            [
+                {
+                    "loc": ("body",),
+                    "type": "list_type",
+                    "msg": "a batch is a JSON list of GeoJSON objects",
+                }
+            ]
+        )
+    return items
+
+
+def polygon_item(item: Any) -> dict[str, Any]:
+    """One batch item validated as a GeoJSON object, as plain data.
+
+    Raises
+    ------
+    InvalidPolygonError
+        When it is not a valid GeoJSON shape (the first error, located in the item).
+    InvalidOptionError
+        When it is an envelope with options (a batch's options go in the query).
+    """
+    try:
+        shape = polygon_request_adapter.validate_python(item)
+    except ValidationError as exc:
+        first = body_errors(exc.errors(include_url=False))[0]
+        where = ".".join(str(p) for p in first["loc"])
+        raise InvalidPolygonError(f"{where or 'shape'}: {first['msg']}") from None
+    if isinstance(shape, PolygonJob):
+        raise InvalidOptionError("a batch item is a GeoJSON object; options go in the query")
+    return shape.model_dump(mode="json", exclude_none=True)
+
+
+def batch_size(items: list[Any]) -> None:
+    """Refuse an empty batch, and one over :data:`BATCH_MAX_ITEMS` shapes."""
+    if not items:
+        raise InvalidOptionError("the batch is empty: send at least one shape")
+    if len(items) > BATCH_MAX_ITEMS:
+        raise BodyTooLargeError(f"a batch holds at most {BATCH_MAX_ITEMS} shapes, got {len(items)}")
+
+
+@dataclass(frozen=True)
+class Form:
+    """A multipart form as read: each field in order, an uploaded file as its bytes and a
+    text field as its string."""
+
+    items: tuple[tuple[str, bytes | str], ...]
+
+    def get(self, name: str) -> bytes | str | None:
+        """The field's last value (as a form's lookup gives it)."""
+        found = [v for k, v in self.items if k == name]
+        return found[-1] if found else None
+
+    def names(self) -> list[str]:
+        """The field names, each once."""
+        return list(dict.fromkeys(k for k, _ in self.items))
+
+    def files(self, name: str) -> list[bytes]:
+        """The files uploaded in the (repeated) field ``name``, in order."""
+        return [v for k, v in self.items if k == name and isinstance(v, bytes)]
+
+    def uploads(self, names: tuple[str, ...], what: str) -> list[bytes]:
+        """The file of each named field.
+
+        Raises
+        ------
+        RequestValidationError
+            Naming every field that holds no file ("multipart field 'a' with ``what``
+            is required").
+        """
+        missing = [k for k in names if not isinstance(self.get(k), bytes)]
+        if missing:
+            raise RequestValidationError(
+                [
+                    {
+                        "loc": ("body", k),
+                        "type": "missing",
+                        "msg": f"multipart field {k!r} with {what} is required",
+                    }
+                    for k in missing
+                ]
+            )
+        return [v for v in map(self.get, names) if isinstance(v, bytes)]
+
+    def options(self, files: str) -> PruneQuery:
+        """The text fields other than ``files``, read as options as the query's are
+        (unknown ones refused; errors located in the body)."""
+        fields = QueryParams([(k, v) for k, v in self.items if k != files and isinstance(v, str)])
+        try:
+            return parse_query(fields)
+        except RequestValidationError as exc:
+            raise RequestValidationError(
+                [{**e, "loc": ("body", *e["loc"][1:])} for e in exc.errors()]
+            ) from None
+
+
+async def read_form(request: Request, max_files: int) -> Form:
+    """The request's multipart form, at most ``max_files`` files and 16 text fields."""
+    items: list[tuple[str, bytes | str]] = []
+    async with request.form(max_files=max_files, max_fields=16) as form:
+        for key, value in form.multi_items():
+            items.append((key, await value.read() if isinstance(value, UploadFile) else value))
+    return Form(tuple(items))

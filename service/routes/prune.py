@@ -1,0 +1,179 @@
+"""``POST /v1/prune`` and ``POST /v1/prune/batch``."""
+
+from __future__ import annotations
+
+import json
+import logging
+from collections.abc import AsyncIterator, Callable
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Depends, Request, Response
+from fastapi.responses import StreamingResponse
+
+from service import openapi
+from service.builder import JobBuilder, job_builder
+from service.errors import InternalError, UnsupportedMediaTypeError, lookup, problem
+from service.examples import PRUNE_RESPONSES
+from service.http.bodies import (
+    BATCH_MAX_ITEMS,
+    JSON_TYPES,
+    batch_size,
+    content_type,
+    parse_json_list,
+    parse_polygon,
+    polygon_item,
+    read_form,
+    refuse_encoding,
+    validate_json,
+)
+from service.http.negotiation import NDJSON, accept_ndjson, negotiate
+from service.http.query import parse_query
+from service.jobs import Job, run_job
+from service.pool import PoolError, WorkerPool
+from service.settings import Settings
+from skelprune.errors import InvalidPolygonError, SkelpruneError
+from skelprune.io.png import check_png_size
+
+__all__ = ["job_function", "router"]
+
+router = APIRouter()
+log = logging.getLogger("service.routes")
+
+
+async def job_function() -> Callable[[Job], Any]:
+    """The worker-side function (a dependency, so that tests can swap in a faulty one).
+
+    ``async`` although it does nothing to wait for: FastAPI runs a plain ``def``
+    dependency in its thread pool, a thread round trip on every request.
+    """
+    return run_job
+
+
+@router.post(
+    "/v1/prune",
+    summary="Prune the skeleton of a PNG mask or a GeoJSON polygon",
+    description=openapi.PRUNE_DESCRIPTION,
+    response_class=Response,
+    responses=PRUNE_RESPONSES,
+    openapi_extra=openapi.PRUNE_EXTRA,
+    tags=["prune"],
+)
+async def prune(
+    request: Request,
+    fn: Annotated[Callable[[Job], Any], Depends(job_function)],
+) -> Response:
+    query = parse_query(request.query_params)  # first: bad options are refused before all
+    settings: Settings = request.app.state.settings
+    pool: WorkerPool = request.app.state.pool
+    output = negotiate(request.headers.get("accept"))
+    ctype = content_type(request)
+    refuse_encoding(request)
+    body = await request.body()  # size-limited by BodyLimitMiddleware
+    if ctype in ("image/png", "multipart/form-data"):
+        envelope = None
+        if ctype == "image/png":
+            png = body
+        else:
+            form = await read_form(request, max_files=1)
+            (png,) = form.uploads(("file",), "the PNG")
+            envelope = form.options(files="file")
+        check_png_size(png, settings.max_pixels)  # refused before it is queued
+        geojson = None
+    elif ctype in JSON_TYPES:
+        envelope, geojson = await validate_json(parse_polygon, body)
+        png = None
+    else:
+        shown = ctype or "none"
+        raise UnsupportedMediaTypeError(
+            f"Content-Type {shown!r} is not supported; send image/png, multipart/form-data "
+            "(field 'file') or application/json (GeoJSON)"
+        )
+    build = job_builder(query, envelope, settings, polygon=geojson is not None, output=output)
+    result = await pool.run(fn, build.job(png=png, geojson=geojson))
+    request.app.state.metrics.prune_seconds.observe(result.prune_seconds)
+    # The same URL answers in three formats: caches must key on Accept.
+    return Response(
+        result.body, media_type=result.media_type, headers={"Vary": "Accept", **result.headers}
+    )
+
+
+def _item_problem(exc: Exception) -> dict[str, Any]:
+    row = lookup(exc)
+    if row is None or (row.status >= 500 and not isinstance(exc, PoolError)):
+        if row is None:
+            log.error("batch item failed: %s", type(exc).__name__)
+        exc = InternalError("the job failed with an internal error")
+    return json.loads(problem(exc).body)
+
+
+def _batch_item(
+    index: int, item: Any, build: JobBuilder, settings: Settings, png: bool
+) -> Job | dict[str, Any]:
+    """The job of one shape, or its problem line."""
+    try:
+        if png:
+            check_png_size(item, settings.max_pixels)
+            return build.job(png=item)
+        return build.job(geojson=polygon_item(item))
+    except SkelpruneError as exc:
+        return {"index": index, "problem": _item_problem(exc)}
+    except RecursionError:  # an item nested deeper than validation's stack
+        return {
+            "index": index,
+            "problem": _item_problem(InvalidPolygonError("shape: nested too deep")),
+        }
+
+
+@router.post(
+    "/v1/prune/batch",
+    summary="Prune several shapes; NDJSON answer in input order",
+    description=openapi.BATCH_DESCRIPTION,
+    response_class=Response,
+    responses=openapi.BATCH_RESPONSES,
+    openapi_extra=openapi.BATCH_EXTRA,
+    tags=["prune"],
+)
+async def prune_batch(
+    request: Request,
+    fn: Annotated[Callable[[Job], Any], Depends(job_function)],
+) -> Response:
+    query = parse_query(request.query_params)
+    settings: Settings = request.app.state.settings
+    pool: WorkerPool = request.app.state.pool
+    accept_ndjson(request.headers.get("accept", ""))
+    ctype = content_type(request)
+    body = await request.body()  # size-limited by BodyLimitMiddleware
+    items: list[Any]
+    form_options = None
+    if ctype == "multipart/form-data":
+        form = await read_form(request, max_files=BATCH_MAX_ITEMS + 1)
+        items = list(form.files("file"))
+        form_options = form.options(files="file")
+    elif ctype in JSON_TYPES:
+        items = parse_json_list(body)
+    else:
+        raise UnsupportedMediaTypeError(
+            f"Content-Type {ctype or 'none'!r} is not supported; send multipart/form-data "
+            "(fields 'file') or application/json (a list of GeoJSON objects)"
+        )
+    batch_size(items)
+    png = ctype == "multipart/form-data"
+    # the options are checked first, once: a bad option is the batch's problem
+    build = job_builder(query, form_options, settings, polygon=not png, output="json")
+    jobs = [_batch_item(i, item, build, settings, png) for i, item in enumerate(items)]
+
+    async def lines() -> AsyncIterator[bytes]:
+        for index, job in enumerate(jobs):
+            if isinstance(job, dict):
+                line = job
+            else:
+                try:  # one job at a time: a batch never holds more than one worker
+                    result = await pool.run(fn, job)
+                    request.app.state.metrics.prune_seconds.observe(result.prune_seconds)
+                    yield b'{"index":%d,"result":' % index + result.body + b"}\n"
+                    continue
+                except Exception as exc:  # this shape's failure, not the batch's
+                    line = {"index": index, "problem": _item_problem(exc)}
+            yield json.dumps(line, separators=(",", ":")).encode() + b"\n"
+
+    return StreamingResponse(lines(), media_type=NDJSON)

@@ -18,12 +18,10 @@ from pydantic import (
     Field,
     Tag,
     TypeAdapter,
-    ValidationInfo,
     create_model,
-    field_validator,
 )
 
-from skelprune.options import GROUPS, RasterOptions, ReadOptions, check_option
+from skelprune.options import GROUPS, RasterOptions, ReadOptions
 
 __all__ = [
     "POLYGON_ONLY",
@@ -51,12 +49,13 @@ FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 POLYGON_ONLY = tuple(f.name for f in dataclass_fields(RasterOptions))
 
 
-def _option_models() -> tuple[type[BaseModel], dict[str, Any], dict[str, Any]]:
+def _option_models() -> tuple[type[BaseModel], dict[str, Any]]:
     """The query model and the body's option fields, from the library's option classes.
 
-    Only the wire types are declared here (a number, a flag, one of the choices); each
-    value is checked by the library's own check of that option
-    (:func:`skelprune.options.check_option`), so an error names the field it is in.
+    Only the wire types are declared here (a number, a flag, one of the choices); the
+    values are checked once, by the library's option classes, when the request builder
+    makes them (:mod:`service.builder`), which locates each error where it was given.
+    The checks' bounds are shown in the schema.
     """
     fields: dict[str, Any] = {}
     for group in GROUPS:
@@ -82,19 +81,12 @@ def _option_models() -> tuple[type[BaseModel], dict[str, Any], dict[str, Any]]:
                 text += " A server may set a default (`SKELPRUNE_POLYGON_LONGEST_SIDE`)."
             schema = getattr(f.metadata["check"], "schema", None)
             fields[f.name] = (wire | None, Field(None, description=text, json_schema_extra=schema))
-    validators = {"check": field_validator(*fields)(_check)}
-    query = create_model(
-        "PruneQuery", __config__=ConfigDict(extra="forbid"), __validators__=validators, **fields
-    )
+    query = create_model("PruneQuery", __config__=ConfigDict(extra="forbid"), **fields)
     query.__doc__ = "Options in the query string (all optional; unknown parameters are refused)."
-    return query, fields, validators
+    return query, fields
 
 
-def _check(cls: type, value: Any, info: ValidationInfo) -> Any:
-    return value if value is None else check_option(str(info.field_name), value)
-
-
-PruneQuery, _BODY_OPTIONS, _VALIDATORS = _option_models()
+PruneQuery, _BODY_OPTIONS = _option_models()
 
 
 def query_parameters(model: type[BaseModel]) -> list[dict[str, Any]]:
@@ -174,7 +166,6 @@ GeoJSONInput = Annotated[
 PolygonJob = create_model(
     "PolygonJob",
     __config__=STRICT,
-    __validators__=_VALIDATORS,
     geojson=(GeoJSONInput, ...),
     **_BODY_OPTIONS,
 )
@@ -382,6 +373,15 @@ class Versions(BaseModel):
     )
 
 
+#: The pruning options the document records as applied: the method's default filled in,
+#: null where the method does not use the option.
+_APPLIED = {
+    "min_margin": "As applied: the margin below which the answer's end branches went "
+    "(method=bayesian; null for method=dce).",
+    "dce_threshold": "As applied: the DCE stop threshold (method=dce; null for method=bayesian).",
+}
+
+
 class RasterInfo(BaseModel):
     """How a polygon was rasterised (polygon input only)."""
 
@@ -394,6 +394,10 @@ class RasterInfo(BaseModel):
         "pixel_size nor longest_side given)."
     )
     parts: int = Field(description="Parts of the (repaired) polygon.")
+    longest_side: int | None = Field(description="The option as given (null: not given).")
+    pixels_per_width: float = Field(description="The option (used when fitted).")
+    pixel_budget: int = Field(description="The option (used when fitted).")
+    repair: bool = Field(description="Whether invalid geometry was to be repaired.")
 
 
 class RasterWarningItem(BaseModel):
@@ -422,6 +426,8 @@ class PruneDocument(BaseModel):
         description="How the answer was chosen from the pruning sequence."
     )
     trim: bool = Field(description="Whether the answer's end branches were cut back at their tips.")
+    min_margin: float | None = Field(description=_APPLIED["min_margin"])
+    dce_threshold: float | None = Field(description=_APPLIED["dce_threshold"])
     foreground: ForegroundTaken
     components: list[Component]
     raster: RasterInfo | None = Field(None, description="Polygon input only.")
@@ -509,6 +515,10 @@ class CollectionProperties(BaseModel):
     coarse: Literal["dce"] | None
     choice: Literal["argmin", "noise-floor"]
     trim: bool
+    min_margin: float | None = Field(description=_APPLIED["min_margin"])
+    dce_threshold: float | None = Field(description=_APPLIED["dce_threshold"])
+    simplify: float = Field(description="How far each line was simplified, in pixels.")
+    cut_ends: bool = Field(description="Whether cut reaches end straight across.")
     components: list[ComponentSummary]
     warnings: list[RasterWarningItem] | None = Field(
         None, description="Polygon input only, as in the JSON document."

@@ -89,12 +89,10 @@ def _run_match_job(job: MatchJob) -> MatchResult:
     import skelprune
     from skelprune.api import prune_input
 
-    shapes = [read_job(job.a), read_job(job.b)]
-    check_budget(sum(estimate(s.mask) for s in shapes), job.a.memory_budget, job.a.time_budget)
+    a, b = read_job(job.a), read_job(job.b)
+    check_budget(estimate(a.mask) + estimate(b.mask), job.a.memory_budget, job.a.time_budget)
     t0 = time.perf_counter()
-    ra, rb = (
-        prune_input(s, j.options, j.shown) for s, j in zip(shapes, (job.a, job.b), strict=True)
-    )
+    ra, rb = prune_input(a, job.a.options, job.a.shown), prune_input(b, job.b.options, job.b.shown)
     elapsed = time.perf_counter() - t0
     # each result's own frame maps its positions (a polygon's coordinates)
     body = dumps(skelprune.match(ra, rb).to_dict())

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import asdict, dataclass, field, fields, replace
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 from .errors import InvalidOptionError, shown
@@ -256,10 +256,6 @@ class PruneOptions:
                 "margin measures the Bayesian trade-off"
             )
 
-    def kwargs(self) -> dict[str, Any]:
-        """As keyword arguments of :func:`skelprune.prune`."""
-        return asdict(self)
-
     def resolved(self) -> PruneOptions:
         """The options as the pruning applies them, as the document records them: the
         method's defaults filled in (``min_margin`` of the Bayesian pruning,
@@ -326,8 +322,9 @@ class RasterOptions:
 
     Examples
     --------
-    >>> RasterOptions(pixel_size=0.5).kwargs()
-    {'pixel_size': 0.5, 'pixels_per_width': 3.0, 'pixel_budget': 4194304, 'repair': True}
+    >>> RasterOptions(pixel_size=0.5)  # doctest: +NORMALIZE_WHITESPACE
+    RasterOptions(pixel_size=0.5, longest_side=None, pixels_per_width=3.0,
+                  pixel_budget=4194304, repair=True)
     >>> RasterOptions(pixel_size=0.5, longest_side=100)
     Traceback (most recent call last):
     ...
@@ -371,10 +368,6 @@ class RasterOptions:
         _check_fields(self)
         if self.pixel_size is not None and self.longest_side is not None:
             raise InvalidOptionError("give pixel_size or longest_side, not both")
-
-    def kwargs(self) -> dict[str, Any]:
-        """As keyword arguments of :func:`skelprune.io.polygon_mask` (unset sizes left out)."""
-        return {k: v for k, v in asdict(self).items() if v is not None}
 
 
 GROUPS: tuple[type, ...] = (PruneOptions, OutputOptions, ReadOptions, RasterOptions)

@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 from typing import Any
 
+from fastapi.exceptions import RequestValidationError
 from pydantic import BaseModel
 
 from service.jobs import MEDIA_TYPES, Job, Output
@@ -20,7 +21,7 @@ from service.match_job import MatchJob
 from service.schemas import POLYGON_ONLY, PruneQuery
 from service.settings import Settings
 from skelprune.errors import InvalidOptionError
-from skelprune.options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
+from skelprune.options import GROUPS, OutputOptions, PruneOptions, RasterOptions, ReadOptions
 
 __all__ = ["JobBuilder", "job_builder"]
 
@@ -88,6 +89,36 @@ def _group(opts: dict[str, Any], group: type) -> dict[str, Any]:
     return {f.name: opts[f.name] for f in fields(group) if f.name in opts}
 
 
+def _where(query: PruneQuery, body: BaseModel | None) -> dict[str, str]:
+    """Where each given option came from, as a validation error locates it."""
+    where = {k: "query" for k, v in query.model_dump().items() if v is not None}
+    if body is not None:
+        where.update(
+            (k, "body") for k, v in body.model_dump(exclude={"geojson"}).items() if v is not None
+        )
+    return where
+
+
+def _values(opts: dict[str, Any], where: dict[str, str]) -> tuple[Any, ...]:
+    """One value of each options class: the classes check the values, the only check
+    (the request's models check wire types). Every refused option is located where it
+    was given, as a validation error of the request."""
+    values, errors = [], []
+    for group in GROUPS:
+        try:
+            values.append(group(**_group(opts, group)))
+        except InvalidOptionError as exc:
+            if not exc.errors:  # options refused together: no one place to name
+                raise
+            errors += [
+                {"loc": (where.get(name, "query"), name), "msg": message, "type": "value_error"}
+                for name, message in exc.errors
+            ]
+    if errors:
+        raise RequestValidationError(errors)
+    return tuple(values)
+
+
 @dataclass(frozen=True)
 class JobBuilder:
     """A request's checked options and the service's limits: makes the job of each of
@@ -98,34 +129,29 @@ class JobBuilder:
     prune: PruneOptions
     out: OutputOptions
     read: ReadOptions
-    #: Keyword arguments of the polygon raster (empty for PNG input).
-    raster: dict[str, Any]
+    raster: RasterOptions
 
     def job(self, png: bytes | None = None, geojson: dict[str, Any] | None = None) -> Job:
         """The worker's job for one shape: exactly one of ``png`` and ``geojson``."""
         settings = self.settings
+        kind, data = ("image", png) if png is not None else ("geojson", geojson or {})
         return Job(
             output=self.output,
-            png=png,
-            geojson=geojson,
-            prune_options=self.prune.kwargs(),
+            kind=kind,
+            data=data,
+            options=self.prune,
+            read=self.read,
             raster=self.raster,
-            curve=self.out.curve,
-            overlay=self.out.overlay,
-            sequence=self.out.sequence,
-            overlay_scale=self.out.overlay_scale,
-            overlay_legend=self.out.overlay_legend,
-            simplify=self.out.simplify,
-            cut_ends=self.out.cut_ends,
+            shown=self.out,
             max_pixels=settings.max_pixels,
-            foreground=self.read.foreground,
+            max_vertices=settings.max_vertices,
             memory_budget=settings.job_memory_mb * 2**20,
             time_budget=settings.job_timeout,
         )
 
     def match_job(self, a: Job, b: Job) -> MatchJob:
         """The worker's job matching two shapes (each a :meth:`job`)."""
-        return MatchJob(a=a, b=b, prune_options=self.prune.kwargs())
+        return MatchJob(a=a, b=b)
 
 
 def job_builder(
@@ -157,21 +183,28 @@ def job_builder(
     Raises
     ------
     InvalidOptionError
-        An option given twice, where it does not apply, or with a bad value.
+        An option given twice, where it does not apply, or refused together with another.
+    RequestValidationError
+        An option with a bad value, located where it was given (query or body).
     """
     opts = _gather(query, body, polygon, output)
     if match:
         unused = list(_group(opts, OutputOptions))
         if unused:
             raise InvalidOptionError(f"option(s) {', '.join(unused)} do not apply to /v1/match")
-    # The library's option classes check the values (the only place they are checked).
-    prune = PruneOptions(**_group(opts, PruneOptions))
-    out = OutputOptions(**_group(opts, OutputOptions))
-    read = ReadOptions(**_group(opts, ReadOptions))
-    raster: dict[str, Any] = {}
-    if polygon:
-        given = _group(opts, RasterOptions)
-        if "pixel_size" not in given and settings.polygon_longest_side is not None:
-            given.setdefault("longest_side", settings.polygon_longest_side)
-        raster = {**RasterOptions(**given).kwargs(), "max_vertices": settings.max_vertices}
-    return JobBuilder(output, settings, prune, out, read, raster)
+    if (
+        polygon
+        and "pixel_size" not in opts
+        and "longest_side" not in opts
+        and settings.polygon_longest_side is not None
+    ):
+        opts["longest_side"] = settings.polygon_longest_side  # the server's default
+    values = dict(zip(GROUPS, _values(opts, _where(query, body)), strict=True))
+    return JobBuilder(
+        output,
+        settings,
+        values[PruneOptions],
+        values[OutputOptions],
+        values[ReadOptions],
+        values[RasterOptions],
+    )

@@ -34,6 +34,8 @@ DOCUMENT_EXAMPLE: dict[str, Any] = {
     "coarse": "dce",
     "choice": "argmin",
     "trim": True,
+    "min_margin": 0.01,
+    "dce_threshold": None,
     "foreground": {"rule": "auto", "shape": "light", "threshold": 127.5, "border": 1.0},
     "components": [
         {
@@ -97,6 +99,10 @@ GEOJSON_EXAMPLE: dict[str, Any] = {
         "coarse": "dce",
         "choice": "argmin",
         "trim": True,
+        "min_margin": 0.01,
+        "dce_threshold": None,
+        "simplify": 0.5,
+        "cut_ends": False,
         "components": [
             {
                 "component": 0,

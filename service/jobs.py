@@ -6,7 +6,6 @@ the worker returns the response body already serialised.
 
 from __future__ import annotations
 
-import base64
 import json
 import sys
 import time
@@ -16,14 +15,21 @@ from typing import Any, Literal
 import numpy as np
 
 from service.budget import cap_address_space, check_budget, estimate, out_of_memory
-from skelprune.errors import ImageTooLargeError, InvalidImageError, SkelpruneError
-from skelprune.io import read_shape
-from skelprune.io.foreground import POLYGON_FOREGROUND, Foreground
-from skelprune.io.frame import PixelFrame
-from skelprune.io.polygon import PolygonRaster, read_polygon
+from skelprune.errors import ImageTooLargeError, SkelpruneError
+from skelprune.io.input import Input, Kind, read_input
+from skelprune.options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
 from skelprune.output.render import auto_scale
 
-__all__ = ["Job", "JobResult", "answer_pixels", "dumps", "kernel_counts", "run_job", "warmup"]
+__all__ = [
+    "Job",
+    "JobResult",
+    "answer_pixels",
+    "dumps",
+    "kernel_counts",
+    "read_job",
+    "run_job",
+    "warmup",
+]
 
 Output = Literal["json", "png", "geojson"]
 
@@ -36,27 +42,23 @@ MEDIA_TYPES: dict[str, str] = {
 
 @dataclass(frozen=True)
 class Job:
-    """One pruning request, as sent to a worker (picklable).
+    """One shape to prune, as sent to a worker (picklable): the input as it came, its
+    kind, and the request's options as the library's checked, frozen values.
 
-    Exactly one of ``png`` (PNG bytes) and ``geojson`` (a GeoJSON mapping) is set.
-    ``prune_options`` go to :func:`skelprune.prune` unchanged; ``raster`` to
-    :func:`skelprune.io.polygon.polygon_mask`.
+    ``data`` is PNG bytes for ``kind="image"``, a GeoJSON mapping for ``kind="geojson"``;
+    the worker reads it with :func:`skelprune.io.read_input` (as data, never a file's
+    name) and prunes it with :func:`skelprune.api.prune_input`, the library's pipeline.
     """
 
     output: Output
-    png: bytes | None = None
-    geojson: dict[str, Any] | None = None
-    prune_options: dict[str, Any] = field(default_factory=dict)
-    raster: dict[str, Any] = field(default_factory=dict)
-    curve: bool = True
-    overlay: bool = False
-    sequence: bool = False
-    overlay_scale: int | None = None  # None: the library's readable default
-    overlay_legend: bool = False
-    simplify: float = 0.5
-    cut_ends: bool = False
+    kind: Kind
+    data: bytes | dict[str, Any]
+    options: PruneOptions = field(default_factory=PruneOptions)
+    read: ReadOptions = field(default_factory=ReadOptions)
+    raster: RasterOptions = field(default_factory=RasterOptions)
+    shown: OutputOptions = field(default_factory=OutputOptions)
     max_pixels: int | None = None
-    foreground: str = "auto"
+    max_vertices: int | None = None
     memory_budget: int | None = None  # bytes a worker may hold for the job
     time_budget: float | None = None  # seconds the job may take (the job time limit)
 
@@ -137,22 +139,16 @@ def warmup(memory_budget: int | None = None) -> str:
     return f"{loaded} numba kernels loaded from the cache in {took}"
 
 
-def _raster(job: Job) -> PolygonRaster:
-    return read_polygon(job.geojson or {}, max_pixels=job.max_pixels, **job.raster)
-
-
-def _mask(job: Job) -> tuple[np.ndarray, PixelFrame | None, Foreground]:
-    if job.png is not None:
-        # read_shape also opens files by path: never let anything but bytes through.
-        if not isinstance(job.png, bytes | bytearray | memoryview):
-            raise InvalidImageError("PNG input must be bytes, not a file name")
-        mask, taken = read_shape(
-            bytes(job.png), foreground=job.foreground, max_pixels=job.max_pixels
-        )
-        return mask, None, taken
-    assert job.geojson is not None
-    raster = _raster(job)
-    return raster.mask, raster.frame, POLYGON_FOREGROUND
+def read_job(job: Job) -> Input:
+    """The job's input, read with the service's limits."""
+    return read_input(
+        job.data,
+        kind=job.kind,
+        read=job.read,
+        raster=job.raster,
+        max_pixels=job.max_pixels,
+        max_vertices=job.max_vertices,
+    )
 
 
 def answer_pixels(job: Job, shape: tuple[int, int]) -> int:
@@ -163,9 +159,9 @@ def answer_pixels(job: Job, shape: tuple[int, int]) -> int:
     ImageTooLargeError
         When ``overlay_scale`` makes the overlay larger than ``max_pixels``.
     """
-    if job.output != "png" and not job.overlay:
+    if job.output != "png" and not job.shown.overlay:
         return 0
-    scale = auto_scale(shape) if job.overlay_scale is None else job.overlay_scale
+    scale = auto_scale(shape) if job.shown.overlay_scale is None else job.shown.overlay_scale
     height, width = shape[0] * scale, shape[1] * scale
     if job.max_pixels is not None and width * height > job.max_pixels:
         raise ImageTooLargeError(
@@ -189,26 +185,17 @@ def run_job(job: Job) -> JobResult:
 
 
 def _run_job(job: Job) -> JobResult:
-    import skelprune
+    from skelprune.api import prune_input
 
-    raster, taken = None, None
-    if job.geojson is not None:
-        raster = _raster(job)
-        mask = raster.mask
-    else:
-        mask, _, taken = _mask(job)
-    cost = estimate(mask, answer_pixels(job, mask.shape))
+    shape = read_job(job)
+    cost = estimate(shape.mask, answer_pixels(job, shape.mask.shape))
     check_budget(cost, job.memory_budget, job.time_budget)
     t0 = time.perf_counter()
-    if raster is not None:
-        res = skelprune.api.prune_raster(raster, **job.prune_options)
-    else:
-        res = skelprune.prune(mask, **job.prune_options)
-        res.foreground = taken
+    res = prune_input(shape, job.options, job.shown)
     elapsed = time.perf_counter() - t0
     headers: dict[str, str] = {}
     if job.output == "png":
-        body = res.overlay_png(job.overlay_scale, job.overlay_legend)
+        body = res.overlay_png()
         headers = {
             name: ",".join(repr(float(getattr(c, key))) for c in res.components)
             for name, key in PNG_HEADERS.items()
@@ -217,13 +204,9 @@ def _run_job(job: Job) -> JobResult:
         if res.warnings:  # a polygon the raster does not hold as it is
             headers["X-Skelprune-Warnings"] = str(len(res.warnings))
     elif job.output == "geojson":
-        body = dumps(res.to_geojson(simplify=job.simplify, cut_ends=job.cut_ends))
+        body = dumps(res.to_geojson())
     else:
-        doc = res.to_dict(curve=job.curve, sequence=job.sequence)
-        if job.overlay:
-            png = res.overlay_png(job.overlay_scale, job.overlay_legend)
-            doc["overlay_png"] = base64.b64encode(png).decode("ascii")
-        body = dumps(doc)
+        body = dumps(res.to_dict())
     return JobResult(
         body=body, media_type=MEDIA_TYPES[job.output], prune_seconds=elapsed, headers=headers
     )

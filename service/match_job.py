@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
 
 from pydantic import BaseModel, ConfigDict, Field
 
 from service.budget import check_budget, estimate, out_of_memory
-from service.jobs import Job, _mask, dumps
+from service.jobs import Job, dumps, read_job
 from service.schemas import GeoJSONInput
 
 __all__ = [
@@ -63,11 +62,11 @@ class MatchDocument(BaseModel):
 
 @dataclass(frozen=True)
 class MatchJob:
-    """Two shapes to prune and match, as sent to a worker (picklable)."""
+    """Two shapes to prune and match, as sent to a worker (picklable); each job carries
+    the request's options values."""
 
     a: Job
     b: Job
-    prune_options: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -88,14 +87,13 @@ def run_match_job(job: MatchJob) -> MatchResult:
 
 def _run_match_job(job: MatchJob) -> MatchResult:
     import skelprune
+    from skelprune.api import prune_input
 
-    (ma, frame_a, _), (mb, frame_b, _) = _mask(job.a), _mask(job.b)
-    check_budget(estimate(ma) + estimate(mb), job.a.memory_budget, job.a.time_budget)
+    a, b = read_job(job.a), read_job(job.b)
+    check_budget(estimate(a.mask) + estimate(b.mask), job.a.memory_budget, job.a.time_budget)
     t0 = time.perf_counter()
-    ra = skelprune.prune(ma, **job.prune_options)
-    rb = skelprune.prune(mb, **job.prune_options)
+    ra, rb = prune_input(a, job.a.options, job.a.shown), prune_input(b, job.b.options, job.b.shown)
     elapsed = time.perf_counter() - t0
-    res = skelprune.match(ra, rb)
-    frames = {k: f for k, f in (("frame_a", frame_a), ("frame_b", frame_b)) if f is not None}
-    body = dumps(res.to_dict(**frames))
+    # each result's own frame maps its positions (a polygon's coordinates)
+    body = dumps(skelprune.match(ra, rb).to_dict())
     return MatchResult(body=body, media_type="application/json", prune_seconds=elapsed)

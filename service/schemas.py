@@ -33,12 +33,10 @@ from pydantic import (
     Field,
     Tag,
     TypeAdapter,
-    ValidationInfo,
     create_model,
-    field_validator,
 )
 
-from skelprune.options import GROUPS, RasterOptions, ReadOptions, check_option
+from skelprune.options import GROUPS, RasterOptions, ReadOptions
 from skelprune.output import schema
 from skelprune.output.schema import Doc, Len
 
@@ -68,12 +66,13 @@ FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 POLYGON_ONLY = tuple(f.name for f in dataclass_fields(RasterOptions))
 
 
-def _option_models() -> tuple[type[BaseModel], dict[str, Any], dict[str, Any]]:
+def _option_models() -> tuple[type[BaseModel], dict[str, Any]]:
     """The query model and the body's option fields, from the library's option classes.
 
-    Only the wire types are declared here (a number, a flag, one of the choices); each
-    value is checked by the library's own check of that option
-    (:func:`skelprune.options.check_option`), so an error names the field it is in.
+    Only the wire types are declared here (a number, a flag, one of the choices); the
+    values are checked once, by the library's option classes, when the request builder
+    makes them (:mod:`service.builder`), which locates each error where it was given.
+    The checks' bounds are shown in the schema.
     """
     fields: dict[str, Any] = {}
     for group in GROUPS:
@@ -99,19 +98,12 @@ def _option_models() -> tuple[type[BaseModel], dict[str, Any], dict[str, Any]]:
                 text += " A server may set a default (`SKELPRUNE_POLYGON_LONGEST_SIDE`)."
             schema = getattr(f.metadata["check"], "schema", None)
             fields[f.name] = (wire | None, Field(None, description=text, json_schema_extra=schema))
-    validators = {"check": field_validator(*fields)(_check)}
-    query = create_model(
-        "PruneQuery", __config__=ConfigDict(extra="forbid"), __validators__=validators, **fields
-    )
+    query = create_model("PruneQuery", __config__=ConfigDict(extra="forbid"), **fields)
     query.__doc__ = "Options in the query string (all optional; unknown parameters are refused)."
-    return query, fields, validators
+    return query, fields
 
 
-def _check(cls: type, value: Any, info: ValidationInfo) -> Any:
-    return value if value is None else check_option(str(info.field_name), value)
-
-
-PruneQuery, _BODY_OPTIONS, _VALIDATORS = _option_models()
+PruneQuery, _BODY_OPTIONS = _option_models()
 
 
 def query_parameters(model: type[BaseModel]) -> list[dict[str, Any]]:
@@ -191,7 +183,6 @@ GeoJSONInput = Annotated[
 PolygonJob = create_model(
     "PolygonJob",
     __config__=STRICT,
-    __validators__=_VALIDATORS,
     geojson=(GeoJSONInput, ...),
     **_BODY_OPTIONS,
 )

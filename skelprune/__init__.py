@@ -7,8 +7,20 @@ simplicity and reconstruction error", Science China Information Sciences, 2013.
 >>> m = np.zeros((30, 60), bool); m[5:25, 5:55] = True
 >>> doc = skelprune.prune(m).to_dict()
 >>> sorted(doc)  # doctest: +NORMALIZE_WHITESPACE
-['beta', 'choice', 'coarse', 'components', 'foreground', 'height', 'method', 'trim',
- 'version', 'width']
+['beta', 'choice', 'coarse', 'components', 'dce_threshold', 'foreground', 'height',
+ 'method', 'min_margin', 'trim', 'version', 'width']
+
+A polygon in one call, answered in its own coordinates:
+
+>>> strip = {"type": "Polygon",
+...          "coordinates": [[[0, 0], [100, 0], [100, 10], [0, 10], [0, 0]]]}
+>>> skelprune.prune(strip).to_geojson()["features"][0]["geometry"]["type"]
+'LineString'
+
+Options travel as one value each (:mod:`skelprune.options`), or as keywords:
+
+>>> skelprune.prune(m, skelprune.PruneOptions(beta=3.0)).to_dict()["beta"]
+3.0
 >>> doc["version"] == {"library": skelprune.__version__, "algorithm": ALGORITHM_VERSION}
 True
 
@@ -32,11 +44,13 @@ from .errors import (
     InvalidPolygonError,
     SkelpruneError,
 )
+from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
 
 if TYPE_CHECKING:
     from .api import components, prune
     from .graph import BranchGraph
     from .io.frame import PixelFrame
+    from .io.input import Input, read_input
     from .matching import Match, SkeletonDescriptor, UnmatchableShapeError, describe, match
     from .medial_axis import MedialAxis, medial_axis, squared_distance
     from .output.document import ComponentResult, PruneResult
@@ -48,6 +62,8 @@ _LAZY = {
     "prune": "api",
     "BranchGraph": "graph",
     "PixelFrame": "io.frame",
+    "Input": "io.input",
+    "read_input": "io.input",
     "Match": "matching",
     "SkeletonDescriptor": "matching",
     "UnmatchableShapeError": "matching",
@@ -88,13 +104,18 @@ __all__ = [
     "ComponentResult",
     "EmptyMaskError",
     "ImageTooLargeError",
+    "Input",
     "InvalidImageError",
     "InvalidOptionError",
     "InvalidPolygonError",
     "Match",
     "MedialAxis",
+    "OutputOptions",
     "PixelFrame",
+    "PruneOptions",
     "PruneResult",
+    "RasterOptions",
+    "ReadOptions",
     "SkeletonDescriptor",
     "SkelpruneError",
     "UnmatchableShapeError",
@@ -103,6 +124,7 @@ __all__ = [
     "match",
     "medial_axis",
     "prune",
+    "read_input",
     "reconstruction",
     "reconstruction_error",
     "squared_distance",

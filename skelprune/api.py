@@ -2,21 +2,26 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import asdict, replace
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any
 
 import numpy as np
 
 from ._label import components8
-from .errors import EmptyMaskError, InvalidOptionError
-from .io.foreground import select
-from .options import DEFAULT_MIN_MARGIN, METHODS, PruneOptions, RasterOptions, check_option
+from .errors import EmptyMaskError
+from .io.input import Input, read_input
+from .options import (
+    METHODS,
+    OutputOptions,
+    PruneOptions,
+    RasterOptions,
+    ReadOptions,
+    options_value,
+    split_options,
+)
 from .output.document import ComponentResult, GraphSummary, PruneResult
 from .pruning.bayesian import bayesian_sequence, choose_step, remove_unsupported
 from .pruning.coarse import coarse_dce
 from .pruning.dce import (
-    DCE_THRESHOLD,
     DCE_VERTICES,
     boundary_partition,
     generated_in_several_segments,
@@ -27,10 +32,7 @@ from .pruning.tips import trim_tips
 from .reconstruction import count_covered
 from .skeleton import Skeleton
 
-if TYPE_CHECKING:
-    from .io.polygon import PolygonRaster
-
-__all__ = ["METHODS", "components", "prune", "prune_component", "prune_raster"]
+__all__ = ["METHODS", "components", "prune", "prune_component", "prune_input"]
 
 
 def components(mask: np.ndarray) -> list[tuple[np.ndarray, tuple[int, int]]]:
@@ -61,13 +63,13 @@ def prune_component(
     ties included, so that a shape turned by 90° or mirrored gets the turned or mirrored
     skeleton; the result maps its points back.
     """
+    options = options.resolved()  # the method's defaults filled in
     beta = options.beta
-    min_margin = DEFAULT_MIN_MARGIN if options.min_margin is None else options.min_margin
+    min_margin = options.min_margin or 0.0  # None for DCE pruning
     medial = Skeleton.medial_axis(crop, origin)
     if options.method == "dce":
         norm = medial.normalisation(beta)
-        threshold = DCE_THRESHOLD if options.dce_threshold is None else options.dce_threshold
-        keep = dce_support(medial, DCE_VERTICES, threshold)
+        keep = dce_support(medial, DCE_VERTICES, options.dce_threshold)
         order = remove_unsupported(medial.working_graph(), keep)
         start = medial
         seq = bayesian_sequence(start, norm.alpha, norm.lbar, order=order)
@@ -125,87 +127,59 @@ def prune_component(
     )
 
 
-def _is_polygon(shape: Any) -> bool:
-    return isinstance(shape, Mapping) or hasattr(shape, "__geo_interface__")
-
-
 def prune(
-    mask: Any,
-    beta: float = 9.0,
-    method: Literal["bayesian", "dce"] = "bayesian",
-    coarse: Literal["dce"] | None = "dce",
-    dce_threshold: float | None = None,
-    foreground: Literal["auto", "nonzero", "zero"] = "nonzero",
-    min_margin: float | None = None,
-    choice: Literal["argmin", "noise-floor"] = "argmin",
-    trim: bool = True,
+    source: Any,
+    options: PruneOptions | None = None,
     *,
-    pixel_size: float | None = None,
-    longest_side: int | None = None,
-    pixels_per_width: float = RasterOptions.pixels_per_width,
-    pixel_budget: int = RasterOptions.pixel_budget,
-    repair: bool = RasterOptions.repair,
+    read: ReadOptions | None = None,
+    raster: RasterOptions | None = None,
+    output: OutputOptions | None = None,
+    **keywords: Any,
 ) -> PruneResult:
-    """Pruned skeleton of every 8-connected component of a binary mask, or of a polygon.
+    """Pruned skeleton of every 8-connected component of a shape: a mask, an image or a
+    polygon.
 
     Parameters
     ----------
-    mask : (H, W) array, GeoJSON mapping or shapely geometry
-        The image (by default its non-zero pixels are the shape), or a polygon: a GeoJSON
-        ``Polygon``, ``MultiPolygon``, ``Feature`` or ``FeatureCollection`` as a mapping,
-        or a shapely (Multi)Polygon. A polygon is rasterised
-        (:func:`skelprune.io.polygon.polygon_raster`) and its result maps itself back:
-        ``to_dict()`` and ``to_geojson()`` answer in the polygon's coordinates and carry
-        the raster's ``warnings``.
-    beta : float
-        Weight of the reconstruction term, ``α = β·log(length(M)/ℓ̄)``; the paper's 9.
-    method : {"bayesian", "dce"}
-        Bayesian pruning (the paper) or DCE contour-partition pruning (its ref. [10]).
-    coarse : {"dce", None}
-        For ``method="bayesian"``: start from a coarse skeleton, pruned by DCE contour
-        partition (:mod:`skelprune.pruning.coarse`; the default, as the paper's experiments
-        did), or from the full medial axis (``None``). Chosen by the stability
-        benchmark: see ``docs/stability-findings.md``. Ignored by ``method="dce"``,
-        which is the DCE pruning itself.
-    dce_threshold : float, optional
-        For ``method="dce"``: the DCE stop threshold on relevance (scale-free: edge
-        lengths over the perimeter); default :data:`skelprune.pruning.dce.DCE_THRESHOLD`.
-    foreground : {"nonzero", "auto", "zero"}
-        Which pixels of ``mask`` are the shape (:mod:`skelprune.io.foreground`): the
-        non-zero ones (the default for arrays, as a boolean mask means), the zero ones,
-        or by the ``auto`` rule, which :func:`skelprune.io.read_mask` uses for images:
-        the background is the grey level holding most of the image border.
-    min_margin : float, optional
-        For ``method="bayesian"``: drop the answer's end branches whose margin
-        (:mod:`skelprune.pruning.margin`) is below this, one at a time, cheapest first, as
-        the sequence would go on removing them. Default (``None``):
-        :data:`~skelprune.options.DEFAULT_MIN_MARGIN`, chosen by the stability benchmark
-        over noise models and sizes; ``0``: the paper's answer, the argmin of λ.
-    choice : {"argmin", "noise-floor"}
-        For ``method="bayesian"``: how the answer is chosen from the sequence:
-        ``"argmin"``, the paper's skeleton of least λ, or ``"noise-floor"``
-        (:mod:`skelprune.pruning.floor`), least λ with the reconstruction error counted
-        only over the pixels deeper than the boundary's one-pixel rim.
-    trim : bool
-        For ``method="bayesian"``: cut each end branch of the answer back from its tip to
-        the point that minimises the target λ along it (:mod:`skelprune.pruning.tips`;
-        the default), so that a round end's branch stops near its centre instead of
-        turning to the boundary. ``False``: the greedy's answer, branches whole.
-    pixel_size, longest_side, pixels_per_width, pixel_budget, repair
-        Polygon input only: how it becomes a raster (:class:`skelprune.options.RasterOptions`;
-        default: a pixel size fitted to the polygon).
+    source : array, Input, GeoJSON mapping or text, shapely geometry, bytes or path
+        What :func:`skelprune.io.read_input` reads: a mask (its non-zero pixels are the
+        shape unless ``foreground`` says otherwise), PNG bytes or a file's path, or a
+        polygon (``Polygon``, ``MultiPolygon``, ``Feature`` or ``FeatureCollection``, or
+        a shapely (Multi)Polygon), rasterised as ``raster`` says. A polygon's result maps
+        itself back: ``to_dict()`` and ``to_geojson()`` answer in its coordinates and
+        carry the raster's ``warnings``.
+    options : PruneOptions, optional
+        How to prune (:class:`skelprune.options.PruneOptions`: ``beta``, ``method``,
+        ``coarse``, ``dce_threshold``, ``min_margin``, ``choice``, ``trim``; the defaults:
+        the paper's pruning from a coarse DCE skeleton, the answer's end branches of
+        margin below 0.01 dropped, their tips cut back).
+    read : ReadOptions, optional
+        Image input: which pixels are the shape (``foreground``).
+    raster : RasterOptions, optional
+        Polygon input: how it becomes pixels (``pixel_size``, ``longest_side``,
+        ``pixels_per_width``, ``pixel_budget``, ``repair``).
+    output : OutputOptions, optional
+        What the result's outputs hold by default (``curve``, ``sequence``, ``overlay``,
+        ``overlay_scale``, ``overlay_legend``, ``simplify``, ``cut_ends``).
+    **keywords
+        Any field of those four classes by name, instead of the class's value (never
+        both for one class): ``prune(mask, beta=3.0)`` is
+        ``prune(mask, PruneOptions(beta=3.0))``.
 
     Returns
     -------
     PruneResult
+        The components' answers, the input (mask, frame, foreground) and every option:
+        its outputs need no further argument.
 
     Raises
     ------
     EmptyMaskError
-        When the mask has no foreground pixel.
+        When the shape has no pixel.
     InvalidOptionError
-        For a bad ``beta``, ``method``, ``coarse``, ``foreground``, ``min_margin`` or
-        ``trim``.
+        For an option its class refuses.
+    TypeError
+        For an unknown option, or a class's value and its fields both given.
 
     Examples
     --------
@@ -214,6 +188,8 @@ def prune(
     >>> comp = res.components[0]
     >>> len(comp.to_dict()["skeleton"]["endpoints"]), comp.rer < 0.05
     (4, True)
+    >>> prune(m, beta=3.0).to_dict()["beta"], prune(m, PruneOptions(method="dce")).method
+    (3.0, 'dce')
 
     A polygon, in its own coordinates:
 
@@ -223,70 +199,46 @@ def prune(
     >>> doc = res.to_dict()
     >>> doc["raster"]["fitted"], doc["warnings"]
     (True, [])
-    >>> res.to_geojson()["features"][0]["geometry"]["type"]
-    'LineString'
+    >>> line = res.to_geojson()["features"][0]["geometry"]
+    >>> line["type"], all(0 <= x <= 1000 and 0 <= y <= 20 for x, y in line["coordinates"])
+    ('LineString', True)
     """
-    if _is_polygon(mask):
-        from .io.polygon import read_polygon
+    groups = split_options(keywords)
+    options = options_value(PruneOptions, options, groups[PruneOptions])
+    output = options_value(OutputOptions, output, groups[OutputOptions])
+    if isinstance(source, Input):
+        if read is not None or raster is not None or groups[ReadOptions] or groups[RasterOptions]:
+            raise TypeError("read and raster options apply to reading; this input is read")
+        shape = source
+    else:
+        read = (
+            None
+            if read is None and not groups[ReadOptions]
+            else options_value(ReadOptions, read, groups[ReadOptions])
+        )
+        raster = (
+            None
+            if raster is None and not groups[RasterOptions]
+            else options_value(RasterOptions, raster, groups[RasterOptions])
+        )
+        shape = read_input(source, read=read, raster=raster)
+    return prune_input(shape, options, output)
 
-        raster_opts = RasterOptions(
-            pixel_size=pixel_size,
-            longest_side=longest_side,
-            pixels_per_width=pixels_per_width,
-            pixel_budget=pixel_budget,
-            repair=repair,
-        )
-        obj = mask if isinstance(mask, Mapping) else mask.__geo_interface__
-        raster = read_polygon(obj, **asdict(raster_opts))
-        return prune_raster(
-            raster,
-            beta=beta,
-            method=method,
-            coarse=coarse,
-            dce_threshold=dce_threshold,
-            min_margin=min_margin,
-            choice=choice,
-            trim=trim,
-        )
-    opts = PruneOptions(
-        beta=beta,
-        method=method,
-        coarse=coarse,
-        dce_threshold=dce_threshold,
-        min_margin=min_margin,
-        choice=choice,
-        trim=trim,
-    )
-    if opts.method == "dce":  # DCE pruning has no stage before it, nor tips cut after it
-        opts = replace(opts, coarse=None, choice="argmin", trim=False)
-    check_option("foreground", foreground)
-    mask = np.asarray(mask)
-    if mask.ndim != 2:
-        raise InvalidOptionError(f"mask must be 2-D, got shape {mask.shape}")
-    fg, taken = (mask != 0, None) if foreground == "nonzero" else select(mask, foreground)
-    if not fg.any():
+
+def prune_input(
+    shape: Input, options: PruneOptions, output: OutputOptions | None = None
+) -> PruneResult:
+    """The pipeline after reading: prune every component of an :class:`Input`.
+
+    What :func:`prune` runs once its input is read and its options built; callers that
+    read with limits of their own (the service) call it directly.
+    """
+    if not shape.mask.any():
         raise EmptyMaskError("the mask has no foreground pixel")
+    applied = options.resolved()
     result = PruneResult(
-        mask=fg,
-        method=opts.method,
-        beta=opts.beta,
-        coarse=opts.coarse,
-        choice=opts.choice,
-        trim=opts.trim,
+        input=shape, options=applied, output=OutputOptions() if output is None else output
     )
-    if taken is not None:
-        result.foreground = taken
-    for crop, origin in components(fg):
-        result.components.append(prune_component(crop, origin, opts))
-    return result
-
-
-def prune_raster(raster: PolygonRaster, **options: Any) -> PruneResult:
-    """:func:`prune` of a rasterised polygon (:func:`skelprune.io.polygon.polygon_raster`):
-    the result keeps the raster, so that it maps itself back to the polygon."""
-    from .io.foreground import POLYGON_FOREGROUND
-
-    result = prune(raster.mask, **options)
-    result.foreground = POLYGON_FOREGROUND
-    result.raster = raster
+    for crop, origin in components(shape.mask):
+        result.components.append(prune_component(crop, origin, applied))
     return result

@@ -18,6 +18,7 @@ import enum
 import json
 import os
 import sys
+from dataclasses import fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -25,7 +26,7 @@ import typer
 import typer.core
 from typer.exceptions import TyperException
 
-from .errors import InvalidPolygonError, SkelpruneError
+from .errors import SkelpruneError
 from .options import (
     CHOICES,
     COARSE,
@@ -73,55 +74,36 @@ def _main(
     """Parameter-free Bayesian skeleton pruning."""
 
 
-#: File name endings read as GeoJSON polygons (any case); anything else is read as a PNG.
-GEOJSON_SUFFIXES = (".geojson", ".json")
 #: What a folder is searched for (any case).
 FOLDER_SUFFIXES = (".png", ".geojson")
 
 
 def _prune(
     path: str,
-    read: ReadOptions,
     options: PruneOptions,
+    read: ReadOptions,
     raster: RasterOptions,
-    curve: bool,
-    sequence: bool = False,
-    geojson: OutputOptions | None = None,
+    output: OutputOptions,
+    geojson: bool = False,
 ) -> tuple[PruneResult, dict[str, Any]]:
     """The result and its document (a polygon's in the polygon's own coordinates), or its
-    GeoJSON with ``geojson``'s line options."""
+    GeoJSON: the library's one pipeline (``.geojson``/``.json`` files are polygons)."""
     from .api import prune
 
-    if path.lower().endswith(GEOJSON_SUFFIXES):
-        try:
-            shape = json.loads(Path(path).read_bytes())
-        except (ValueError, UnicodeDecodeError) as exc:
-            raise InvalidPolygonError(f"not a GeoJSON file: {exc}") from None
-        if not isinstance(shape, dict):
-            raise InvalidPolygonError("not a GeoJSON object")
-        res = prune(shape, **options.kwargs(), **raster.kwargs())
-    else:
-        from .io import read_shape
-
-        mask, taken = read_shape(path, foreground=read.foreground)
-        res = prune(mask, **options.kwargs())
-        res.foreground = taken
-    if geojson is not None:
-        return res, res.to_geojson(simplify=geojson.simplify, cut_ends=geojson.cut_ends)
-    return res, res.to_dict(curve=curve, sequence=sequence)
+    res = prune(Path(path), options, read=read, raster=raster, output=output)
+    return res, res.to_geojson() if geojson else res.to_dict()
 
 
 def _prune_file(
     path: str,
-    read: ReadOptions,
     options: PruneOptions,
+    read: ReadOptions,
     raster: RasterOptions,
-    curve: bool,
-    sequence: bool = False,
-    geojson: OutputOptions | None = None,
+    output: OutputOptions,
+    geojson: bool = False,
 ) -> dict[str, Any]:
     try:
-        res, doc = _prune(path, read, options, raster, curve, sequence, geojson)
+        res, doc = _prune(path, options, read, raster, output, geojson)
         line = {"file": path, "result": doc}
         if res.warnings:
             line["warnings"] = [w["message"] for w in res.warnings]
@@ -249,26 +231,10 @@ def prune_command(
     ] = 0,
 ) -> None:
     """Prune the skeleton of each shape and print the result as JSON."""
-    # checked once, before any file is read
-    options, read = _options_or_exit(
-        beta, method, coarse, dce_threshold, min_margin, choice, trim, foreground
+    # checked once, before any file is read; the JSON document holds no overlay image
+    options, read, raster, output = _options_or_exit(
+        {**locals(), "overlay": False}, PruneOptions, ReadOptions, RasterOptions, OutputOptions
     )
-    try:
-        raster = RasterOptions(
-            pixel_size=pixel_size,
-            longest_side=longest_side,
-            pixels_per_width=pixels_per_width,
-            pixel_budget=pixel_budget,
-            repair=repair,
-        )
-        shown = OutputOptions(
-            overlay_scale=overlay_scale,
-            overlay_legend=overlay_legend,
-            simplify=simplify,
-            cut_ends=cut_ends,
-        )
-    except SkelpruneError as exc:
-        raise _usage(str(exc)) from None
     if workers < 0:
         raise _usage(f"--workers must be >= 0 (0: one a CPU core), got {workers}")
     if overlay is not None and not overlay.parent.is_dir():
@@ -278,9 +244,7 @@ def prune_command(
         raise _usage("no PNG or GeoJSON file given")
     if len(inputs) == 1 and not files[0].is_dir():
         try:
-            res, doc = _prune(
-                str(inputs[0]), read, options, raster, curve, sequence, shown if geojson else None
-            )
+            res, doc = _prune(str(inputs[0]), options, read, raster, output, geojson)
         except (SkelpruneError, OSError) as exc:
             typer.echo(f"error: {inputs[0]}: {exc}", err=True)
             raise typer.Exit(1) from None
@@ -288,7 +252,7 @@ def prune_command(
             typer.echo(f"warning: {inputs[0]}: {warning['message']}", err=True)
         if overlay is not None:
             try:
-                overlay.write_bytes(res.overlay_png(shown.overlay_scale, shown.overlay_legend))
+                overlay.write_bytes(res.overlay_png())
             except OSError as exc:
                 typer.echo(f"error: --overlay {overlay}: {exc.strerror or exc}", err=True)
                 raise typer.Exit(1) from None
@@ -308,12 +272,11 @@ def prune_command(
         jobs = pool.map(
             _prune_file,
             [str(p) for p in inputs],
-            [read] * k,
             [options] * k,
+            [read] * k,
             [raster] * k,
-            [curve] * k,
-            [sequence] * k,
-            [shown if geojson else None] * k,
+            [output] * k,
+            [geojson] * k,
         )
         for line in tqdm(jobs, total=len(inputs), file=sys.stderr, unit="shape"):
             failed += "error" in line
@@ -322,37 +285,23 @@ def prune_command(
         raise typer.Exit(1)
 
 
-def _describe_file(path: str, read: ReadOptions, options: PruneOptions) -> Any:
+def _describe_file(path: str, options: PruneOptions, read: ReadOptions) -> Any:
     from .matching import describe
 
     try:
-        return describe(_prune(path, read, options, RasterOptions(), False)[0])
+        return describe(_prune(path, options, read, RasterOptions(), OutputOptions())[0])
     except (SkelpruneError, OSError) as exc:
         return f"{type(exc).__name__}: {exc}"
 
 
-def _options_or_exit(
-    beta: float,
-    method: Any,
-    coarse: Any,
-    dce_threshold: float | None,
-    min_margin: float | None,
-    choice: Any,
-    trim: bool,
-    foreground: Any,
-) -> tuple[PruneOptions, ReadOptions]:
+def _options_or_exit(params: dict[str, Any], *groups: type) -> tuple[Any, ...]:
+    """One value of each options class, from the command's parameters of its fields'
+    names (a choice's Enum read as its value): the classes check them, once."""
+    values = {k: v.value if isinstance(v, enum.Enum) else v for k, v in params.items()}
     try:
-        return (
-            PruneOptions(
-                beta=beta,
-                method=method.value,
-                coarse=coarse.value,
-                dce_threshold=dce_threshold,
-                min_margin=min_margin,
-                choice=choice.value,
-                trim=trim,
-            ),
-            ReadOptions(foreground=foreground.value),
+        return tuple(
+            group(**{f.name: values[f.name] for f in fields(group) if f.name in values})
+            for group in groups
         )
     except SkelpruneError as exc:
         raise _usage(str(exc)) from None
@@ -375,11 +324,11 @@ def match_command(
     endpoint correspondence as JSON."""
     from .matching import match
 
-    options, read = _options_or_exit(
-        beta, method, coarse, dce_threshold, min_margin, choice, trim, foreground
-    )
+    options, read = _options_or_exit(locals(), PruneOptions, ReadOptions)
     try:
-        shapes = [_prune(str(p), read, options, RasterOptions(), False)[0] for p in (a, b)]
+        shapes = [
+            _prune(str(p), options, read, RasterOptions(), OutputOptions())[0] for p in (a, b)
+        ]
         res = match(*shapes)
     except (SkelpruneError, OSError) as exc:
         typer.echo(f"error: {exc}", err=True)
@@ -411,9 +360,7 @@ def retrieve_command(
 
     from .matching import distance_matrix
 
-    options, read = _options_or_exit(
-        beta, method, coarse, dce_threshold, min_margin, choice, trim, foreground
-    )
+    options, read = _options_or_exit(locals(), PruneOptions, ReadOptions)
     inputs = _expand(folder)
     if not inputs:
         typer.echo("error: no PNG file given", err=True)
@@ -423,7 +370,7 @@ def retrieve_command(
     with ProcessPoolExecutor(max_workers=n) as pool:
         described = list(
             tqdm(
-                pool.map(_describe_file, [str(p) for p in inputs], [read] * k, [options] * k),
+                pool.map(_describe_file, [str(p) for p in inputs], [options] * k, [read] * k),
                 total=k,
                 file=sys.stderr,
                 unit="shape",

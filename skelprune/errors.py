@@ -41,7 +41,16 @@ class InvalidPolygonError(SkelpruneError):
 
 
 class InvalidOptionError(SkelpruneError):
-    """An option is out of range or unknown (beta <= 0, unknown method, ...)."""
+    """An option is out of range or unknown (beta <= 0, unknown method, ...).
+
+    ``errors`` lists ``(option, message)`` for each option refused on its own (every one
+    of an options value, so that a caller can name each where it was given); it is empty
+    when options are refused together (two that exclude each other).
+    """
+
+    def __init__(self, message: str, errors: list[tuple[str, str]] | None = None) -> None:
+        super().__init__(message)
+        self.errors = errors or []
 
 
 def shown(value: Any) -> str:

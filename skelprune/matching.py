@@ -20,7 +20,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import cv2
@@ -81,6 +81,8 @@ class SkeletonDescriptor:
         Path lengths over the skeleton's total length.
     component : int
         The component described (the largest one).
+    frame : PixelFrame
+        From the pixel frame to the input's coordinates (a polygon's own units).
     """
 
     node_ids: np.ndarray
@@ -88,6 +90,7 @@ class SkeletonDescriptor:
     radii: np.ndarray
     lengths: np.ndarray
     component: int = 0
+    frame: PixelFrame = IDENTITY
 
     @property
     def n_endpoints(self) -> int:
@@ -117,10 +120,13 @@ class Match:
     b: SkeletonDescriptor
 
     def to_dict(
-        self, frame_a: PixelFrame = IDENTITY, frame_b: PixelFrame = IDENTITY
+        self, frame_a: PixelFrame | None = None, frame_b: PixelFrame | None = None
     ) -> dict[str, Any]:
         """Plain JSON types: the distance and, per pair, both endpoints' node ids and
-        positions (mapped by each shape's frame: polygon input gets its own units)."""
+        positions (mapped by each shape's frame, None: its own, so that polygon input
+        gets its own units)."""
+        frame_a = self.a.frame if frame_a is None else frame_a
+        frame_b = self.b.frame if frame_b is None else frame_b
 
         def end(d: SkeletonDescriptor, k: int, frame: PixelFrame) -> dict[str, Any]:
             x, y = frame.point(float(d.positions[k, 0]), float(d.positions[k, 1]))
@@ -242,7 +248,7 @@ def describe_skeleton(
     )
 
 
-def describe(shape: PruneResult | np.ndarray | SkeletonDescriptor) -> SkeletonDescriptor:
+def describe(shape: PruneResult | SkeletonDescriptor | Any) -> SkeletonDescriptor:
     """The path table of a pruning result (its largest component) or of a mask (pruned
     with the default options first).
 
@@ -256,7 +262,7 @@ def describe(shape: PruneResult | np.ndarray | SkeletonDescriptor) -> SkeletonDe
     """
     if isinstance(shape, SkeletonDescriptor):
         return shape
-    result = prune(shape) if isinstance(shape, np.ndarray) else shape
+    result = shape if isinstance(shape, PruneResult) else prune(shape)
     ci = int(np.argmax([c.area for c in result.components]))
     comp = result.components[ci]
     skeleton = comp.to_dict(curve=False)["skeleton"]
@@ -265,7 +271,7 @@ def describe(shape: PruneResult | np.ndarray | SkeletonDescriptor) -> SkeletonDe
     # the component alone, so that the boundary is its own
     rows, cols = comp.image_coordinates(comp.skeleton.graph.rows[:1], comp.skeleton.graph.cols[:1])
     own = _component_mask(result.mask, int(rows[0]), int(cols[0]))
-    return describe_skeleton(skeleton, own, mean_radius, component=ci)
+    return replace(describe_skeleton(skeleton, own, mean_radius, component=ci), frame=result.frame)
 
 
 def _component_mask(mask: np.ndarray, row: int, col: int) -> np.ndarray:

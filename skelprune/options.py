@@ -14,15 +14,17 @@ objects from what they were sent, as titiler builds its dependencies once).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from dataclasses import asdict, dataclass, field, fields
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 from .errors import InvalidOptionError, shown
 
 __all__ = [
+    "ARRAY_FOREGROUND",
     "CHOICES",
     "COARSE",
+    "DEFAULT_DCE_THRESHOLD",
     "DEFAULT_LONGEST_SIDE",
     "DEFAULT_MIN_MARGIN",
     "DEFAULT_PIXELS_PER_WIDTH",
@@ -38,6 +40,8 @@ __all__ = [
     "ReadOptions",
     "check_option",
     "option_fields",
+    "options_value",
+    "split_options",
 ]
 
 METHODS = ("bayesian", "dce")
@@ -50,6 +54,12 @@ COARSE = ("dce", "none")
 #: The margin below which the answer's end branches go unless told otherwise: chosen by
 #: the stability benchmark over noise models and sizes (docs/stability-findings.md).
 DEFAULT_MIN_MARGIN = 0.01
+#: The DCE stop of ``method="dce"`` on relevance (scale-free: lengths over the perimeter,
+#: angle in radians): docs/dce.md gives the evidence.
+DEFAULT_DCE_THRESHOLD = 0.01
+#: The foreground rule of an array given without one: an array is a mask, its non-zero
+#: pixels the shape (an image file's default is ``auto``, :class:`ReadOptions`).
+ARRAY_FOREGROUND = "nonzero"
 #: How the answer is chosen from the sequence (:mod:`skelprune.pruning.floor`).
 CHOICES = ("argmin", "noise-floor")
 #: Pixels across the longer side of a polygon's bounding box at the least (a polygon's
@@ -139,12 +149,19 @@ def _flag(name: str, value: Any) -> bool:
 
 def _check_fields(options: Any) -> None:
     """Check (and normalise) every field of a frozen options object in place; a field
-    whose default is None may be left unset."""
+    whose default is None may be left unset. Every refused field is named in the error
+    (:attr:`InvalidOptionError.errors`), not only the first."""
+    errors: list[tuple[str, str]] = []
     for f in fields(options):
         value = getattr(options, f.name)
         if value is None and f.default is None:
             continue
-        object.__setattr__(options, f.name, f.metadata["check"](f.name, value))
+        try:
+            object.__setattr__(options, f.name, f.metadata["check"](f.name, value))
+        except InvalidOptionError as exc:
+            errors.append((f.name, str(exc)))
+    if errors:
+        raise InvalidOptionError("; ".join(message for _, message in errors), errors)
 
 
 @dataclass(frozen=True)
@@ -199,7 +216,8 @@ class PruneOptions:
     )
     dce_threshold: float | None = _option(
         None,
-        "For method=dce: the DCE stop threshold on relevance, >= 0 (scale-free; default 0.01).",
+        "For method=dce: the DCE stop threshold on relevance, >= 0 (scale-free; default "
+        f"{DEFAULT_DCE_THRESHOLD:g}).",
         _number(0, strict=False),
     )
     min_margin: float | None = _option(
@@ -238,9 +256,25 @@ class PruneOptions:
                 "margin measures the Bayesian trade-off"
             )
 
-    def kwargs(self) -> dict[str, Any]:
-        """As keyword arguments of :func:`skelprune.prune`."""
-        return asdict(self)
+    def resolved(self) -> PruneOptions:
+        """The options as the pruning applies them, as the document records them: the
+        method's defaults filled in (``min_margin`` of the Bayesian pruning,
+        ``dce_threshold`` of the DCE one) and what the method does not use cleared (DCE
+        pruning has no coarse stage, no choice of step, no tips cut).
+
+        Examples
+        --------
+        >>> PruneOptions().resolved().min_margin
+        0.01
+        >>> PruneOptions(method="dce").resolved()  # doctest: +NORMALIZE_WHITESPACE
+        PruneOptions(beta=9.0, method='dce', coarse=None, dce_threshold=0.01,
+                     min_margin=None, choice='argmin', trim=False)
+        """
+        if self.method == "dce":
+            threshold = DEFAULT_DCE_THRESHOLD if self.dce_threshold is None else self.dce_threshold
+            return replace(self, coarse=None, choice="argmin", trim=False, dce_threshold=threshold)
+        margin = DEFAULT_MIN_MARGIN if self.min_margin is None else self.min_margin
+        return replace(self, dce_threshold=None, min_margin=margin)
 
 
 @dataclass(frozen=True)
@@ -288,8 +322,9 @@ class RasterOptions:
 
     Examples
     --------
-    >>> RasterOptions(pixel_size=0.5).kwargs()
-    {'pixel_size': 0.5, 'pixels_per_width': 3.0, 'pixel_budget': 4194304, 'repair': True}
+    >>> RasterOptions(pixel_size=0.5)  # doctest: +NORMALIZE_WHITESPACE
+    RasterOptions(pixel_size=0.5, longest_side=None, pixels_per_width=3.0,
+                  pixel_budget=4194304, repair=True)
     >>> RasterOptions(pixel_size=0.5, longest_side=100)
     Traceback (most recent call last):
     ...
@@ -334,10 +369,6 @@ class RasterOptions:
         if self.pixel_size is not None and self.longest_side is not None:
             raise InvalidOptionError("give pixel_size or longest_side, not both")
 
-    def kwargs(self) -> dict[str, Any]:
-        """As keyword arguments of :func:`skelprune.io.polygon_mask` (unset sizes left out)."""
-        return {k: v for k, v in asdict(self).items() if v is not None}
-
 
 GROUPS: tuple[type, ...] = (PruneOptions, OutputOptions, ReadOptions, RasterOptions)
 
@@ -359,6 +390,49 @@ def check_option(name: str, value: Any) -> Any:
                 f.metadata["check"](name, value)
                 return value
     raise InvalidOptionError(f"unknown option {name!r}")
+
+
+def split_options(given: Mapping[str, Any]) -> dict[type, dict[str, Any]]:
+    """Keyword options sorted by the class that defines each (what :func:`skelprune.prune`
+    builds its options values from); a name no class defines is a ``TypeError``, as for
+    any unknown keyword argument.
+
+    >>> split_options({"beta": 3.0, "foreground": "zero"})[PruneOptions]
+    {'beta': 3.0}
+    >>> split_options({"betta": 3.0})
+    Traceback (most recent call last):
+    ...
+    TypeError: unknown option 'betta'
+    """
+    owner = {f.name: group for group in GROUPS for f in fields(group)}
+    out: dict[type, dict[str, Any]] = {group: {} for group in GROUPS}
+    for name, value in given.items():
+        if name not in owner:
+            raise TypeError(f"unknown option {name!r}")
+        out[owner[name]][name] = value
+    return out
+
+
+def options_value(cls: type, given: Any, keywords: Mapping[str, Any]) -> Any:
+    """One options value of class ``cls``: ``given``, or one built from keyword options
+    (its fields), never both; whoever takes options this way checks them once, here.
+
+    >>> options_value(RasterOptions, None, {"pixel_size": 2.0}).pixel_size
+    2.0
+    >>> options_value(PruneOptions, PruneOptions(), {"beta": 3.0})
+    Traceback (most recent call last):
+    ...
+    TypeError: give PruneOptions or its fields as keywords, not both (got beta)
+    """
+    if given is None:
+        return cls(**keywords)
+    if keywords:
+        raise TypeError(
+            f"give {cls.__name__} or its fields as keywords, not both (got {', '.join(keywords)})"
+        )
+    if not isinstance(given, cls):
+        raise TypeError(f"expected {cls.__name__}, got {type(given).__name__}")
+    return given
 
 
 def option_fields(*groups: type) -> list[tuple[str, Any, str, tuple[str, ...] | None]]:

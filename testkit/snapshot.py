@@ -57,8 +57,9 @@ def write_snapshot(out: Path, quick: bool = False, **extra: object) -> int:
         written += 1
     polygon = json.loads((REPO / "examples" / "shape.geojson").read_text())
     for side in (64, 256):
+        # the raster's mask and frame without the polygon: lines as the pixels give them
         mask, frame = polygon_mask(polygon, longest_side=side)
-        geo = skelprune.prune(mask, **extra).to_geojson(frame)
+        geo = skelprune.prune(skelprune.Input(mask, frame), **extra).to_geojson()
         (out / f"examples_shape__{side}.geojson").write_text(json.dumps(geo, sort_keys=True))
         written += 1
     return written

@@ -44,12 +44,7 @@ from skelprune.io.fit import (
     fitted_pixel_size,
 )
 from skelprune.io.frame import PixelFrame
-from skelprune.options import (
-    DEFAULT_LONGEST_SIDE,
-    DEFAULT_PIXEL_BUDGET,
-    DEFAULT_PIXELS_PER_WIDTH,
-    RasterOptions,
-)
+from skelprune.options import DEFAULT_LONGEST_SIDE, RasterOptions, options_value
 
 __all__ = [
     "DEFAULT_LONGEST_SIDE",
@@ -259,7 +254,7 @@ class PolygonRaster:
 
     ``fitted`` tells whether the pixel size came from the polygon (no ``pixel_size`` or
     ``longest_side`` given); ``warnings`` lists the parts the raster does not hold as they
-    are (:func:`skelprune.io.fit.check_topology`).
+    are (:func:`skelprune.io.fit.check_topology`); ``options`` are the options that made it.
     """
 
     geometry: MultiPolygon
@@ -267,27 +262,31 @@ class PolygonRaster:
     frame: PixelFrame
     fitted: bool
     warnings: list[RasterWarning] = field(default_factory=list)
+    options: RasterOptions = field(default_factory=RasterOptions)
 
     def to_dict(self) -> dict[str, Any]:
-        """What the document says of the raster (``raster``)."""
+        """What the document says of the raster (``raster``): its size and every raster
+        option (``pixel_size`` the one used, given or fitted)."""
         return {
             "pixel_size": self.frame.pixel_size,
             "width": int(self.mask.shape[1]),
             "height": int(self.mask.shape[0]),
             "fitted": self.fitted,
             "parts": len(self.geometry.geoms),
+            "longest_side": self.options.longest_side,
+            "pixels_per_width": self.options.pixels_per_width,
+            "pixel_budget": self.options.pixel_budget,
+            "repair": self.options.repair,
         }
 
 
 def rasterize(
     geom: MultiPolygon,
+    options: RasterOptions | None = None,
     *,
-    pixel_size: float | None = None,
-    longest_side: int | None = None,
     margin: int = DEFAULT_MARGIN,
     max_pixels: int | None = None,
-    pixels_per_width: float = DEFAULT_PIXELS_PER_WIDTH,
-    pixel_budget: int = DEFAULT_PIXEL_BUDGET,
+    **keywords: Any,
 ) -> tuple[np.ndarray, PixelFrame]:
     """Fill a polygon into a boolean raster.
 
@@ -295,18 +294,15 @@ def rasterize(
     ----------
     geom : shapely.geometry.MultiPolygon
         Valid polygonal geometry, e.g. from :func:`parse_geojson`.
-    pixel_size : float, optional
-        Side of a pixel in the polygon's units. Exclusive with ``longest_side``.
-    longest_side : int, optional
-        Pixels across the longer side of the bounding box.
+    options : RasterOptions, optional
+        The pixel size (``pixel_size``, or ``longest_side`` pixels across the bounding
+        box's longer side, or fitted to the polygon: :mod:`skelprune.io.fit`,
+        ``pixels_per_width`` pixels across its narrowest part, within ``pixel_budget``
+        pixels and ``max_pixels``). Its fields may be given as keywords instead.
     margin : int
         Background pixels added on every side.
     max_pixels : int, optional
         Refuse a raster larger than this (before allocating it).
-    pixels_per_width, pixel_budget
-        Without ``pixel_size`` and ``longest_side``: the pixel size is fitted to the
-        polygon (:mod:`skelprune.io.fit`), this many pixels across its narrowest part,
-        within this many pixels (and ``max_pixels``).
 
     Returns
     -------
@@ -322,12 +318,9 @@ def rasterize(
     """
     raster = polygon_raster(
         geom,
-        pixel_size=pixel_size,
-        longest_side=longest_side,
+        options_value(RasterOptions, options, keywords),
         margin=margin,
         max_pixels=max_pixels,
-        pixels_per_width=pixels_per_width,
-        pixel_budget=pixel_budget,
         check=False,
     )
     return raster.mask, raster.frame
@@ -335,23 +328,25 @@ def rasterize(
 
 def polygon_raster(
     geom: MultiPolygon,
+    options: RasterOptions | None = None,
     *,
-    pixel_size: float | None = None,
-    longest_side: int | None = None,
     margin: int = DEFAULT_MARGIN,
     max_pixels: int | None = None,
-    pixels_per_width: float = DEFAULT_PIXELS_PER_WIDTH,
-    pixel_budget: int = DEFAULT_PIXEL_BUDGET,
     check: bool = True,
+    **keywords: Any,
 ) -> PolygonRaster:
-    """:func:`rasterize`, keeping the geometry, and (``check``) the topology check's
-    warnings."""
-    RasterOptions(  # the options' checks
-        pixel_size=pixel_size,
-        longest_side=longest_side,
-        pixels_per_width=pixels_per_width,
-        pixel_budget=pixel_budget,
-    )
+    """:func:`rasterize`, keeping the geometry, the options and (``check``) the topology
+    check's warnings.
+
+    Examples
+    --------
+    >>> from shapely.geometry import box
+    >>> raster = polygon_raster(MultiPolygon([box(0, 0, 10, 10)]), pixel_size=1.0)
+    >>> raster.mask.shape, raster.fitted, raster.options.pixel_size
+    ((14, 14), False, 1.0)
+    """
+    options = options_value(RasterOptions, options, keywords)
+    pixel_size, longest_side = options.pixel_size, options.longest_side
     minx, miny, maxx, maxy = geom.bounds
     extent = max(maxx - minx, maxy - miny)
     if not math.isfinite(extent):
@@ -361,11 +356,13 @@ def polygon_raster(
         return _fill(g, size, margin, max_pixels)
 
     fitted = pixel_size is None and longest_side is None
-    budget = pixel_budget if max_pixels is None else min(pixel_budget, max_pixels)
+    budget = options.pixel_budget if max_pixels is None else min(options.pixel_budget, max_pixels)
     if fitted:
         if extent <= 0 or not math.isfinite(extent / DEFAULT_LONGEST_SIDE):
             raise InvalidPolygonError(f"polygon extent {extent:.3g} is too small to rasterise")
-        size = fitted_pixel_size(geom, pixels_per_width, budget, DEFAULT_LONGEST_SIDE, margin)
+        size = fitted_pixel_size(
+            geom, options.pixels_per_width, budget, DEFAULT_LONGEST_SIDE, margin
+        )
         mask, frame = fill(geom, size)
     else:
         if pixel_size is None:
@@ -387,7 +384,7 @@ def polygon_raster(
                 break
             mask, frame = fill(geom, min(sizes))
             warnings = check_topology(geom, mask, frame, margin, fill)
-    return PolygonRaster(geom, mask, frame, fitted, warnings)
+    return PolygonRaster(geom, mask, frame, fitted, warnings, options)
 
 
 def _fill(
@@ -452,17 +449,15 @@ def _fill(
 
 def polygon_mask(
     obj: Mapping[str, Any],
+    options: RasterOptions | None = None,
     *,
-    pixel_size: float | None = None,
-    longest_side: int | None = None,
     margin: int = DEFAULT_MARGIN,
     max_vertices: int | None = None,
     max_pixels: int | None = None,
-    repair: bool = True,
-    pixels_per_width: float = DEFAULT_PIXELS_PER_WIDTH,
-    pixel_budget: int = DEFAULT_PIXEL_BUDGET,
+    **keywords: Any,
 ) -> tuple[np.ndarray, PixelFrame]:
-    """Validate and rasterise a GeoJSON polygon: :func:`parse_geojson` then :func:`rasterize`.
+    """Validate and rasterise a GeoJSON polygon: :func:`parse_geojson` then :func:`rasterize`
+    (``options`` or its fields as keywords: :class:`~skelprune.options.RasterOptions`).
 
     Examples
     --------
@@ -472,29 +467,23 @@ def polygon_mask(
     >>> mask.shape, int(mask.sum()), frame.point(2, 2)
     ((14, 14), 100, (0.5, 9.5))
     """
-    geom = parse_geojson(obj, max_vertices=max_vertices, repair=repair)
-    return rasterize(
-        geom,
-        pixel_size=pixel_size,
-        longest_side=longest_side,
-        margin=margin,
-        max_pixels=max_pixels,
-        pixels_per_width=pixels_per_width,
-        pixel_budget=pixel_budget,
-    )
+    options = options_value(RasterOptions, options, keywords)
+    geom = parse_geojson(obj, max_vertices=max_vertices, repair=options.repair)
+    return rasterize(geom, options, margin=margin, max_pixels=max_pixels)
 
 
 def read_polygon(
     obj: Mapping[str, Any],
+    options: RasterOptions | None = None,
     *,
     max_vertices: int | None = None,
-    repair: bool = True,
-    **raster: Any,
+    max_pixels: int | None = None,
 ) -> PolygonRaster:
     """Validate a GeoJSON polygon and rasterise it with its topology check:
-    :func:`parse_geojson` then :func:`polygon_raster` (``raster``: its keyword options).
+    :func:`parse_geojson` then :func:`polygon_raster`.
 
-    The one way a polygon becomes a raster for pruning, in the library and the service.
+    The one way a polygon becomes a raster for pruning (:func:`skelprune.io.read_input`).
     """
-    geom = parse_geojson(obj, max_vertices=max_vertices, repair=repair)
-    return polygon_raster(geom, **raster)
+    options = RasterOptions() if options is None else options
+    geom = parse_geojson(obj, max_vertices=max_vertices, repair=options.repair)
+    return polygon_raster(geom, options, max_pixels=max_pixels)

@@ -20,8 +20,10 @@ from .._version import ALGORITHM_VERSION, __version__
 from ..graph import BranchGraph, step_length
 from ..io.foreground import Foreground
 from ..io.frame import IDENTITY, PixelFrame
+from ..options import OutputOptions, PruneOptions
 
 if TYPE_CHECKING:
+    from ..io.input import Input
     from ..io.polygon import PolygonRaster
 from ..pruning.bayesian import PruningSequence
 from ..pruning.bayesian import objective as target
@@ -222,33 +224,72 @@ def branch_line(skeleton: dict[str, Any], branch: dict[str, Any]) -> list[list[f
 
 @dataclass
 class PruneResult:
-    """Result of :func:`skelprune.prune` for a whole image."""
+    """Result of :func:`skelprune.prune`: the components' answers, the input they came
+    from and every option that shaped them, so that its outputs need no argument.
 
-    mask: np.ndarray
-    method: str
-    beta: float
-    coarse: str | None
-    #: How the answers were chosen from their sequences (:mod:`skelprune.pruning.floor`).
-    choice: str = "argmin"
-    #: Whether the answers' tips were cut (:mod:`skelprune.pruning.tips`).
-    trim: bool = False
+    Attributes
+    ----------
+    input : Input
+        The mask, the frame back to the input's coordinates and what was taken as the
+        shape (:func:`skelprune.io.read_input`).
+    options : PruneOptions
+        The pruning's options as applied (:meth:`PruneOptions.resolved`): what the
+        document records.
+    output : OutputOptions
+        What :meth:`to_dict`, :meth:`to_geojson` and :meth:`overlay_png` hold when not
+        told otherwise.
+    components : list of ComponentResult
+    """
+
+    input: Input
+    options: PruneOptions = field(default_factory=lambda: PruneOptions().resolved())
+    output: OutputOptions = field(default_factory=OutputOptions)
     components: list[ComponentResult] = field(default_factory=list)
-    #: What was taken as the shape (:mod:`skelprune.io.foreground`); readers of images
-    #: (:func:`skelprune.io.read_shape`) set theirs here.
-    foreground: Foreground = field(default_factory=lambda: Foreground("nonzero", "nonzero"))
-    #: For polygon input (:func:`skelprune.prune` of a polygon): the polygon, its raster,
-    #: the frame back to its coordinates and the raster's warnings.
-    raster: PolygonRaster | None = None
+
+    @property
+    def mask(self) -> np.ndarray:
+        return self.input.mask
 
     @property
     def frame(self) -> PixelFrame:
         """The result's own frame: the polygon's coordinates, or the image's pixels."""
-        return IDENTITY if self.raster is None else self.raster.frame
+        return self.input.frame
+
+    @property
+    def foreground(self) -> Foreground:
+        """What was taken as the shape (:mod:`skelprune.io.foreground`)."""
+        return self.input.foreground
+
+    @property
+    def raster(self) -> PolygonRaster | None:
+        """For polygon input: the polygon, its raster, its options and warnings."""
+        return self.input.raster
 
     @property
     def warnings(self) -> list[dict[str, Any]]:
         """What the raster of a polygon does not hold as it is (empty for images)."""
-        return [] if self.raster is None else [w.to_dict() for w in self.raster.warnings]
+        return self.input.warnings
+
+    # the pruning's options, as the document names them
+    @property
+    def method(self) -> str:
+        return self.options.method
+
+    @property
+    def beta(self) -> float:
+        return self.options.beta
+
+    @property
+    def coarse(self) -> str | None:
+        return self.options.coarse
+
+    @property
+    def choice(self) -> str:
+        return self.options.choice
+
+    @property
+    def trim(self) -> bool:
+        return self.options.trim
 
     @property
     def width(self) -> int:
@@ -272,17 +313,19 @@ class PruneResult:
 
     def to_dict(
         self,
-        curve: bool = True,
-        overlay: bool = False,
+        curve: bool | None = None,
+        overlay: bool | None = None,
         frame: PixelFrame | None = None,
-        sequence: bool = False,
+        sequence: bool | None = None,
     ) -> dict[str, Any]:
         """The output document of docs/graph.md (plain JSON types).
 
-        ``frame`` None: the result's own frame (a polygon's coordinates, an image's
-        pixels); :data:`~skelprune.io.frame.IDENTITY` for the raster's pixels. A polygon's
-        document also says how it was rasterised (``raster``) and what the raster does
-        not hold as it is (``warnings``).
+        ``curve``, ``overlay`` and ``sequence`` None: as the result's
+        :attr:`output` options say. ``frame`` None: the result's own frame (a polygon's
+        coordinates, an image's pixels); :data:`~skelprune.io.frame.IDENTITY` for the
+        raster's pixels. The document records every pruning option as applied; a
+        polygon's also says how it was rasterised (``raster``, with the raster options)
+        and what the raster does not hold as it is (``warnings``).
 
         Examples
         --------
@@ -293,14 +336,14 @@ class PruneResult:
         (40, 4)
         """
         frame = self.frame if frame is None else frame
+        out = self.output
+        curve = out.curve if curve is None else curve
+        overlay = out.overlay if overlay is None else overlay
+        sequence = out.sequence if sequence is None else sequence
         doc: dict[str, Any] = {
             "width": self.width,
             "height": self.height,
-            "method": self.method,
-            "beta": float(self.beta),
-            "coarse": self.coarse,
-            "choice": self.choice,
-            "trim": self.trim,
+            **self._options_block(),
             "foreground": self.foreground.to_dict(),
             "components": [
                 c.to_dict(curve=curve, frame=frame, sequence=sequence) for c in self.components
@@ -314,11 +357,24 @@ class PruneResult:
             doc["overlay_png"] = base64.b64encode(self.overlay_png()).decode("ascii")
         return doc
 
+    def _options_block(self) -> dict[str, Any]:
+        """Every pruning option as applied, in the document's order."""
+        o = self.options
+        return {
+            "method": o.method,
+            "beta": float(o.beta),
+            "coarse": o.coarse,
+            "choice": o.choice,
+            "trim": o.trim,
+            "min_margin": o.min_margin,
+            "dce_threshold": o.dce_threshold,
+        }
+
     def to_geojson(
         self,
         frame: PixelFrame | None = None,
-        simplify: float = 0.5,
-        cut_ends: bool = False,
+        simplify: float | None = None,
+        cut_ends: bool | None = None,
     ) -> dict[str, Any]:
         """GeoJSON FeatureCollection for maps: branches as LineStrings, nodes as Points.
 
@@ -328,10 +384,12 @@ class PruneResult:
         (:mod:`skelprune.output.lines`); for a polygon, their inner vertices first move to
         the medial point across the line (sub-pixel, from the exact polygon). ``cut_ends``
         ends a reach cut straight across at the middle of the cut instead of in a fork to
-        its corners. The document's points stay exact: only this map output changes.
+        its corners (both None: as the result's :attr:`output` options say). The
+        document's points stay exact: only this map output changes.
 
         Every feature's properties carry its component's ``rer`` and ``ss``; the
-        collection's ``properties`` (a foreign member) the document's options, each
+        collection's ``properties`` (a foreign member) the document's options and the
+        line options, each
         component's ``area``, ``alpha``, ``rer``, ``ss`` and ``objective``, and for a
         polygon the raster's ``warnings``.
         """
@@ -339,6 +397,8 @@ class PruneResult:
         # a prune() that never draws a map should not pay for at startup
         from .geojson import skeleton_geojson
 
+        simplify = self.output.simplify if simplify is None else simplify
+        cut_ends = self.output.cut_ends if cut_ends is None else cut_ends
         summaries: list[Any] = [
             {
                 "component": ci,
@@ -350,14 +410,13 @@ class PruneResult:
             }
             for ci, c in enumerate(self.components)
         ]
+        # A foreign member of the collection (RFC 7946 §6.1): the document's numbers.
         header = {
             "width": self.width,
             "height": self.height,
-            "method": self.method,
-            "beta": float(self.beta),
-            "coarse": self.coarse,
-            "choice": self.choice,
-            "trim": self.trim,
+            **self._options_block(),
+            "simplify": simplify,
+            "cut_ends": cut_ends,
         }
         return skeleton_geojson(  # type: ignore[return-value]
             [c.table for c in self.components],
@@ -425,10 +484,13 @@ class PruneResult:
             legend=text,
         )
 
-    def overlay_png(self, scale: int | None = None, legend: bool = False) -> bytes:
-        """The overlay as PNG bytes; ``scale`` None: the smallest integer scale that
-        makes the longer side at least 512 px (:func:`~skelprune.output.render.auto_scale`).
+    def overlay_png(self, scale: int | None = None, legend: bool | None = None) -> bytes:
+        """The overlay as PNG bytes; ``scale`` and ``legend`` None: as the result's
+        :attr:`output` options say (``overlay_scale`` None: the smallest integer scale that
+        makes the longer side at least 512 px, :func:`~skelprune.output.render.auto_scale`).
         """
+        scale = self.output.overlay_scale if scale is None else scale
+        legend = self.output.overlay_legend if legend is None else legend
         return encode_png(
             self.render_overlay(auto_scale(self.mask.shape) if scale is None else scale, legend)
         )

@@ -270,6 +270,15 @@ class VersionsDoc(TypedDict):
     ]
 
 
+#: The pruning options the document records as applied: the method's default filled in,
+#: null where the method does not use the option.
+MIN_MARGIN_APPLIED = (
+    "As applied: the margin below which the answer's end branches went "
+    "(method=bayesian; null for method=dce)."
+)
+DCE_THRESHOLD_APPLIED = "As applied: the DCE stop threshold (method=dce; null for method=bayesian)."
+
+
 class RasterInfoDoc(TypedDict):
     """How a polygon was rasterised (polygon input only)."""
 
@@ -284,6 +293,10 @@ class RasterInfoDoc(TypedDict):
         ),
     ]
     parts: Annotated[int, Doc("Parts of the (repaired) polygon.")]
+    longest_side: Annotated[int | None, Doc("The option as given (null: not given).")]
+    pixels_per_width: Annotated[float, Doc("The option (used when fitted).")]
+    pixel_budget: Annotated[int, Doc("The option (used when fitted).")]
+    repair: Annotated[bool, Doc("Whether invalid geometry was to be repaired.")]
 
 
 class RasterWarningItemDoc(TypedDict):
@@ -308,6 +321,8 @@ class PruneDocument(TypedDict):
     coarse: Coarse
     choice: Annotated[Choice, Doc("How the answer was chosen from the pruning sequence.")]
     trim: Annotated[bool, Doc("Whether the answer's end branches were cut back at their tips.")]
+    min_margin: Annotated[float | None, Doc(MIN_MARGIN_APPLIED)]
+    dce_threshold: Annotated[float | None, Doc(DCE_THRESHOLD_APPLIED)]
     foreground: ForegroundTakenDoc
     components: list[ComponentDoc]
     raster: NotRequired[Annotated[RasterInfoDoc, Doc("Polygon input only.")]]
@@ -389,6 +404,10 @@ class CollectionPropertiesDoc(TypedDict):
     coarse: Coarse
     choice: Choice
     trim: bool
+    min_margin: Annotated[float | None, Doc(MIN_MARGIN_APPLIED)]
+    dce_threshold: Annotated[float | None, Doc(DCE_THRESHOLD_APPLIED)]
+    simplify: Annotated[float, Doc("How far each line was simplified, in pixels.")]
+    cut_ends: Annotated[bool, Doc("Whether cut reaches end straight across.")]
     components: list[ComponentSummaryDoc]
     warnings: NotRequired[
         Annotated[list[RasterWarningItemDoc], Doc("Polygon input only, as in the JSON document.")]

@@ -33,6 +33,7 @@ import numba
 import numpy as np
 
 from .._contours import trace_boundaries
+from ..options import DEFAULT_DCE_THRESHOLD
 from ._generating import TOUCH_TOLERANCE, generated_in_several_segments, generating_segments
 from ._partition import BoundaryPartition
 
@@ -51,7 +52,7 @@ __all__ = [
 #: Default stop of DCE for ``method="dce"`` (and when no rule is given): delete every
 #: vertex whose relevance (lengths over the perimeter, angle in radians) is at most this,
 #: scale-free ... (see ``docs/dce.md`` for the evidence)
-DCE_THRESHOLD: float = 0.01
+DCE_THRESHOLD: float = DEFAULT_DCE_THRESHOLD  # defined with the option it defaults
 #: ... and keep no more than this many vertices per boundary polygon, so that boundary
 #: noise (whose relevance grows as the shape gets smaller) cannot add vertices without end.
 DCE_VERTICES: int = 16

@@ -260,7 +260,7 @@ def test_worker_refuses_a_path_in_place_of_bytes() -> None:
     """Even a route bug handing over a str could not make the worker open a file."""
     readme = str(REPO / "README.md")
     with pytest.raises(InvalidImageError, match="bytes"):
-        run_job(Job(output="json", png=readme))  # type: ignore[arg-type]
+        run_job(Job(output="json", kind="image", data=readme))  # type: ignore[arg-type]
 
 
 # -------------------------------------------------------------------- request IDs

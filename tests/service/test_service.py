@@ -17,7 +17,7 @@ from PIL import Image
 
 import skelprune
 from service.schemas import Problem, PruneDocument, Readiness, SkeletonGeoJSON
-from skelprune.io import read_mask, read_shape
+from skelprune.io import read_mask
 from testkit import DATA
 
 pytestmark = pytest.mark.timeout(300)
@@ -56,10 +56,7 @@ def assert_problem(resp, status: int, *fragments: str) -> dict:
 
 
 def library_document(png: bytes, **opts: object) -> dict:
-    mask, taken = read_shape(png)
-    res = skelprune.prune(mask, **opts)
-    res.foreground = taken
-    return json.loads(json.dumps(res.to_dict()))
+    return json.loads(json.dumps(skelprune.prune(png, **opts).to_dict()))
 
 
 # ----------------------------------------------------------------------- inputs

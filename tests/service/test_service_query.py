@@ -4,9 +4,11 @@ values, same errors), and its place before every other check of the request."""
 
 from __future__ import annotations
 
+import io
 from typing import Annotated, Any
 from urllib.parse import urlencode
 
+import numpy as np
 import pytest
 from fastapi import FastAPI, Query, Request
 from fastapi.exceptions import RequestValidationError
@@ -14,12 +16,15 @@ from fastapi.responses import JSONResponse
 from fastapi.testclient import TestClient
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from PIL import Image
 from starlette.datastructures import QueryParams
 
 from service.app import create_app
 from service.http.query import parse_query
 from service.schemas import PruneQuery
 from service.settings import Settings
+from skelprune.errors import InvalidOptionError
+from skelprune.options import PruneOptions
 
 pytestmark = pytest.mark.timeout(120)
 
@@ -125,7 +130,28 @@ def test_bad_options_are_refused_before_anything_else() -> None:
         {"accept": "text/html"},
         {"content-type": "image/png", "content-encoding": "gzip"},
     ):
-        resp = client.post("/v1/prune?beta=0&betta=1", content=b"x", headers=headers)
+        resp = client.post("/v1/prune?beta=x&betta=1", content=b"x", headers=headers)
         assert resp.status_code == 422, resp.text
         assert resp.headers["content-type"] == "application/problem+json"
         assert [e["loc"] for e in resp.json()["errors"]] == [["query", "beta"], ["query", "betta"]]
+
+
+def test_option_values_are_checked_once_by_the_option_classes(client: TestClient) -> None:
+    # The query model checks wire types only; the options' classes refuse the values,
+    # every refused one located where it was given, with the library's own message.
+    buf = io.BytesIO()
+    Image.fromarray(np.full((8, 8), 255, np.uint8)).save(buf, "PNG")
+    resp = client.post(
+        "/v1/prune?beta=0&overlay_scale=99&overlay=true",
+        content=buf.getvalue(),
+        headers={"content-type": "image/png"},
+    )
+    assert resp.status_code == 422, resp.text
+    errors = resp.json()["errors"]
+    assert [e["loc"] for e in errors] == [["query", "beta"], ["query", "overlay_scale"]]
+    with pytest.raises(InvalidOptionError) as info:
+        PruneOptions(beta=0.0)  # the wire type: a float
+    assert errors[0]["msg"] == str(info.value)
+    body = {"geojson": {"type": "Polygon", "coordinates": [[[0, 0], [9, 0], [9, 9], [0, 0]]]}}
+    resp = client.post("/v1/prune?beta=2", json={**body, "longest_side": 4})
+    assert [e["loc"] for e in resp.json()["errors"]] == [["body", "longest_side"]]

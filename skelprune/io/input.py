@@ -1,0 +1,201 @@
+"""Any input read into one value: :class:`Input` (the mask, the frame back to the input's
+coordinates, what was taken as the shape), by one reader, :func:`read_input`.
+
+The first stage of every caller's pipeline (the library's :func:`skelprune.prune`, the
+command line, the service's jobs): what differs between a PNG, an array and a GeoJSON
+polygon ends here.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from ..errors import InvalidImageError, InvalidPolygonError
+from ..options import ARRAY_FOREGROUND, RasterOptions, ReadOptions
+from .foreground import POLYGON_FOREGROUND, Foreground
+from .frame import IDENTITY, PixelFrame
+
+if TYPE_CHECKING:
+    from .polygon import PolygonRaster
+
+__all__ = ["GEOJSON_SUFFIXES", "MASK_FOREGROUND", "Input", "Kind", "read_input"]
+
+#: What an input is: an image (PNG or array) or a GeoJSON polygon.
+Kind = Literal["image", "geojson"]
+#: File name endings read as GeoJSON polygons (any case); any other file is read as a PNG.
+GEOJSON_SUFFIXES = (".geojson", ".json")
+#: What a mask given as it is takes as the shape: its non-zero pixels.
+MASK_FOREGROUND = Foreground(ARRAY_FOREGROUND, "nonzero")
+
+
+@dataclass(frozen=True, eq=False)
+class Input:
+    """An input, read: what the pruning needs, and what maps its answer back.
+
+    Attributes
+    ----------
+    mask : (H, W) bool array
+        The shape's pixels.
+    frame : PixelFrame
+        From pixel centres to the input's coordinates: a polygon's own units, or the
+        identity for an image.
+    foreground : Foreground
+        What was taken as the shape (the foreground rule's outcome; ``polygon`` for a
+        polygon).
+    raster : PolygonRaster or None
+        For a polygon: the polygon, the raster options that made the mask and what the
+        raster does not hold as it is (``warnings``).
+
+    Examples
+    --------
+    >>> m = np.zeros((8, 8), bool); m[2:6, 2:6] = True
+    >>> shape = Input(m)
+    >>> shape.kind, shape.frame == IDENTITY, shape.foreground.shape
+    ('image', True, 'nonzero')
+    """
+
+    mask: np.ndarray
+    frame: PixelFrame = IDENTITY
+    foreground: Foreground = MASK_FOREGROUND
+    raster: PolygonRaster | None = None
+
+    def __post_init__(self) -> None:
+        mask = np.asarray(self.mask)
+        if mask.ndim != 2:
+            raise InvalidImageError(f"a mask must be 2-D, got shape {mask.shape}")
+        object.__setattr__(self, "mask", np.ascontiguousarray(mask, dtype=bool))
+
+    @property
+    def kind(self) -> Kind:
+        return "image" if self.raster is None else "geojson"
+
+    @property
+    def warnings(self) -> list[dict[str, Any]]:
+        """What the raster of a polygon does not hold as it is (empty for an image)."""
+        return [] if self.raster is None else [w.to_dict() for w in self.raster.warnings]
+
+
+def _guess(source: Any) -> tuple[Kind, Any]:
+    """The kind of an input given without one, and the input as its reader takes it."""
+    if isinstance(source, np.ndarray | bytes | bytearray | memoryview):
+        return "image", source
+    if isinstance(source, Mapping) or hasattr(source, "__geo_interface__"):
+        return "geojson", source
+    if isinstance(source, str) and source.lstrip().startswith("{"):
+        return "geojson", source  # GeoJSON text
+    if isinstance(source, str | os.PathLike):
+        path = Path(source)
+        if path.name.lower().endswith(GEOJSON_SUFFIXES):
+            try:
+                return "geojson", _geojson(path.read_bytes(), "a GeoJSON file")
+            except OSError as exc:
+                raise InvalidPolygonError(
+                    f"cannot read {os.fspath(source)!r}: {exc.strerror}"
+                ) from None
+        return "image", path  # the PNG reader opens it
+    return "image", np.asarray(source)  # an array-like (nested lists)
+
+
+def _geojson(source: Any, what: str = "GeoJSON text") -> Mapping[str, Any]:
+    if isinstance(source, Mapping):
+        return source
+    if hasattr(source, "__geo_interface__"):  # shapely and the like
+        return source.__geo_interface__
+    if isinstance(source, str | bytes | bytearray | memoryview):
+        try:
+            obj = json.loads(bytes(source) if not isinstance(source, str) else source)
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise InvalidPolygonError(f"not {what}: {exc}") from None
+        if not isinstance(obj, dict):
+            raise InvalidPolygonError("not a GeoJSON object")
+        return obj
+    raise InvalidPolygonError(f"expected a GeoJSON object, got {type(source).__name__}")
+
+
+def read_input(
+    source: Any,
+    *,
+    read: ReadOptions | None = None,
+    raster: RasterOptions | None = None,
+    kind: Kind | None = None,
+    max_pixels: int | None = None,
+    max_vertices: int | None = None,
+) -> Input:
+    """Read any input into an :class:`Input`.
+
+    Parameters
+    ----------
+    source : array, bytes, str, os.PathLike, GeoJSON mapping, shapely geometry or Input
+        An image array (``(H, W)``, or ``(H, W, C)`` with ``C`` in 1–4, 2 and 4 with
+        alpha last), PNG bytes, a file's path (``.geojson`` and ``.json``: a GeoJSON
+        polygon; anything else: a PNG), GeoJSON as a mapping or as text, or any object
+        with ``__geo_interface__`` (a shapely (Multi)Polygon). GeoJSON is a ``Polygon``,
+        ``MultiPolygon``, ``Feature`` or ``FeatureCollection``. An :class:`Input` is
+        returned as it is.
+    read : ReadOptions, optional
+        Image input: which pixels are the shape. Default: the ``auto`` rule for a PNG,
+        the non-zero pixels of an array (an array is a mask).
+    raster : RasterOptions, optional
+        Polygon input: how it becomes pixels (default: a pixel size fitted to it).
+    kind : {"image", "geojson"}, optional
+        What ``source`` is, when the caller knows: then it is data, never a file's path
+        (image: PNG bytes or an array; geojson: a mapping, or text or bytes of JSON).
+    max_pixels, max_vertices : int, optional
+        Refuse images and rasters of more pixels than this (before decoding or
+        allocating them), polygons of more positions.
+
+    Returns
+    -------
+    Input
+
+    Raises
+    ------
+    InvalidImageError, InvalidPolygonError, ImageTooLargeError, EmptyMaskError
+        What the readers refuse, with the reason.
+
+    Examples
+    --------
+    >>> img = np.full((6, 6), 255, np.uint8); img[2:4, 1:5] = 0   # black on white
+    >>> shape = read_input(img, read=ReadOptions("auto"))
+    >>> int(shape.mask.sum()), shape.foreground.shape
+    (8, 'dark')
+
+    A polygon, with the frame back to its own coordinates:
+
+    >>> square = {"type": "Polygon",
+    ...           "coordinates": [[[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]]]}
+    >>> shape = read_input(square, raster=RasterOptions(pixel_size=1.0))
+    >>> shape.mask.shape, shape.frame.point(2, 2), shape.kind
+    ((14, 14), (0.5, 9.5), 'geojson')
+    """
+    if isinstance(source, Input):
+        return source
+    data = (np.ndarray, bytes, bytearray, memoryview)
+    if kind is None:
+        kind, source = _guess(source)
+        data = (*data, Path)  # a path given as such
+    if kind == "geojson":
+        from .polygon import read_polygon
+
+        polygon = read_polygon(
+            _geojson(source), raster, max_vertices=max_vertices, max_pixels=max_pixels
+        )
+        return Input(polygon.mask, polygon.frame, POLYGON_FOREGROUND, polygon)
+    if kind != "image":
+        raise ValueError(f"kind must be 'image' or 'geojson', got {kind!r}")
+    if not isinstance(source, data):
+        # never open a file by a name that came as data
+        raise InvalidImageError("image input must be PNG bytes or an array, not a file name")
+    from .png import read_shape
+
+    if read is None:
+        read = ReadOptions(ARRAY_FOREGROUND) if isinstance(source, np.ndarray) else ReadOptions()
+    mask, taken = read_shape(source, foreground=read.foreground, max_pixels=max_pixels)
+    return Input(mask, IDENTITY, taken)

@@ -30,9 +30,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .._digital import disk_half_width, isqrt
 from ..graph import BranchGraph, step_length
 from ..skeleton import Skeleton
+from ._rowcover import cover_counts, exclusive_losses, uncover
 
 __all__ = ["Trim", "trim_tips"]
 
@@ -57,58 +57,11 @@ class Trim:
 
 
 @njit(cache=True)
-def _paint_counts(h, w, rows, cols, r2):
-    """How many disks ``|p − s|² < r²`` cover each pixel."""
-    c = np.zeros((h, w), np.int32)
-    for k in range(rows.size):
-        r, q, v = rows[k], cols[k], r2[k]
-        rad = isqrt(v - 1)
-        for dy in range(-rad, rad + 1):
-            dx = disk_half_width(v, dy)  # strictly inside: dx² < v − dy²
-            y = r + dy
-            for x in range(q - dx, q + dx + 1):
-                c[y, x] += 1
-    return c
-
-
-@njit(cache=True)
-def _losses(mask, c, rows, cols, r2, drop, n_drop, scratch, last):
-    """Pixels lost when the points with ``drop < k`` go, per ``k`` (index ``k − 1``).
-
-    A pixel is lost once every disk covering it is among the dropped points: all its
-    covers are in this list (``scratch`` counts them against ``c``) and the last of them
-    (``last``: the largest drop index) is gone. ``scratch`` and ``last`` come in zeroed
-    and are left zeroed.
-    """
-    loss = np.zeros(n_drop + 1, np.int64)
-    for pass_ in range(3):
-        for k in range(rows.size):
-            r, q, v, d = rows[k], cols[k], r2[k], drop[k]
-            rad = isqrt(v - 1)
-            for dy in range(-rad, rad + 1):
-                dx = disk_half_width(v, dy)  # strictly inside: dx² < v − dy²
-                y = r + dy
-                for x in range(q - dx, q + dx + 1):
-                    if pass_ == 0:
-                        scratch[y, x] += 1
-                        if d + 1 > last[y, x]:
-                            last[y, x] = d + 1
-                    elif pass_ == 1:
-                        if scratch[y, x] == c[y, x] and mask[y, x]:
-                            loss[last[y, x] - 1] += 1
-                        scratch[y, x] = -1  # counted once
-                    else:
-                        scratch[y, x] = 0
-                        last[y, x] = 0
-    return loss
-
-
-@njit(cache=True)
-def _candidates(mask, c, rows, cols, r2, pts, drop, diag, m, scratch, last):
+def _candidates(mask, c, rows, cols, r2, pts, drop, diag, m):
     """Per cut ``k < m``: pixels lost and (axial, diagonal) steps dropped; and the box
     (top, left, bottom, right) the points' disks can reach."""
     n = diag.size + 1
-    loss = _losses(mask, c, rows[pts], cols[pts], r2[pts], drop, n, scratch, last)
+    loss = exclusive_losses(mask, c, rows[pts], cols[pts], r2[pts], drop, n)
     lost = np.zeros(m, np.int64)
     cut = np.zeros((m, 2), np.int64)
     for k in range(1, m):
@@ -127,19 +80,6 @@ def _candidates(mask, c, rows, cols, r2, pts, drop, diag, m, scratch, last):
     return lost, cut, box
 
 
-@njit(cache=True)
-def _uncover(c, rows, cols, r2):
-    """Take the disks of these points off the counts."""
-    for k in range(rows.size):
-        r, q, v = rows[k], cols[k], r2[k]
-        rad = isqrt(v - 1)
-        for dy in range(-rad, rad + 1):
-            dx = disk_half_width(v, dy)  # strictly inside: dx² < v − dy²
-            y = r + dy
-            for x in range(q - dx, q + dx + 1):
-                c[y, x] -= 1
-
-
 class _Tips:
     """The counts and the scratch arrays the cuts share."""
 
@@ -147,9 +87,7 @@ class _Tips:
         self.sk, self.graph = sk, graph
         idx = graph.alive_points()
         h, w = sk.shape.shape
-        self.c = _paint_counts(h, w, sk.rows[idx], sk.cols[idx], sk.r2[idx])
-        self.scratch = np.zeros((h, w), np.int32)
-        self.last = np.zeros((h, w), np.int64)
+        self.c = cover_counts(h, w, sk.rows[idx], sk.cols[idx], sk.r2[idx])
 
     def candidates(
         self, b: int, e: int
@@ -173,8 +111,6 @@ class _Tips:
             dr,
             np.asarray(steps, np.int64),
             m,
-            self.scratch,
-            self.last,
         )
         return points, dr, lost, cut, (int(box[0]), int(box[1]), int(box[2]), int(box[3]))
 
@@ -183,7 +119,7 @@ class _Tips:
         sk, br = self.sk, self.graph.branches[b]
         pts = np.asarray(br.points, np.int64)
         # every point the same drop index: lost all together
-        loss = _losses(
+        loss = exclusive_losses(
             sk.shape,
             self.c,
             sk.rows[pts],
@@ -191,8 +127,6 @@ class _Tips:
             sk.r2[pts],
             np.zeros(pts.size, np.int64),
             1,
-            self.scratch,
-            self.last,
         )
         return int(loss[0])
 
@@ -284,7 +218,7 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
         gone = np.asarray(
             [p for p, d in zip(points, drop.tolist(), strict=True) if d < k], np.int64
         )
-        _uncover(tips.c, answer.rows[gone], answer.cols[gone], answer.r2[gone])
+        uncover(tips.c, answer.rows[gone], answer.cols[gone], answer.r2[gone])
         changed.append(box)  # (the whole tip's box holds the dropped points' disks)
         cut_branches.add(b)
         lost += int(cl[k])

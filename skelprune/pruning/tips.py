@@ -58,8 +58,8 @@ class Trim:
 
 @njit(cache=True)
 def _candidates(mask, c, rows, cols, r2, pts, drop, diag, m):
-    """Per cut ``k < m``: pixels lost and (axial, diagonal) steps dropped; and the box
-    (top, left, bottom, right) the points' disks can reach."""
+    """Per cut ``k < m``: pixels lost and (axial, diagonal) steps dropped; the box (top,
+    left, bottom, right) the points' disks can reach; and the pixels only they cover."""
     n = diag.size + 1
     loss = exclusive_losses(mask, c, rows[pts], cols[pts], r2[pts], drop, n)
     lost = np.zeros(m, np.int64)
@@ -77,7 +77,7 @@ def _candidates(mask, c, rows, cols, r2, pts, drop, diag, m):
         box[1] = min(box[1], cols[p] - rad)
         box[2] = max(box[2], rows[p] + rad)
         box[3] = max(box[3], cols[p] + rad)
-    return lost, cut, box
+    return lost, cut, box, loss.sum()
 
 
 class _Tips:
@@ -91,17 +91,17 @@ class _Tips:
 
     def candidates(
         self, b: int, e: int
-    ) -> tuple[list[int], np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int]]:
+    ) -> tuple[list[int], np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int], int]:
         """The tip's points, their drop indices, per cut ``k = 0 … len − 1`` of the path
         (``len − 2`` on a single path) the pixels lost and the (axial, diagonal) steps
-        dropped, and the box the tip's disks can reach."""
+        dropped, the box the tip's disks can reach, and the pixels only they cover."""
         sk, graph = self.sk, self.graph
         points, drop, steps = graph.tip(b, e)
         # a single path keeps two points: one would be a single endpoint
         m = len(steps) + (0 if graph.branches[b].node[1 - e] is None else 1)
         pts = np.asarray(points, np.int64)
         dr = np.asarray(drop, np.int64)
-        lost, cut, box = _candidates(
+        lost, cut, box, only = _candidates(
             sk.shape,
             self.c,
             sk.rows,
@@ -112,7 +112,8 @@ class _Tips:
             np.asarray(steps, np.int64),
             m,
         )
-        return points, dr, lost, cut, (int(box[0]), int(box[1]), int(box[2]), int(box[3]))
+        box_ = (int(box[0]), int(box[1]), int(box[2]), int(box[3]))
+        return points, dr, lost, cut, box_, int(only)
 
     def exclusive(self, b: int) -> int:
         """Pixels only branch ``b``'s disks cover."""
@@ -206,13 +207,18 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
     cuts: list[tuple[int, int, int]] = []
     changed: list[tuple[int, int, int, int]] = []  # where earlier cuts changed the counts
     cut_branches: set[int] = set()
+    # per branch, from its last count: what only its kept points cover, the box, and
+    # how many changes that count has seen
+    kept: dict[int, tuple[int, tuple[int, int, int, int], int]] = {}
     for *_, b, e in keyed:
-        points, drop, cl, cs, box = first[b, e]
+        points, drop, cl, cs, box, only = first[b, e]
         if b in cut_branches or any(_meet(box, c) for c in changed):
             # an earlier cut changed what this tip's disks share: count again
-            points, drop, cl, cs, box = tips.candidates(b, e)
+            points, drop, cl, cs, box, only = tips.candidates(b, e)
         k = _best(lost, graph.na, graph.nd, cl, cs, area, alpha, lbar)
         cuts.append((b, e, k))
+        # a pixel only the kept points cover had all its disks in the tip, one kept
+        kept[b] = (only - int(cl[k]), box, len(changed) + (k > 0))
         if k == 0:
             continue
         gone = np.asarray(
@@ -223,5 +229,10 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
         cut_branches.add(b)
         lost += int(cl[k])
         graph.cut_tip(b, e, gone.tolist(), int(cs[k, 0]), int(cs[k, 1]))
-    exclusive = {b: tips.exclusive(b) for b in graph.end_branches()}
+    exclusive = {}
+    for b in graph.end_branches():
+        if b in kept and not any(_meet(kept[b][1], c) for c in changed[kept[b][2] :]):
+            exclusive[b] = kept[b][0]  # no later cut reached its disks
+        else:
+            exclusive[b] = tips.exclusive(b)
     return Trim(answer.with_graph(graph), lost, graph.na, graph.nd, cuts, exclusive)

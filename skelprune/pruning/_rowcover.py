@@ -1,9 +1,10 @@
 """Disk coverage counted row by row: work per disk row, never per disk pixel.
 
 A disk ``|p − s|² < r²`` is one run of pixels per row (``_digital.disk_half_width``). The
-kernels here take a set of disks as those runs, binned by row, and per row add them up
-with a difference array over the runs' extent. Against painting every pixel of every
-disk, a row costs its runs plus the columns the runs span, once: on a blob, where
+kernels here walk the rows top to bottom with the disks that reach the current row
+(small buffers, in cache) and add their runs up with a difference array over the
+runs' extent. Against painting every pixel of every disk, a row costs its runs plus the
+columns the runs span, once: on a blob, where
 hundreds of disks of hundreds of pixels' radius overlap, that is the difference between
 the sum of the disks' areas and the area they cover.
 
@@ -23,126 +24,144 @@ __all__ = ["cover_counts", "exclusive_losses", "uncover", "uncover_count"]
 
 
 @njit(cache=True)
-def _runs(rows, cols, r2, order, tag):
-    """The disks' runs binned by row, each row's runs in ``order`` of the disks.
+def _by_top(rows, cols, r2, order, tag):
+    """The disks in ``order`` (positions ``0 … n − 1``), each row's new disks listed.
 
-    Returns ``(y0, start, lo, hi, t)``: runs of row ``y0 + i`` are
-    ``start[i] … start[i + 1] − 1``, run ``j`` covering columns ``lo[j] … hi[j]`` of a
-    disk ``i`` whose ``tag[i]`` is ``t[j]``.
+    Returns the disks' centres, squared radii, tags and radii in rows, by position; the
+    first row ``y0`` and the number of rows they span; and the positions of the disks
+    whose top row is ``y0 + i``, ``ids[first[i] : first[i + 1]]``, ascending.
     """
     n = rows.size
+    rr, qq, vv, tt = rows[order], cols[order], r2[order], tag[order]
     rad = np.empty(n, np.int64)
     y0, y1 = 0, -1
     if n:
         y0, y1 = np.iinfo(np.int64).max, np.iinfo(np.int64).min
     for i in range(n):
-        rad[i] = isqrt(r2[i] - 1)
-        y0 = min(y0, rows[i] - rad[i])
-        y1 = max(y1, rows[i] + rad[i])
-    start = np.zeros(y1 - y0 + 3, np.int64)
-    for i in range(n):  # a disk adds one run to each of its rows
-        start[rows[i] - rad[i] - y0 + 1] += 1
-        start[rows[i] + rad[i] - y0 + 2] -= 1
-    for i in range(1, start.size):
-        start[i] += start[i - 1]
-    for i in range(1, start.size):
-        start[i] += start[i - 1]
-    start = start[:-1]
-    total = start[-1]
-    lo = np.empty(total, np.int32)
-    hi = np.empty(total, np.int32)
-    t = np.empty(total, tag.dtype)
-    fill = start[:-1].copy()
-    for i in order:
-        r, q, v, g = rows[i], cols[i], r2[i], tag[i]
-        dx = rad[i]
-        for dy in range(rad[i] + 1):
-            while dx * dx + dy * dy >= v:  # strictly inside (disk_half_width, in steps)
-                dx -= 1
-            j = fill[r + dy - y0]
-            fill[r + dy - y0] += 1
-            lo[j], hi[j], t[j] = q - dx, q + dx, g
-            if dy:  # the same run, mirrored
-                j = fill[r - dy - y0]
-                fill[r - dy - y0] += 1
-                lo[j], hi[j], t[j] = q - dx, q + dx, g
-    return y0, start, lo, hi, t
+        rad[i] = isqrt(vv[i] - 1)
+        y0 = min(y0, rr[i] - rad[i])
+        y1 = max(y1, rr[i] + rad[i])
+    nrow = y1 - y0 + 1
+    first = np.zeros(nrow + 1, np.int64)
+    for i in range(n):
+        first[rr[i] - rad[i] - y0 + 1] += 1
+    for i in range(nrow):
+        first[i + 1] += first[i]
+    ids = np.empty(n, np.int64)
+    fill = first[:-1].copy()
+    for i in range(n):
+        top = rr[i] - rad[i] - y0
+        ids[fill[top]] = i
+        fill[top] += 1
+    return rr, qq, vv, tt, rad, y0, nrow, first, ids
 
 
 @njit(cache=True)
-def _row_sum(run, lo, hi, a, b):
-    """Add runs ``a … b − 1`` into the difference array ``run``; return their extent."""
+def _row(y, new, rr, qq, vv, tt, rad, active, tmp, na, lo, hi, t, run):
+    """Row ``y``'s runs: the disks ``new`` starting here merged into ``active`` (kept in
+    position order), those past their bottom row let go; each active disk's run goes
+    into ``lo``, ``hi``, ``t`` (in position order) and into the difference array
+    ``run``. Returns ``(active, tmp, n_runs, left, right)``, ``left … right`` the runs'
+    extent."""
+    if new.size:
+        p, q, m = 0, 0, 0
+        while p < na or q < new.size:
+            if q >= new.size or (p < na and active[p] < new[q]):
+                tmp[m] = active[p]
+                p += 1
+            else:
+                tmp[m] = new[q]
+                q += 1
+            m += 1
+        active, tmp, na = tmp, active, m
+    m = 0
     left, right = np.iinfo(np.int64).max, np.iinfo(np.int64).min
-    for j in range(a, b):
-        run[lo[j]] += 1
-        run[hi[j] + 1] -= 1
-        left = min(left, lo[j])
-        right = max(right, hi[j])
-    return left, right
+    for p in range(na):
+        j = active[p]
+        dy = y - rr[j]
+        if dy > rad[j]:
+            continue  # past its bottom row
+        active[m] = j
+        dx = isqrt(vv[j] - 1 - dy * dy)  # strictly inside: dx² < r² − dy²
+        lo[m], hi[m], t[m] = qq[j] - dx, qq[j] + dx, tt[j]
+        run[lo[m]] += 1
+        run[hi[m] + 1] -= 1
+        left = min(left, lo[m])
+        right = max(right, hi[m])
+        m += 1
+    return active, tmp, m, left, right
 
 
 @njit(cache=True)
 def cover_counts(h, w, rows, cols, r2):
     """How many disks ``|p − s|² < r²`` cover each pixel (``int32``, ``h × w``)."""
     c = np.zeros((h, w), np.int32)
-    for i in range(rows.size):
-        r, q, v = rows[i], cols[i], r2[i]
-        dx = rad = isqrt(v - 1)
-        for dy in range(rad + 1):
-            while dx * dx + dy * dy >= v:  # strictly inside (disk_half_width, in steps)
-                dx -= 1
-            for y in range(r - dy, r + dy + 1, max(2 * dy, 1)):  # rows r ± dy
-                c[y, q - dx] += 1
-                if q + dx + 1 < w:
-                    c[y, q + dx + 1] -= 1
-    for y in range(h):
-        acc = 0
-        for x in range(w):
-            acc += c[y, x]
-            c[y, x] = acc
-    return c
-
-
-@njit(cache=True)
-def uncover(c, rows, cols, r2):
-    """Take the disks of these points off the counts ``c``."""
-    y0, start, lo, hi, _ = _runs(rows, cols, r2, np.arange(rows.size), rows)
-    run = np.zeros(c.shape[1] + 1, np.int32)
-    for i in range(start.size - 1):
-        if start[i] == start[i + 1]:
-            continue
+    n = rows.size
+    order = np.arange(n)
+    rr, qq, vv, tt, rad, y0, nrow, first, ids = _by_top(rows, cols, r2, order, order)
+    active, tmp = np.empty(n, np.int64), np.empty(n, np.int64)
+    lo, hi, t = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64)
+    run = np.zeros(w + 1, np.int32)
+    na = 0
+    for i in range(nrow):
         y = y0 + i
-        left, right = _row_sum(run, lo, hi, start[i], start[i + 1])
+        new = ids[first[i] : first[i + 1]]
+        active, tmp, na, left, right = _row(
+            y, new, rr, qq, vv, tt, rad, active, tmp, na, lo, hi, t, run
+        )
+        if na == 0:
+            continue
         acc = 0
         for x in range(left, right + 1):
             acc += run[x]
             run[x] = 0
-            c[y, x] -= acc
+            c[y, x] = acc
         run[right + 1] = 0
+    return c
 
 
 @njit(cache=True)
-def uncover_count(c, deep, rows, cols, r2):
-    """Take these disks off the counts ``c``; return how many ``deep`` pixels lost their
-    last one."""
-    y0, start, lo, hi, _ = _runs(rows, cols, r2, np.arange(rows.size), rows)
+def _take_off(c, deep, rows, cols, r2, count):
+    """Take the disks off ``c``; with ``count``, return how many ``deep`` pixels lost
+    their last one."""
+    n = rows.size
+    order = np.arange(n)
+    rr, qq, vv, tt, rad, y0, nrow, first, ids = _by_top(rows, cols, r2, order, order)
+    active, tmp = np.empty(n, np.int64), np.empty(n, np.int64)
+    lo, hi, t = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64)
     run = np.zeros(c.shape[1] + 1, np.int32)
-    n = 0
-    for i in range(start.size - 1):
-        if start[i] == start[i + 1]:
-            continue
+    na, lost = 0, 0
+    for i in range(nrow):
         y = y0 + i
-        left, right = _row_sum(run, lo, hi, start[i], start[i + 1])
+        new = ids[first[i] : first[i + 1]]
+        active, tmp, na, left, right = _row(
+            y, new, rr, qq, vv, tt, rad, active, tmp, na, lo, hi, t, run
+        )
+        if na == 0:
+            continue
         acc = 0
         for x in range(left, right + 1):
             acc += run[x]
             run[x] = 0
             if acc > 0:
                 c[y, x] -= acc
-                if c[y, x] == 0 and deep[y, x]:
-                    n += 1
+                if count and c[y, x] == 0 and deep[y, x]:
+                    lost += 1
         run[right + 1] = 0
-    return n
+    return lost
+
+
+@njit(cache=True)
+def uncover(c, rows, cols, r2):
+    """Take the disks of these points off the counts ``c``."""
+    _take_off(c, np.zeros((1, 1), np.bool_), rows, cols, r2, False)
+
+
+@njit(cache=True)
+def uncover_count(c, deep, rows, cols, r2):
+    """Take these disks off the counts ``c``; return how many ``deep`` pixels lost their
+    last one."""
+    return _take_off(c, deep, rows, cols, r2, True)
 
 
 @njit(cache=True)
@@ -166,17 +185,24 @@ def exclusive_losses(mask, c, rows, cols, r2, drop, n_drop):
     decreasing drop index, claim the open pixels they cover, skipping claimed ones with
     a union-find: each pixel is claimed once, by its largest drop index.
     """
+    n = rows.size
     order = np.argsort(-drop, kind="mergesort")
-    y0, start, lo, hi, t = _runs(rows, cols, r2, order, drop.astype(np.int32))
+    rr, qq, vv, tt, rad, y0, nrow, first, ids = _by_top(rows, cols, r2, order, drop)
+    active, tmp = np.empty(n, np.int64), np.empty(n, np.int64)
+    lo, hi, t = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64)
     w = c.shape[1]
     run = np.zeros(w + 1, np.int32)
     nxt = np.empty(w + 1, np.int32)
     loss = np.zeros(n_drop, np.int64)
-    for i in range(start.size - 1):
-        if start[i] == start[i + 1]:
-            continue
+    na = 0
+    for i in range(nrow):
         y = y0 + i
-        left, right = _row_sum(run, lo, hi, start[i], start[i + 1])
+        new = ids[first[i] : first[i + 1]]
+        active, tmp, na, left, right = _row(
+            y, new, rr, qq, vv, tt, rad, active, tmp, na, lo, hi, t, run
+        )
+        if na == 0:
+            continue
         acc = 0
         for x in range(left, right + 1):
             acc += run[x]
@@ -185,7 +211,7 @@ def exclusive_losses(mask, c, rows, cols, r2, drop, n_drop):
             nxt[x] = x if acc > 0 and acc == c[y, x] and mask[y, x] else x + 1
         run[right + 1] = 0
         nxt[right + 1] = right + 1
-        for j in range(start[i], start[i + 1]):  # decreasing drop index
+        for j in range(na):  # decreasing drop index
             d = t[j]
             x = _find(nxt, lo[j])
             while x <= hi[j]:

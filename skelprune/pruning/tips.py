@@ -56,28 +56,24 @@ class Trim:
     exclusive: dict[int, int]
 
 
-@njit(cache=True)
 def _candidates(mask, c, rows, cols, r2, pts, drop, diag, m):
     """Per cut ``k < m``: pixels lost and (axial, diagonal) steps dropped; the box (top,
     left, bottom, right) the points' disks can reach; and the pixels only they cover."""
-    n = diag.size + 1
-    loss = exclusive_losses(mask, c, rows[pts], cols[pts], r2[pts], drop, n)
+    loss = exclusive_losses(mask, c, rows[pts], cols[pts], r2[pts], drop, diag.size + 1)
     lost = np.zeros(m, np.int64)
     cut = np.zeros((m, 2), np.int64)
-    for k in range(1, m):
-        lost[k] = lost[k - 1] + loss[k - 1]
-        cut[k, 0] = cut[k - 1, 0] + 1 - diag[k - 1]
-        cut[k, 1] = cut[k - 1, 1] + diag[k - 1]
-    box = np.empty(4, np.int64)
-    box[0] = box[1] = np.iinfo(np.int64).max
-    box[2] = box[3] = np.iinfo(np.int64).min
-    for p in pts:
-        rad = int(math.sqrt(r2[p])) + 1
-        box[0] = min(box[0], rows[p] - rad)
-        box[1] = min(box[1], cols[p] - rad)
-        box[2] = max(box[2], rows[p] + rad)
-        box[3] = max(box[3], cols[p] + rad)
-    return lost, cut, box, loss.sum()
+    if m > 1:
+        lost[1:] = np.cumsum(loss[: m - 1])
+        cut[1:, 0] = np.cumsum(1 - diag[: m - 1])
+        cut[1:, 1] = np.cumsum(diag[: m - 1])
+    rad = np.sqrt(r2[pts]).astype(np.int64) + 1
+    box = (
+        int((rows[pts] - rad).min()),
+        int((cols[pts] - rad).min()),
+        int((rows[pts] + rad).max()),
+        int((cols[pts] + rad).max()),
+    )
+    return lost, cut, box, int(loss.sum())
 
 
 class _Tips:
@@ -112,8 +108,7 @@ class _Tips:
             np.asarray(steps, np.int64),
             m,
         )
-        box_ = (int(box[0]), int(box[1]), int(box[2]), int(box[3]))
-        return points, dr, lost, cut, box_, int(only)
+        return points, dr, lost, cut, box, only
 
     def exclusive(self, b: int) -> int:
         """Pixels only branch ``b``'s disks cover."""

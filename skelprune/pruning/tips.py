@@ -56,7 +56,17 @@ class Trim:
     exclusive: dict[int, int]
 
 
-def _candidates(mask, c, rows, cols, r2, pts, drop, diag, m):
+def _candidates(
+    mask: np.ndarray,
+    c: np.ndarray,
+    rows: np.ndarray,
+    cols: np.ndarray,
+    r2: np.ndarray,
+    pts: np.ndarray,
+    drop: np.ndarray,
+    diag: np.ndarray,
+    m: int,
+) -> tuple[np.ndarray, np.ndarray, tuple[int, int, int, int], int]:
     """Per cut ``k < m``: pixels lost and (axial, diagonal) steps dropped; the box (top,
     left, bottom, right) the points' disks can reach; and the pixels only they cover."""
     loss = exclusive_losses(mask, c, rows[pts], cols[pts], r2[pts], drop, diag.size + 1)
@@ -77,7 +87,8 @@ def _candidates(mask, c, rows, cols, r2, pts, drop, diag, m):
 
 
 class _Tips:
-    """The counts and the scratch arrays the cuts share."""
+    """The disk counts the cuts share (``c``: per pixel, how many disks of the skeleton
+    left so far cover it)."""
 
     def __init__(self, sk: Skeleton, graph: BranchGraph) -> None:
         self.sk, self.graph = sk, graph

@@ -15,12 +15,14 @@ current skeleton cover it.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
 from .._digital import isqrt
 
-__all__ = ["cover_counts", "exclusive_losses", "uncover", "uncover_count"]
+__all__ = ["cover_counts", "cut_counts", "exclusive_losses", "uncover", "uncover_count"]
 
 
 @njit(cache=True)
@@ -219,3 +221,32 @@ def exclusive_losses(mask, c, rows, cols, r2, drop, n_drop):
                 nxt[x] = x + 1
                 x = _find(nxt, x + 1)
     return loss
+
+
+@njit(cache=True)
+def cut_counts(mask, c, rows, cols, r2, pts, drop, diag, m):
+    """A tip's cuts ``k < m`` (its points ``pts``, their ``drop`` indices, ``diag`` per
+    step of its path whether it is diagonal): pixels lost and (axial, diagonal) steps
+    dropped per cut; the box (top, left, bottom, right) the points' disks can reach; and
+    the pixels only they cover.
+
+    Compiled with :func:`exclusive_losses` in one module, so that numba's cache never
+    pairs it with an older copy of that kernel.
+    """
+    loss = exclusive_losses(mask, c, rows[pts], cols[pts], r2[pts], drop, diag.size + 1)
+    lost = np.zeros(m, np.int64)
+    cut = np.zeros((m, 2), np.int64)
+    for k in range(1, m):
+        lost[k] = lost[k - 1] + loss[k - 1]
+        cut[k, 0] = cut[k - 1, 0] + 1 - diag[k - 1]
+        cut[k, 1] = cut[k - 1, 1] + diag[k - 1]
+    box = np.empty(4, np.int64)
+    box[0] = box[1] = np.iinfo(np.int64).max
+    box[2] = box[3] = np.iinfo(np.int64).min
+    for p in pts:
+        rad = int(math.sqrt(r2[p])) + 1
+        box[0] = min(box[0], rows[p] - rad)
+        box[1] = min(box[1], cols[p] - rad)
+        box[2] = max(box[2], rows[p] + rad)
+        box[3] = max(box[3], cols[p] + rad)
+    return lost, cut, box, loss.sum()

@@ -32,7 +32,7 @@ from numba import njit
 
 from ..graph import BranchGraph, step_length
 from ..skeleton import Skeleton
-from ._rowcover import cover_counts, exclusive_losses, uncover
+from ._rowcover import cover_counts, cut_counts, exclusive_losses, uncover
 
 __all__ = ["Trim", "trim_tips"]
 
@@ -54,36 +54,6 @@ class Trim:
     #: Per end branch of the trimmed skeleton: the pixels only its disks cover (what
     #: removing it whole would lose), for its margin.
     exclusive: dict[int, int]
-
-
-def _candidates(
-    mask: np.ndarray,
-    c: np.ndarray,
-    rows: np.ndarray,
-    cols: np.ndarray,
-    r2: np.ndarray,
-    pts: np.ndarray,
-    drop: np.ndarray,
-    diag: np.ndarray,
-    m: int,
-) -> tuple[np.ndarray, np.ndarray, tuple[int, int, int, int], int]:
-    """Per cut ``k < m``: pixels lost and (axial, diagonal) steps dropped; the box (top,
-    left, bottom, right) the points' disks can reach; and the pixels only they cover."""
-    loss = exclusive_losses(mask, c, rows[pts], cols[pts], r2[pts], drop, diag.size + 1)
-    lost = np.zeros(m, np.int64)
-    cut = np.zeros((m, 2), np.int64)
-    if m > 1:
-        lost[1:] = np.cumsum(loss[: m - 1])
-        cut[1:, 0] = np.cumsum(1 - diag[: m - 1])
-        cut[1:, 1] = np.cumsum(diag[: m - 1])
-    rad = np.sqrt(r2[pts]).astype(np.int64) + 1
-    box = (
-        int((rows[pts] - rad).min()),
-        int((cols[pts] - rad).min()),
-        int((rows[pts] + rad).max()),
-        int((cols[pts] + rad).max()),
-    )
-    return lost, cut, box, int(loss.sum())
 
 
 class _Tips:
@@ -108,7 +78,7 @@ class _Tips:
         m = len(steps) + (0 if graph.branches[b].node[1 - e] is None else 1)
         pts = np.asarray(points, np.int64)
         dr = np.asarray(drop, np.int64)
-        lost, cut, box, only = _candidates(
+        lost, cut, box, only = cut_counts(
             sk.shape,
             self.c,
             sk.rows,
@@ -119,7 +89,8 @@ class _Tips:
             np.asarray(steps, np.int64),
             m,
         )
-        return points, dr, lost, cut, box, only
+        box_ = (int(box[0]), int(box[1]), int(box[2]), int(box[3]))
+        return points, dr, lost, cut, box_, int(only)
 
     def exclusive(self, b: int) -> int:
         """Pixels only branch ``b``'s disks cover."""

@@ -13,35 +13,16 @@ step chosen may come later.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from .._digital import disk_half_width, isqrt
 from ..medial_axis import squared_distance
+from ._rowcover import cover_counts, uncover_count
 from .bayesian import PruningSequence, choose_step
-from .tips import _paint_counts
 
 __all__ = ["floor_lost", "floor_step"]
 
 #: Squared distance to the background up to which a pixel is on the rim: the pixels a
 #: one-pixel move of the boundary adds or takes (4- and 8-adjacent to the background).
 RIM = 2
-
-
-@njit(cache=True)
-def _uncover_count(c, deep, rows, cols, r2):
-    """Take these disks off the counts; return how many deep pixels lost their last one."""
-    n = 0
-    for k in range(rows.size):
-        r, q, v = rows[k], cols[k], r2[k]
-        rad = isqrt(v - 1)
-        for dy in range(-rad, rad + 1):
-            dx = disk_half_width(v, dy)  # strictly inside: dx² < v − dy²
-            y = r + dy
-            for x in range(q - dx, q + dx + 1):
-                c[y, x] -= 1
-                if c[y, x] == 0 and deep[y, x]:
-                    n += 1
-    return n
 
 
 def floor_lost(seq: PruningSequence) -> np.ndarray:
@@ -51,14 +32,14 @@ def floor_lost(seq: PruningSequence) -> np.ndarray:
     deep = squared_distance(shape) > RIM
     idx = start.points()
     h, w = shape.shape
-    c = _paint_counts(h, w, start.rows[idx], start.cols[idx], start.r2[idx])
+    c = cover_counts(h, w, start.rows[idx], start.cols[idx], start.r2[idx])
     lost = [int((deep & (c == 0)).sum())]
     graph = start.working_graph()
     for b in seq.removed:
         pts = np.asarray(graph.branches[b].points, np.int64)
         graph.remove_end_branch(b)
         lost.append(
-            lost[-1] + _uncover_count(c, deep, start.rows[pts], start.cols[pts], start.r2[pts])
+            lost[-1] + uncover_count(c, deep, start.rows[pts], start.cols[pts], start.r2[pts])
         )
     return np.asarray(lost)
 

@@ -30,9 +30,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .._digital import disk_half_width, isqrt
 from ..graph import BranchGraph, step_length
 from ..skeleton import Skeleton
+from ._rowcover import cover_counts, cut_counts, exclusive_losses, uncover
 
 __all__ = ["Trim", "trim_tips"]
 
@@ -56,114 +56,29 @@ class Trim:
     exclusive: dict[int, int]
 
 
-@njit(cache=True)
-def _paint_counts(h, w, rows, cols, r2):
-    """How many disks ``|p − s|² < r²`` cover each pixel."""
-    c = np.zeros((h, w), np.int32)
-    for k in range(rows.size):
-        r, q, v = rows[k], cols[k], r2[k]
-        rad = isqrt(v - 1)
-        for dy in range(-rad, rad + 1):
-            dx = disk_half_width(v, dy)  # strictly inside: dx² < v − dy²
-            y = r + dy
-            for x in range(q - dx, q + dx + 1):
-                c[y, x] += 1
-    return c
-
-
-@njit(cache=True)
-def _losses(mask, c, rows, cols, r2, drop, n_drop, scratch, last):
-    """Pixels lost when the points with ``drop < k`` go, per ``k`` (index ``k − 1``).
-
-    A pixel is lost once every disk covering it is among the dropped points: all its
-    covers are in this list (``scratch`` counts them against ``c``) and the last of them
-    (``last``: the largest drop index) is gone. ``scratch`` and ``last`` come in zeroed
-    and are left zeroed.
-    """
-    loss = np.zeros(n_drop + 1, np.int64)
-    for pass_ in range(3):
-        for k in range(rows.size):
-            r, q, v, d = rows[k], cols[k], r2[k], drop[k]
-            rad = isqrt(v - 1)
-            for dy in range(-rad, rad + 1):
-                dx = disk_half_width(v, dy)  # strictly inside: dx² < v − dy²
-                y = r + dy
-                for x in range(q - dx, q + dx + 1):
-                    if pass_ == 0:
-                        scratch[y, x] += 1
-                        if d + 1 > last[y, x]:
-                            last[y, x] = d + 1
-                    elif pass_ == 1:
-                        if scratch[y, x] == c[y, x] and mask[y, x]:
-                            loss[last[y, x] - 1] += 1
-                        scratch[y, x] = -1  # counted once
-                    else:
-                        scratch[y, x] = 0
-                        last[y, x] = 0
-    return loss
-
-
-@njit(cache=True)
-def _candidates(mask, c, rows, cols, r2, pts, drop, diag, m, scratch, last):
-    """Per cut ``k < m``: pixels lost and (axial, diagonal) steps dropped; and the box
-    (top, left, bottom, right) the points' disks can reach."""
-    n = diag.size + 1
-    loss = _losses(mask, c, rows[pts], cols[pts], r2[pts], drop, n, scratch, last)
-    lost = np.zeros(m, np.int64)
-    cut = np.zeros((m, 2), np.int64)
-    for k in range(1, m):
-        lost[k] = lost[k - 1] + loss[k - 1]
-        cut[k, 0] = cut[k - 1, 0] + 1 - diag[k - 1]
-        cut[k, 1] = cut[k - 1, 1] + diag[k - 1]
-    box = np.empty(4, np.int64)
-    box[0] = box[1] = np.iinfo(np.int64).max
-    box[2] = box[3] = np.iinfo(np.int64).min
-    for p in pts:
-        rad = int(math.sqrt(r2[p])) + 1
-        box[0] = min(box[0], rows[p] - rad)
-        box[1] = min(box[1], cols[p] - rad)
-        box[2] = max(box[2], rows[p] + rad)
-        box[3] = max(box[3], cols[p] + rad)
-    return lost, cut, box
-
-
-@njit(cache=True)
-def _uncover(c, rows, cols, r2):
-    """Take the disks of these points off the counts."""
-    for k in range(rows.size):
-        r, q, v = rows[k], cols[k], r2[k]
-        rad = isqrt(v - 1)
-        for dy in range(-rad, rad + 1):
-            dx = disk_half_width(v, dy)  # strictly inside: dx² < v − dy²
-            y = r + dy
-            for x in range(q - dx, q + dx + 1):
-                c[y, x] -= 1
-
-
 class _Tips:
-    """The counts and the scratch arrays the cuts share."""
+    """The disk counts the cuts share (``c``: per pixel, how many disks of the skeleton
+    left so far cover it)."""
 
     def __init__(self, sk: Skeleton, graph: BranchGraph) -> None:
         self.sk, self.graph = sk, graph
         idx = graph.alive_points()
         h, w = sk.shape.shape
-        self.c = _paint_counts(h, w, sk.rows[idx], sk.cols[idx], sk.r2[idx])
-        self.scratch = np.zeros((h, w), np.int32)
-        self.last = np.zeros((h, w), np.int64)
+        self.c = cover_counts(h, w, sk.rows[idx], sk.cols[idx], sk.r2[idx])
 
     def candidates(
         self, b: int, e: int
-    ) -> tuple[list[int], np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int]]:
+    ) -> tuple[list[int], np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int], int]:
         """The tip's points, their drop indices, per cut ``k = 0 … len − 1`` of the path
         (``len − 2`` on a single path) the pixels lost and the (axial, diagonal) steps
-        dropped, and the box the tip's disks can reach."""
+        dropped, the box the tip's disks can reach, and the pixels only they cover."""
         sk, graph = self.sk, self.graph
         points, drop, steps = graph.tip(b, e)
         # a single path keeps two points: one would be a single endpoint
         m = len(steps) + (0 if graph.branches[b].node[1 - e] is None else 1)
         pts = np.asarray(points, np.int64)
         dr = np.asarray(drop, np.int64)
-        lost, cut, box = _candidates(
+        lost, cut, box, only = cut_counts(
             sk.shape,
             self.c,
             sk.rows,
@@ -173,17 +88,16 @@ class _Tips:
             dr,
             np.asarray(steps, np.int64),
             m,
-            self.scratch,
-            self.last,
         )
-        return points, dr, lost, cut, (int(box[0]), int(box[1]), int(box[2]), int(box[3]))
+        box_ = (int(box[0]), int(box[1]), int(box[2]), int(box[3]))
+        return points, dr, lost, cut, box_, int(only)
 
     def exclusive(self, b: int) -> int:
         """Pixels only branch ``b``'s disks cover."""
         sk, br = self.sk, self.graph.branches[b]
         pts = np.asarray(br.points, np.int64)
         # every point the same drop index: lost all together
-        loss = _losses(
+        loss = exclusive_losses(
             sk.shape,
             self.c,
             sk.rows[pts],
@@ -191,8 +105,6 @@ class _Tips:
             sk.r2[pts],
             np.zeros(pts.size, np.int64),
             1,
-            self.scratch,
-            self.last,
         )
         return int(loss[0])
 
@@ -272,22 +184,32 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
     cuts: list[tuple[int, int, int]] = []
     changed: list[tuple[int, int, int, int]] = []  # where earlier cuts changed the counts
     cut_branches: set[int] = set()
+    # per branch, from its last count: what only its kept points cover, the box, and
+    # how many changes that count has seen
+    kept: dict[int, tuple[int, tuple[int, int, int, int], int]] = {}
     for *_, b, e in keyed:
-        points, drop, cl, cs, box = first[b, e]
+        points, drop, cl, cs, box, only = first[b, e]
         if b in cut_branches or any(_meet(box, c) for c in changed):
             # an earlier cut changed what this tip's disks share: count again
-            points, drop, cl, cs, box = tips.candidates(b, e)
+            points, drop, cl, cs, box, only = tips.candidates(b, e)
         k = _best(lost, graph.na, graph.nd, cl, cs, area, alpha, lbar)
         cuts.append((b, e, k))
+        # a pixel only the kept points cover had all its disks in the tip, one kept
+        kept[b] = (only - int(cl[k]), box, len(changed) + (k > 0))
         if k == 0:
             continue
         gone = np.asarray(
             [p for p, d in zip(points, drop.tolist(), strict=True) if d < k], np.int64
         )
-        _uncover(tips.c, answer.rows[gone], answer.cols[gone], answer.r2[gone])
+        uncover(tips.c, answer.rows[gone], answer.cols[gone], answer.r2[gone])
         changed.append(box)  # (the whole tip's box holds the dropped points' disks)
         cut_branches.add(b)
         lost += int(cl[k])
         graph.cut_tip(b, e, gone.tolist(), int(cs[k, 0]), int(cs[k, 1]))
-    exclusive = {b: tips.exclusive(b) for b in graph.end_branches()}
+    exclusive = {}
+    for b in graph.end_branches():
+        if b in kept and not any(_meet(kept[b][1], c) for c in changed[kept[b][2] :]):
+            exclusive[b] = kept[b][0]  # no later cut reached its disks
+        else:
+            exclusive[b] = tips.exclusive(b)
     return Trim(answer.with_graph(graph), lost, graph.na, graph.nd, cuts, exclusive)

@@ -13,7 +13,7 @@ from skelprune.pruning.bayesian import bayesian_sequence, choose_step
 from skelprune.pruning.coarse import coarse_dce
 from skelprune.pruning.tips import trim_tips
 from skelprune.skeleton import Skeleton
-from testkit.oracle import naive_trim, objective
+from testkit.oracle import disk_pixels, naive_trim, objective
 from testkit.shapes import DRAWN, blobs, dataset, load, rectangle_with_holes
 
 K216 = dataset("kimia216")
@@ -58,6 +58,20 @@ def fast_and_naive(start: Skeleton, alpha: float, lbar: float) -> tuple[int, int
     # λ can only fall, and the endpoints stay
     assert lam <= seq.objective[chosen] + 1e-12
     assert fast.skeleton.n_endpoints == answer.n_endpoints
+    # each end branch's exclusive pixels: those only its kept points' disks cover
+    disks = disk_pixels(graph.rows, graph.cols, answer.r2, answer.shape.shape)
+    size = answer.shape.size
+    flat = answer.shape.ravel()
+
+    def count(points: list[int]) -> np.ndarray:
+        hit = [disks[p] for p in points]
+        return np.bincount(np.concatenate(hit), minlength=size) if hit else np.zeros(size, int)
+
+    every = count(list(graph.alive_points()))
+    assert set(fast.exclusive) == set(graph.end_branches())
+    for b, n in fast.exclusive.items():
+        own = count(graph.branches[b].points)
+        assert n == int((flat & (own > 0) & (own == every)).sum())
     return len(cuts), sum(k for *_, k in cuts)
 
 

@@ -29,7 +29,13 @@ from ._digital import (
     isqrt,
     neighbourhood_code,
 )
-from ._disk_counts import coverage, disk_loss, disk_remove, drop_redundant_anchors
+from ._disk_counts import (
+    capped_coverage,
+    coverage,
+    disk_loss,
+    disk_remove,
+    drop_redundant_anchors,
+)
 from ._orientation import IDENTITY_ORIENTATION, oriented
 from .errors import InvalidImageError
 
@@ -306,19 +312,49 @@ def _ordered_thinning(fg, r2, anchor, simple) -> None:
                     queued[q] = True
 
 
+#: The thinning's first cap on the counts, and the largest before exact counts.
+_FIRST_CAP = 4
+_LAST_CAP = 64
+
+
+def thinning_cap(r2s: np.ndarray, pixels: int) -> int:
+    """The first cap on the thinning's counts for disks ``r2s`` on a grid of ``pixels``.
+
+    Capped counts (see :func:`_thin`) cost about the pixels, exact ones the disks'
+    heights: capped where the heights outweigh the pixels (a blob's axis, few removals
+    and disks of hundreds of pixels' radius), exact otherwise.
+    """
+    heights = float(np.sum(2.0 * np.sqrt(r2s.astype(np.float64)) + 1.0))
+    return _FIRST_CAP if heights > pixels else 0
+
+
 @njit(cache=True)
-def _thin(fg, r2, rows, cols, simple, degree) -> None:
+def _counts(inside, rows, cols, r2s, cap):
+    """The thinning's disk counts: capped at ``cap`` (:func:`capped_coverage`), exact if 0."""
+    if cap:
+        return capped_coverage(inside, rows, cols, r2s, cap)
+    return coverage(inside.shape[0], inside.shape[1], rows, cols, r2s)
+
+
+@njit(cache=True)
+def _thin(fg, r2, rows, cols, simple, degree, cap) -> None:
     """Make the anchored skeleton one pixel thin.
 
     Removes simple pixels that are not endpoints, the one losing the fewest
     reconstructed pixels first (ties: smaller radius, then the given order). Removals
     only lower the coverage, so a pixel's loss never decreases: a min-heap with lazy
     re-evaluation of the popped key gives exactly that greedy order.
+
+    The counts are capped at ``cap`` (0: exact counts), raised (by 4×, then exact)
+    and remade from the disks left whenever the removals since they were made would
+    reach ``cap - 1``: the losses are the same either way (:func:`capped_coverage`).
     """
     r2s = np.empty(rows.size, dtype=np.int64)
     for k in range(rows.size):
         r2s[k] = r2[rows[k], cols[k]]
-    cover, bmin, bcnt, lazy = coverage(fg.shape[0], fg.shape[1], rows, cols, r2s)
+    inside = r2 > 0
+    cover, bmin, bcnt, lazy = _counts(inside, rows, cols, r2s, cap)
+    removed = 0  # removals since the counts were made
     n = rows.size
     rank = np.full(fg.shape, -1, dtype=np.int64)
     for k in range(n):
@@ -349,8 +385,14 @@ def _thin(fg, r2, rows, cols, simple, degree) -> None:
             size = heap_push(heap, size, loss * big + k)
             inheap[k] = True
             continue
+        if cap and removed + 1 > cap - 2:  # capped counts would stop being exact
+            cap = cap * 4 if cap * 4 <= _LAST_CAP else 0
+            live = np.array([j for j in range(n) if fg[rows[j], cols[j]]], dtype=np.int64)
+            cover, bmin, bcnt, lazy = _counts(inside, rows[live], cols[live], r2s[live], cap)
+            removed = 0
         fg[r, c] = False
         disk_remove(cover, bmin, bcnt, lazy, r, c, v)
+        removed += 1
         for i in range(8):
             rr, cc = r + NEIGHBOURS[i, 0], c + NEIGHBOURS[i, 1]
             q = rank[rr, cc]
@@ -502,7 +544,8 @@ def _medial_axis_pixels(padded: np.ndarray, r2: np.ndarray) -> tuple[np.ndarray,
     _ordered_thinning(fg, r2, anchor, SIMPLE)
     rows, cols = np.nonzero(fg)
     order = np.lexsort((cols, rows, r2[rows, cols]))  # smallest radius first
-    _thin(fg, r2, rows[order].astype(np.int64), cols[order].astype(np.int64), SIMPLE, DEGREE)
+    rows, cols = rows[order].astype(np.int64), cols[order].astype(np.int64)
+    _thin(fg, r2, rows, cols, SIMPLE, DEGREE, thinning_cap(r2[rows, cols], r2.size))
     _extend_ends(fg, r2, DEGREE)
     rows, cols = np.nonzero(fg)
     return rows.astype(np.int64), cols.astype(np.int64)

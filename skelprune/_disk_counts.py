@@ -317,6 +317,12 @@ def last_cover(inside, rows, cols, r2s) -> np.ndarray:
                     dx = xa - c if c < xa else (c - xe if c > xe else 0)
                     if dy * dy + dx * dx >= v:
                         ys = 0
+                    else:  # only the rows where the disk reaches the box's columns
+                        reach = isqrt(v - 1 - dx * dx)
+                        ys &= _bits(
+                            max(r - reach, ty * TILE) - ty * TILE,
+                            min(r + reach, ty * TILE + TILE - 1) - ty * TILE,
+                        )
                 painted = False
                 while ys:
                     low = ys & -ys
@@ -463,6 +469,12 @@ def capped_coverage(inside, rows, cols, r2s, cap: int):
                     dx = xa - c if c < xa else (c - xe if c > xe else 0)
                     if dy * dy + dx * dx >= v:
                         ys = 0
+                    else:  # only the rows where the disk reaches the box's columns
+                        reach = isqrt(v - 1 - dx * dx)
+                        ys &= _bits(
+                            max(r - reach, ty * TILE) - ty * TILE,
+                            min(r + reach, ty * TILE + TILE - 1) - ty * TILE,
+                        )
                 full = False  # some pixel reached the cap
                 while ys:
                     low = ys & -ys

@@ -364,7 +364,7 @@ def _thin(fg, r2, rows, cols, simple, degree, cap) -> None:
     cover, bmin, bcnt, lazy = _counts(inside, rows, cols, r2s, cap)
     removed = 0  # removals since the counts were made
     n = rows.size
-    rank = np.full(fg.shape, -1, dtype=np.int64)
+    rank = np.full(fg.shape, -1, dtype=np.int32)  # int32: 64 MB less at 4096 px
     for k in range(n):
         rank[rows[k], cols[k]] = k
     big = n + 1

@@ -14,6 +14,11 @@ a scanned silhouette is: their softened staircase boundary gives hundreds of bra
 with huge disks, the slow case for the pruning. After the table, the slowest shape is run
 once more under cProfile and its top entries printed.
 
+Each shape is timed with the default options and with ``trim=False`` (the tips'
+cut off), which shows the other stages alone. ``SKELPRUNE_BENCH_TRIM=off`` times only
+the latter (the tips' cut of a 4096-px blob can take minutes), and
+``SKELPRUNE_BENCH_SIZES=1024,2048`` picks the sizes.
+
 ``python -m benchmarks large`` (about ten minutes on one core).
 """
 
@@ -22,6 +27,7 @@ from __future__ import annotations
 import cProfile
 import io
 import multiprocessing as mp
+import os
 import pstats
 import resource
 import time
@@ -32,7 +38,9 @@ import numpy as np
 
 from .common import DATA, table, upscale
 
-SIZES = (1024, 2048, 4096)
+SIZES = tuple(int(s) for s in os.environ.get("SKELPRUNE_BENCH_SIZES", "1024,2048,4096").split(","))
+#: Whether the default options are timed too, or ``trim=False`` only.
+DEFAULT_TOO = os.environ.get("SKELPRUNE_BENCH_TRIM", "both") != "off"
 SHAPES = (
     "filled disk",
     "filled square",
@@ -45,6 +53,8 @@ SHAPES = (
     "heart",
     "cup",
     "holed blob",
+    "octopus",
+    "holed disk",
 )
 
 
@@ -64,12 +74,22 @@ DRAWN = 160
 
 def blob(name: str, size: int) -> np.ndarray:
     """``name`` (a shape of SHAPES) filling a ``size``-px frame."""
-    if name in ("apple", "heart", "cup", "holed blob"):
+    if name in ("apple", "heart", "cup", "holed blob", "octopus"):
         return upscale(_drawn(name, DRAWN), size)
-    if name == "filled disk":
+    if name in ("filled disk", "holed disk"):
         yy, xx = np.mgrid[:size, :size]
         c = (size - 1) / 2
-        return (yy - c) ** 2 + (xx - c) ** 2 <= (size / 2 - 2) ** 2
+        disk = (yy - c) ** 2 + (xx - c) ** 2 <= (size / 2 - 2) ** 2
+        if name == "holed disk":  # five round holes of different sizes
+            for cy, cx, rad in (
+                (-0.4, -0.3, 0.12),
+                (0.35, -0.4, 0.08),
+                (0.1, 0.45, 0.18),
+                (-0.45, 0.35, 0.06),
+                (0.45, 0.2, 0.1),
+            ):
+                disk &= np.hypot(yy / (size / 2) - 1 - cy, xx / (size / 2) - 1 - cx) > rad
+        return disk
     if name == "filled square":
         mask = np.zeros((size, size), bool)
         mask[2:-2, 2:-2] = True
@@ -101,6 +121,11 @@ def _drawn(name: str, size: int) -> np.ndarray:
         body = (np.abs(xx + 0.2) < 0.55 - 0.12 * (yy + 0.8) / 1.6) & (np.abs(yy) < 0.8)
         ring = np.hypot(yy + 0.05, xx - 0.45) / 0.42
         return body | ((ring > 0.6) & (ring < 1.0) & (xx > 0.2))
+    if name == "octopus":  # a round body with eight wavy arms
+        return _polar(
+            size,
+            lambda t: 0.3 + 0.6 * (0.5 + 0.5 * np.cos(8 * t + 0.3 * np.sin(3 * t))) ** 2.5,
+        )
     if name == "holed blob":  # a wobbly disc with three round holes
         outer = _polar(size, lambda t: 0.85 + 0.08 * np.sin(3 * t) + 0.04 * np.cos(5 * t))
         holes = np.zeros_like(outer)
@@ -122,11 +147,15 @@ def _run(name: str, size: int, repeat: int, out: mp.Queue) -> None:
 
     skelprune.prune(blob("filled square", 64))  # loads the compiled kernels
     mask = blob(name, size)
-    total, edt = [], []
-    for _ in range(repeat):  # the two interleaved, so that a slow spell hits both
+    total, untrimmed, edt = [], [], []
+    for _ in range(repeat):  # interleaved, so that a slow spell hits all
+        if DEFAULT_TOO:
+            t = time.perf_counter()
+            skelprune.prune(mask).to_dict()
+            total.append(time.perf_counter() - t)
         t = time.perf_counter()
-        skelprune.prune(mask).to_dict()
-        total.append(time.perf_counter() - t)
+        skelprune.prune(mask, trim=False).to_dict()
+        untrimmed.append(time.perf_counter() - t)
         t = time.perf_counter()
         ndimage.distance_transform_edt(mask)
         edt.append(time.perf_counter() - t)
@@ -135,7 +164,15 @@ def _run(name: str, size: int, repeat: int, out: mp.Queue) -> None:
     medial_axis.medial_axis(crop)
     axis = time.perf_counter() - t
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    out.put((float(np.median(total)), float(np.median(edt)), axis, rss))
+    out.put(
+        (
+            float(np.median(total)) if total else float("nan"),
+            float(np.median(untrimmed)),
+            float(np.median(edt)),
+            axis,
+            rss,
+        )
+    )
 
 
 def _profile(name: str, size: int, out: mp.Queue) -> None:
@@ -145,7 +182,7 @@ def _profile(name: str, size: int, out: mp.Queue) -> None:
     mask = blob(name, size)
     prof = cProfile.Profile()
     prof.enable()
-    skelprune.prune(mask).to_dict()
+    skelprune.prune(mask, trim=DEFAULT_TOO).to_dict()
     prof.disable()
     text = io.StringIO()
     pstats.Stats(prof, stream=text).sort_stats("tottime").print_stats(PROFILE_TOP)
@@ -173,28 +210,28 @@ def main() -> None:
     for size in SIZES:
         repeat = 3 if size <= 2048 else 1
         for name in SHAPES:
-            total, edt, axis, rss = _in_process(_run, name, size, repeat)
-            slowest = max(slowest, (total, name, size))
+            total, untrimmed, edt, axis, rss = _in_process(_run, name, size, repeat)
+            slowest = max(slowest, (total if DEFAULT_TOO else untrimmed, name, size))
             rows.append(
-                [
-                    f"{size} px",
-                    name,
-                    f"{total:.2f}",
+                [f"{size} px", name]
+                + ([f"{total:.2f}", f"{total / edt:.1f}×"] if DEFAULT_TOO else [])
+                + [
+                    f"{untrimmed:.2f}",
+                    f"{untrimmed / edt:.1f}×",
                     f"{edt:.2f}",
-                    f"{total / edt:.1f}×",
-                    f"{100 * axis / total:.0f} %",
+                    f"{100 * axis / untrimmed:.0f} %",
                     f"{rss:.0f}",
                 ]
             )
     print(
         table(
-            [
-                "longest side",
-                "shape",
-                "pipeline, s",
+            ["longest side", "shape"]
+            + (["pipeline, s", "ratio to EDT"] if DEFAULT_TOO else [])
+            + [
+                "trim off, s",
+                "trim off: ratio to EDT",
                 "EDT alone, s",
-                "ratio to EDT",
-                "medial axis share",
+                "medial axis / trim off",
                 "peak RSS, MB",
             ],
             rows,
@@ -204,5 +241,6 @@ def main() -> None:
     _, name, size = slowest
     lines = _in_process(_profile, name, size).splitlines()
     top = [line for line in lines if line.strip()][-PROFILE_TOP - 1 :]
-    print(f"\nslowest: {name} at {size} px, cProfile, top {PROFILE_TOP} by own time:\n")
+    how = "default options" if DEFAULT_TOO else "trim=False"
+    print(f"\nslowest: {name} at {size} px ({how}), cProfile, top {PROFILE_TOP} by own time:\n")
     print("\n".join(top))

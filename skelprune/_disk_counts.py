@@ -26,6 +26,7 @@ __all__ = [
     "BLOCK",
     "TILE",
     "DiskCounts",
+    "capped_coverage",
     "coverage",
     "disk_loss",
     "disk_remove",
@@ -316,6 +317,12 @@ def last_cover(inside, rows, cols, r2s) -> np.ndarray:
                     dx = xa - c if c < xa else (c - xe if c > xe else 0)
                     if dy * dy + dx * dx >= v:
                         ys = 0
+                    else:  # only the rows where the disk reaches the box's columns
+                        reach = isqrt(v - 1 - dx * dx)
+                        ys &= _bits(
+                            max(r - reach, ty * TILE) - ty * TILE,
+                            min(r + reach, ty * TILE + TILE - 1) - ty * TILE,
+                        )
                 painted = False
                 while ys:
                     low = ys & -ys
@@ -398,3 +405,133 @@ def drop_redundant_anchors(anchor, r2, rows, cols) -> None:
             half = disk_half_width(v, dy)
             base = (r + dy) * w + c
             kept[base - half : base + half + 1] = True
+
+
+@njit(cache=True, inline="always")  # called from compiled code and from tests: see coverage
+def capped_coverage(inside, rows, cols, r2s, cap: int):
+    """:func:`coverage` with every count above ``cap`` lowered to ``cap``.
+
+    The thinning asks only which pixels one disk alone covers, and removes few disks:
+    after ``j`` removals a count stored as ``cap`` is still at least ``cap - j``, so while
+    ``j <= cap - 2`` the pixels counted 1 are exactly those covered once. Most of a
+    large shape is covered by far more than ``cap`` disks, so the counting is organised
+    as :func:`last_cover`'s painting: one bitmap a level (the pixels covered ``l`` times,
+    ``l < cap``), tiles whose pixels all reached ``cap`` are skipped, and a disk costs
+    about one step per row of tiles plus the tiles it meets that are not yet full,
+    instead of its height. ``inside`` (bool, the grid's shape) must hold every pixel a
+    disk covers.
+
+    Returns the arrays of :func:`coverage` (the same block layout).
+    """
+    shape_h, shape_w = inside.shape
+    th, tw = (shape_h + TILE - 1) // TILE, (shape_w + TILE - 1) // TILE
+    level = np.zeros((shape_h, tw, cap), dtype=np.int64)  # [y, t, l]: pixels covered l times
+    todo = np.zeros((shape_h, tw), dtype=np.int64)  # pixels below the cap
+    busy = np.zeros((th, tw), dtype=np.int64)
+    across = np.zeros((th, tw), dtype=np.int64)
+    for y in range(shape_h):
+        for x in range(shape_w):
+            if inside[y, x]:
+                todo[y, x // TILE] |= 1 << (x % TILE)
+                busy[y // TILE, x // TILE] |= 1 << (y % TILE)
+                across[y // TILE, x // TILE] |= 1 << (x % TILE)
+    for y in range(shape_h):
+        for t in range(tw):
+            level[y, t, 0] = todo[y, t]
+    tnxt = np.empty((th, tw + 1), dtype=np.int32)
+    for ty in range(th):
+        for tx in range(tw + 1):
+            tnxt[ty, tx] = tx if tx == tw or busy[ty, tx] else tx + 1
+    for ty in range(th):
+        for tx in range(tw - 1, -1, -1):
+            tnxt[ty, tx] = tnxt[ty, tnxt[ty, tx]] if tnxt[ty, tx] != tx else tx
+    # largest disks first: they fill the interior's tiles, which the many smaller disks
+    # then skip (the counts do not depend on the order)
+    for k in np.argsort(-r2s):
+        r, c, v = rows[k], cols[k], r2s[k]
+        h = isqrt(v - 1)
+        for ty in range((r - h) // TILE, (r + h) // TILE + 1):
+            y0, y1 = max(r - h, ty * TILE), min(r + h, ty * TILE + TILE - 1)
+            wide = disk_half_width(v, min(max(r, y0), y1) - r)
+            trow = tnxt[ty]
+            span = _bits(y0 - ty * TILE, y1 - ty * TILE)
+            tx = _find(trow, (c - wide) // TILE)
+            while tx <= (c + wide) // TILE:
+                x0 = tx * TILE
+                ys = busy[ty, tx] & span
+                if ys:
+                    cols_left = across[ty, tx]
+                    ya = ty * TILE + _bit_index(ys & -ys)
+                    ye = ty * TILE + _top_bit(ys)
+                    xa = x0 + _bit_index(cols_left & -cols_left)
+                    xe = x0 + _top_bit(cols_left)
+                    dy = ya - r if r < ya else (r - ye if r > ye else 0)
+                    dx = xa - c if c < xa else (c - xe if c > xe else 0)
+                    if dy * dy + dx * dx >= v:
+                        ys = 0
+                    else:  # only the rows where the disk reaches the box's columns
+                        reach = isqrt(v - 1 - dx * dx)
+                        ys &= _bits(
+                            max(r - reach, ty * TILE) - ty * TILE,
+                            min(r + reach, ty * TILE + TILE - 1) - ty * TILE,
+                        )
+                full = False  # some pixel reached the cap
+                while ys:
+                    low = ys & -ys
+                    ys ^= low
+                    y = ty * TILE + _bit_index(low)
+                    w = disk_half_width(v, y - r)
+                    a, e = max(c - w, x0), min(c + w, x0 + TILE - 1)
+                    if a > e:
+                        continue
+                    paint = todo[y, tx] & _bits(a - x0, e - x0)
+                    if paint == 0:
+                        continue
+                    lv = level[y, tx]
+                    top = lv[cap - 1] & paint  # these reach the cap
+                    if top:
+                        lv[cap - 1] ^= top
+                        paint ^= top
+                        todo[y, tx] ^= top
+                        full = True
+                    for lev in range(cap - 2, -1, -1):
+                        if paint == 0:
+                            break
+                        moved = lv[lev] & paint
+                        if moved:
+                            lv[lev] ^= moved
+                            lv[lev + 1] |= moved
+                            paint ^= moved
+                    if todo[y, tx] == 0:
+                        busy[ty, tx] ^= low
+                if full:  # the columns box again, from the rows left
+                    cols_left = 0
+                    rest = busy[ty, tx]
+                    while rest:
+                        low = rest & -rest
+                        rest ^= low
+                        cols_left |= todo[ty * TILE + _bit_index(low), tx]
+                    across[ty, tx] = cols_left
+                if busy[ty, tx] == 0:
+                    trow[tx] = tx + 1
+                tx = _find(trow, tx + 1)
+    nb = (shape_w + BLOCK - 1) // BLOCK
+    cover = np.zeros((shape_h, nb * BLOCK), dtype=np.int32)
+    for y in range(shape_h):
+        for x in range(shape_w):
+            if inside[y, x]:
+                cover[y, x] = cap
+        for t in range(tw):
+            for lev in range(cap):
+                bits = level[y, t, lev]
+                while bits:
+                    bit = bits & -bits
+                    bits ^= bit
+                    cover[y, t * TILE + _bit_index(bit)] = lev
+    bmin = np.empty((shape_h, nb), dtype=np.int32)
+    bcnt = np.empty((shape_h, nb), dtype=np.int32)
+    lazy = np.zeros((shape_h, nb), dtype=np.int32)
+    for y in range(shape_h):
+        for b in range(nb):
+            _block_stats(cover, bmin, bcnt, y, b)
+    return cover, bmin, bcnt, lazy

@@ -29,7 +29,13 @@ from ._digital import (
     isqrt,
     neighbourhood_code,
 )
-from ._disk_counts import coverage, disk_loss, disk_remove, drop_redundant_anchors
+from ._disk_counts import (
+    capped_coverage,
+    coverage,
+    disk_loss,
+    disk_remove,
+    drop_redundant_anchors,
+)
 from ._orientation import IDENTITY_ORIENTATION, oriented
 from .errors import InvalidImageError
 
@@ -257,6 +263,10 @@ def _ordered_thinning(fg, r2, anchor, simple) -> None:
     max_level = r2.max()
     flat = r2.ravel()
     anchored = anchor.ravel()  # once: ravel() inside the loop costs ~60 ns a pixel
+    pix = fg.reshape(n)  # a view: deletions land in fg
+    step = np.empty(8, dtype=np.int64)  # NEIGHBOURS as offsets in the flat array
+    for i in range(8):
+        step[i] = NEIGHBOURS[i, 0] * w + NEIGHBOURS[i, 1]
     start = np.zeros(max_level + 2, dtype=np.int64)
     for p in range(n):
         if flat[p] > 0 and not anchored[p]:
@@ -294,33 +304,67 @@ def _ordered_thinning(fg, r2, anchor, simple) -> None:
             else:
                 break
             queued[p] = False
-            r, c = p // w, p % w
-            if not fg[r, c] or not simple[neighbourhood_code(fg, r, c)]:
+            if not pix[p]:
                 continue
-            fg[r, c] = False
+            code = 0  # neighbourhood_code, on the flat array: no division a pixel
             for i in range(8):
-                rr, cc = r + NEIGHBOURS[i, 0], c + NEIGHBOURS[i, 1]
-                q = rr * w + cc
-                if fg[rr, cc] and not queued[q] and not anchor[rr, cc]:
+                if pix[p + step[i]]:
+                    code |= 1 << i
+            if not simple[code]:
+                continue
+            pix[p] = False
+            for i in range(8):
+                q = p + step[i]
+                if pix[q] and not queued[q] and not anchored[q]:
                     used = _enqueue(item, nxt, head, tail, used, q, max(flat[q], lvl))
                     queued[q] = True
 
 
+#: The thinning's first cap on the counts, and the largest before exact counts.
+_FIRST_CAP = 4
+_LAST_CAP = 64
+
+
+def thinning_cap(r2s: np.ndarray, pixels: int) -> int:
+    """The first cap on the thinning's counts for disks ``r2s`` on a grid of ``pixels``.
+
+    Capped counts (see :func:`_thin`) cost about the pixels, exact ones the disks'
+    heights: capped where the heights outweigh the pixels (a blob's axis, few removals
+    and disks of hundreds of pixels' radius), exact otherwise.
+    """
+    heights = float(np.sum(2.0 * np.sqrt(r2s.astype(np.float64)) + 1.0))
+    return _FIRST_CAP if heights > pixels else 0
+
+
 @njit(cache=True)
-def _thin(fg, r2, rows, cols, simple, degree) -> None:
+def _counts(inside, rows, cols, r2s, cap):
+    """The thinning's disk counts: capped at ``cap`` (:func:`capped_coverage`), exact if 0."""
+    if cap:
+        return capped_coverage(inside, rows, cols, r2s, cap)
+    return coverage(inside.shape[0], inside.shape[1], rows, cols, r2s)
+
+
+@njit(cache=True)
+def _thin(fg, r2, rows, cols, simple, degree, cap) -> None:
     """Make the anchored skeleton one pixel thin.
 
     Removes simple pixels that are not endpoints, the one losing the fewest
     reconstructed pixels first (ties: smaller radius, then the given order). Removals
     only lower the coverage, so a pixel's loss never decreases: a min-heap with lazy
     re-evaluation of the popped key gives exactly that greedy order.
+
+    The counts are capped at ``cap`` (0: exact counts), raised (by 4×, then exact)
+    and remade from the disks left whenever the removals since they were made would
+    reach ``cap - 1``: the losses are the same either way (:func:`capped_coverage`).
     """
     r2s = np.empty(rows.size, dtype=np.int64)
     for k in range(rows.size):
         r2s[k] = r2[rows[k], cols[k]]
-    cover, bmin, bcnt, lazy = coverage(fg.shape[0], fg.shape[1], rows, cols, r2s)
+    inside = r2 > 0
+    cover, bmin, bcnt, lazy = _counts(inside, rows, cols, r2s, cap)
+    removed = 0  # removals since the counts were made
     n = rows.size
-    rank = np.full(fg.shape, -1, dtype=np.int64)
+    rank = np.full(fg.shape, -1, dtype=np.int32)  # int32: 64 MB less at 4096 px
     for k in range(n):
         rank[rows[k], cols[k]] = k
     big = n + 1
@@ -349,8 +393,14 @@ def _thin(fg, r2, rows, cols, simple, degree) -> None:
             size = heap_push(heap, size, loss * big + k)
             inheap[k] = True
             continue
+        if cap and removed + 1 > cap - 2:  # capped counts would stop being exact
+            cap = cap * 4 if cap * 4 <= _LAST_CAP else 0
+            live = np.array([j for j in range(n) if fg[rows[j], cols[j]]], dtype=np.int64)
+            cover, bmin, bcnt, lazy = _counts(inside, rows[live], cols[live], r2s[live], cap)
+            removed = 0
         fg[r, c] = False
         disk_remove(cover, bmin, bcnt, lazy, r, c, v)
+        removed += 1
         for i in range(8):
             rr, cc = r + NEIGHBOURS[i, 0], c + NEIGHBOURS[i, 1]
             q = rank[rr, cc]
@@ -502,7 +552,8 @@ def _medial_axis_pixels(padded: np.ndarray, r2: np.ndarray) -> tuple[np.ndarray,
     _ordered_thinning(fg, r2, anchor, SIMPLE)
     rows, cols = np.nonzero(fg)
     order = np.lexsort((cols, rows, r2[rows, cols]))  # smallest radius first
-    _thin(fg, r2, rows[order].astype(np.int64), cols[order].astype(np.int64), SIMPLE, DEGREE)
+    rows, cols = rows[order].astype(np.int64), cols[order].astype(np.int64)
+    _thin(fg, r2, rows, cols, SIMPLE, DEGREE, thinning_cap(r2[rows, cols], r2.size))
     _extend_ends(fg, r2, DEGREE)
     rows, cols = np.nonzero(fg)
     return rows.astype(np.int64), cols.astype(np.int64)

@@ -34,7 +34,7 @@ import numpy as np
 
 from ..graph import BranchGraph
 from ..skeleton import Skeleton
-from ._generating import SegmentRaster, rim_labels
+from ._generating import SegmentRaster, rim_label_set, rim_labels
 from .bayesian import remove_unsupported
 from .dce import (
     COARSE_PIXEL_THRESHOLD,
@@ -252,11 +252,19 @@ class _EndBranches:
         if not stale:
             return
         flat, offsets = _flatten(graph, stale)
+        cells = self.raster.cells()
         sup, claimed = _branch_states(
             flat,
             offsets,
             self.raster.seg_lo,
             self.raster.seg_hi,
+            cells.start,
+            cells.row,
+            cells.col,
+            cells.lo,
+            cells.hi,
+            cells.nxt,
+            cells.width,
             self.raster.local,
             self.raster.r2,
             self.raster.tolerance,
@@ -303,6 +311,13 @@ def _branch_states(
     offsets: np.ndarray,
     seg_lo: np.ndarray,
     seg_hi: np.ndarray,
+    cell_start: np.ndarray,
+    cell_row: np.ndarray,
+    cell_col: np.ndarray,
+    cell_lo: np.ndarray,
+    cell_hi: np.ndarray,
+    cell_nxt: np.ndarray,
+    cell_width: int,
     local: np.ndarray,
     r2: np.ndarray,
     tolerance: float,
@@ -320,6 +335,12 @@ def _branch_states(
     not scanned yet, until both answers are settled: a supported point and a point
     that rules out every claim (three segments, or two that meet at no convex vertex
     or at another vertex than the branch's).
+
+    A rim's labels are found from the boundary pixels near it (:func:`rim_label_set`),
+    which gives the same set of labels (up to three) as the rim scan in another order.
+    The answers depend on that set only, except where two segments meet at two convex
+    vertices (a closed curve of two segments): then the scan's order picks the vertex,
+    and the rim is scanned as before.
     """
     nb = offsets.size - 1
     sup = np.zeros(nb, np.bool_)
@@ -332,7 +353,28 @@ def _branch_states(
             p = flat[t]
             if not known[p]:
                 labels[:] = -1
-                rim_labels(seg_lo, seg_hi, local[p, 0], local[p, 1], r2[p], tolerance, labels)
+                rim_label_set(
+                    cell_start,
+                    cell_row,
+                    cell_col,
+                    cell_lo,
+                    cell_hi,
+                    cell_nxt,
+                    cell_width,
+                    local[p, 0],
+                    local[p, 1],
+                    r2[p],
+                    tolerance,
+                    labels,
+                )
+                if (
+                    labels[1] != -1
+                    and labels[2] == -1
+                    and _meeting_vertex(starts_at, before, labels[0], labels[1])
+                    != _meeting_vertex(starts_at, before, labels[1], labels[0])
+                ):
+                    labels[:] = -1
+                    rim_labels(seg_lo, seg_hi, local[p, 0], local[p, 1], r2[p], tolerance, labels)
                 known[p] = True
                 first[p] = labels[0]
                 supported[p] = labels[1] != -1

@@ -3,6 +3,7 @@ convex vertex (``skelprune/pruning/coarse.py``)."""
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 import pytest
 
@@ -10,6 +11,7 @@ from evaluation.perturb import boundary_noise, noisy_rectangle
 from skelprune.api import components
 from skelprune.graph import BranchGraph
 from skelprune.medial_axis import medial_axis, squared_distance
+from skelprune.pruning._generating import SegmentRaster, rim_label_set
 from skelprune.pruning.bayesian import remove_unsupported
 from skelprune.pruning.coarse import (
     COARSE_VERTICES,
@@ -308,3 +310,35 @@ def test_the_coarse_stage_holds_no_table_quadratic_in_the_segments():
     assert m > 100
     sizes = {k: v.size for k, v in vars(ends).items() if isinstance(v, np.ndarray)}
     assert sizes and max(sizes.values()) <= 2 * (n + m), sizes
+
+
+@numba.njit
+def _label_sets(cells, raster_local, r2, tolerance, limit):
+    """rim_label_set for every point (compiled here: the kernel is for compiled callers)."""
+    out = np.full((r2.size, limit), -1, np.int64)
+    for k in range(r2.size):
+        rim_label_set(*cells, raster_local[k, 0], raster_local[k, 1], r2[k], tolerance, out[k])
+    return out
+
+
+@pytest.mark.parametrize(
+    ("name", "mask"), _coarse_cases()[::2], ids=lambda x: x if isinstance(x, str) else ""
+)
+def test_rim_labels_from_cells_are_the_scanned_labels(name, mask):
+    """The labels found from the boundary pixels by cells are those of the rim scan:
+    all of them (a limit no rim reaches), and the same first three or fewer."""
+    for crop, _ in components(mask):
+        ma = medial_axis(crop, squared_distance(crop))
+        part = coarse_partition(crop)
+        pts = np.stack([ma.rows, ma.cols], axis=1)
+        raster = SegmentRaster(part, pts, ma.r2)
+        cells = tuple(raster.cells())
+        every = np.arange(len(pts))
+        for limit in (3, 64):
+            scanned = raster.labels(every, limit)
+            found = _label_sets(cells, raster.local, raster.r2, raster.tolerance, limit)
+            for a, b in zip(scanned, found, strict=True):
+                assert (b != -1).sum() == (a != -1).sum()
+                if limit == 64 or (a != -1).sum() < 3:
+                    assert set(a.tolist()) == set(b.tolist())
+        assert (found[:, 1] != -1).any()

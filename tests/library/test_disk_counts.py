@@ -12,6 +12,7 @@ from evaluation.perturb import boundary_noise
 from skelprune._digital import disk_half_width, isqrt
 from skelprune._disk_counts import (
     BLOCK,
+    capped_coverage,
     coverage,
     disk_loss,
     disk_remove,
@@ -60,6 +61,66 @@ def test_block_counts_match_plain_counts(seed):
             disk_remove(*cov, rows[k], cols[k], r2s[k])
             plain -= d
             assert np.array_equal(true_counts(cov[0], cov[3])[:, :w], plain)
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("cap", [1, 2, 4, 7])
+def test_capped_counts_are_plain_counts_capped(seed, cap):
+    rng, rows, cols, r2s, disks = _random_disks(seed, n=60 if seed < 3 else 150)
+    w = disks[0].shape[1]
+    plain = np.sum(disks, axis=0)
+    union = np.logical_or.reduce(disks)
+    for inside in (union, np.ones_like(union)):  # background pixels: count 0, not capped
+        cov = capped_coverage(inside, rows, cols, r2s, cap)
+        expected = np.where(inside, np.minimum(plain, cap), 0)
+        assert np.array_equal(true_counts(cov[0], cov[3])[:, :w], expected)
+        assert not cov[0][:, w:].any()
+    # after j <= cap - 2 removals, the pixels counted 1 are those covered once
+    cov = capped_coverage(union, rows, cols, r2s, cap)
+    for k in rng.permutation(len(disks))[: max(cap - 2, 0)]:
+        disk_remove(*cov, rows[k], cols[k], r2s[k])
+        plain -= disks[k]
+        assert np.array_equal(true_counts(cov[0], cov[3])[:, :w] == 1, plain == 1)
+        for j in range(len(disks)):
+            if (plain[disks[j]] > 0).all():
+                want = int((plain[disks[j]] == 1).sum())
+                assert disk_loss(*cov, rows[j], cols[j], r2s[j]) == want
+
+
+def _thinning_input(crop):
+    r2 = ma.squared_distance(crop)
+    anchor = ma._anchors(r2, ma._domination_table(r2), ma.VECTORS, ma.VECTOR_KIND)
+    ar, ac = np.nonzero(anchor)
+    order = np.lexsort((ac, ar, r2[ar, ac]))
+    drop_redundant_anchors(anchor, r2, ar[order].astype(np.int64), ac[order].astype(np.int64))
+    fg = crop.copy()
+    ma._ordered_thinning(fg, r2, anchor, ma.SIMPLE)
+    rows, cols = np.nonzero(fg)
+    order = np.lexsort((cols, rows, r2[rows, cols]))
+    return fg, r2, rows[order].astype(np.int64), cols[order].astype(np.int64)
+
+
+@pytest.mark.parametrize("case", range(6))
+def test_thinning_with_capped_counts_is_the_exact_thinning(case):
+    """Capped counts, remade with a larger cap as removals use them up, thin exactly
+    as exact counts do (cap 3 is remade after every removal, then at 12 and 48)."""
+    masks = dataset("kimia216")
+    mask = (
+        load(masks[case * 40], factor=2)
+        if case < 3
+        else boundary_noise(blobs(case, size=90, n=4), "gaussian", 1.5, rng=case, margin=2)
+    )
+    thinned = 0
+    for crop, _ in components(mask):
+        fg, r2, rows, cols = _thinning_input(crop)
+        exact = fg.copy()
+        ma._thin(exact, r2, rows, cols, ma.SIMPLE, ma.DEGREE, 0)
+        thinned += int(fg.sum() - exact.sum())
+        for cap in (2, 3, 4, 5):
+            capped = fg.copy()
+            ma._thin(capped, r2, rows, cols, ma.SIMPLE, ma.DEGREE, cap)
+            assert np.array_equal(capped, exact), cap
+    assert thinned > 0  # the thinning removed something to compare
 
 
 @pytest.mark.parametrize("seed", range(4))

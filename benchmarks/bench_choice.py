@@ -25,14 +25,14 @@ import numpy as np
 from evaluation.perturb import rescale, rotate
 from evaluation.stability import PERTURBATIONS, _rng, load_dataset
 from skelprune import prune
-from skelprune._orientation import oriented
 from skelprune.api import components
-from skelprune.graph import BranchGraph
+from skelprune.grid._orientation import oriented
+from skelprune.grid.graph import BranchGraph
 from skelprune.pruning.coarse import coarse_removals
 
 from .common import DATA, table
 
-medial_axis_module = importlib.import_module("skelprune.medial_axis")
+medial_axis_module = importlib.import_module("skelprune.grid.medial_axis")
 MARGINS = (0.0, 0.005, 0.01, 0.02, 0.05)
 KINDS = ("gaussian-1", "uniform-1.5", "rotate-30", "scale-0.5")
 SMALLEST = {

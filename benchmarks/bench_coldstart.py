@@ -56,7 +56,7 @@ import json, time
 import numpy as np
 import skelprune
 from benchmarks.common import dataset
-from skelprune.medial_axis import medial_axis
+from skelprune.grid.medial_axis import medial_axis
 masks = dataset("kimia216")
 skelprune.prune(masks[0])
 best = []

@@ -142,7 +142,7 @@ def _run(name: str, size: int, repeat: int, out: mp.Queue) -> None:
 
     import skelprune
 
-    medial_axis = importlib.import_module("skelprune.medial_axis")
+    medial_axis = importlib.import_module("skelprune.grid.medial_axis")
     from skelprune.api import components
 
     skelprune.prune(blob("filled square", 64))  # loads the compiled kernels

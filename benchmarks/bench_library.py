@@ -18,7 +18,7 @@ from skimage.morphology import skeletonize
 import skelprune
 from evaluation.stability import PERTURBATIONS, _rng
 from skelprune.api import components
-from skelprune.pruning.bayesian import bayesian_sequence
+from skelprune.pruning.bayesian import pruning_sequence
 from skelprune.skeleton import Skeleton
 
 from .common import dataset, table, upscale
@@ -63,9 +63,9 @@ def _sequence_only(crop, naive: bool) -> float:
     graph = medial.working_graph()  # (the fast sequence copies its own)
     t = time.perf_counter()
     if naive:
-        naive_sequence(graph, medial.shape, medial.r2, norm.alpha, norm.lbar)
+        naive_sequence(graph, medial.mask, medial.r2, norm.alpha, norm.lbar)
     else:
-        bayesian_sequence(medial, norm.alpha, norm.lbar)
+        pruning_sequence(medial, norm.alpha, norm.lbar)
     return 1000 * (time.perf_counter() - t)
 
 

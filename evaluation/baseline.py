@@ -19,8 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from skimage.morphology import skeletonize
 
-from skelprune.graph import BranchGraph, step_length
-from skelprune.medial_axis import squared_distance
+from skelprune.grid.graph import BranchGraph, step_length
+from skelprune.grid.medial_axis import squared_distance
 
 __all__ = ["BaselineSkeleton", "cut_end_branches", "skeletonize_cut"]
 

@@ -184,8 +184,8 @@ def curves_figure(shapes: Sequence[tuple[str, np.ndarray]], path: Path) -> None:
         top.set_yticks([])
         top.set_title(f"{name}: step {comp.chosen_step} of {len(steps) - 1}", fontsize=8)
         alpha = 0.0 if seq.alpha is None else seq.alpha
-        ax.plot(steps, alpha * seq.ar, label="α·AR", color="tab:red")
-        ax.plot(steps, seq.lr, label="LR = log(Γ+1)", color="tab:blue")
+        ax.plot(steps, alpha * seq.rer, label="α·AR", color="tab:red")
+        ax.plot(steps, seq.ss, label="LR = log(Γ+1)", color="tab:blue")
         ax.plot(steps, seq.objective, label="λ = α·AR + LR", color="black")
         ax.axvline(comp.chosen_step, color="tab:green", linestyle="--", linewidth=1)
         ax.plot(

@@ -20,7 +20,7 @@ from typing import Literal
 import numpy as np
 from scipy import ndimage as ndi
 
-from skelprune._contours import boundary_polygons
+from skelprune.grid._contours import boundary_polygons
 
 __all__ = [
     "PERTURBATIONS",
@@ -43,7 +43,7 @@ _EIGHT = np.ones((3, 3), bool)
 def _rings(mask: np.ndarray) -> list[np.ndarray]:
     """Boundary polygons (row, col) of the union of the pixel squares, shape on the left.
 
-    The crack polygons of :func:`~skelprune._contours.boundary_polygons` give the
+    The crack polygons of :func:`~skelprune.grid._contours.boundary_polygons` give the
     midpoints; at each turn the pixel corner is put back, so the polygon has exact
     right-angled corners (holes wind the other way round).
     """

@@ -20,7 +20,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from skelprune.api import prune
-from skelprune.graph import BranchGraph
+from skelprune.grid.graph import BranchGraph
+from skelprune.grid.medial_axis import squared_distance
 from skelprune.matching import (
     SkeletonDescriptor,
     UnmatchableShapeError,
@@ -28,7 +29,6 @@ from skelprune.matching import (
     describe_skeleton,
     distance_matrix,
 )
-from skelprune.medial_axis import squared_distance
 from skelprune.output.document import ComponentResult
 from skelprune.skeleton import Skeleton
 

@@ -152,7 +152,7 @@ def measure(
     -------
     Measurement
     """
-    from skelprune.reconstruction import reconstruction_error
+    from skelprune.grid.reconstruction import reconstruction_error
 
     if variant.kind == "prune":
         from skelprune.api import prune

@@ -99,7 +99,7 @@ class InternalError(Exception):
 
 
 @dataclass(frozen=True)
-class Problem:
+class ProblemKind:
     status: int
     slug: str
     title: str
@@ -107,34 +107,34 @@ class Problem:
 
 #: The one table: exception type -> (status, problem type, title). Looked up along
 #: the MRO, so subclasses inherit their parent's row.
-PROBLEMS: dict[type[BaseException], Problem] = {
-    InvalidImageError: Problem(400, "invalid-image", "Invalid image"),
-    ImageTooLargeError: Problem(413, "image-too-large", "Image too large"),
-    JobTooLargeError: Problem(413, "job-too-large", "Job too large"),
-    EmptyMaskError: Problem(422, "empty-mask", "Empty mask"),
-    InvalidPolygonError: Problem(422, "invalid-polygon", "Invalid polygon"),
-    InvalidOptionError: Problem(422, "invalid-option", "Invalid option"),
-    UnmatchableShapeError: Problem(422, "unmatchable-shape", "Shape cannot be matched"),
-    SkelpruneError: Problem(422, "invalid-input", "Invalid input"),
-    BodyTooLargeError: Problem(413, "body-too-large", "Request body too large"),
-    BadRequestError: Problem(400, "bad-request", "Bad request"),
-    HeaderTooLargeError: Problem(431, "header-too-large", "Request header fields too large"),
-    RequestTimeoutError: Problem(408, "request-timeout", "Request timeout"),
-    UnsupportedMediaTypeError: Problem(415, "unsupported-media-type", "Unsupported media type"),
-    NotAcceptableError: Problem(406, "not-acceptable", "Not acceptable"),
-    UnauthorizedError: Problem(401, "unauthorized", "Unauthorized"),
-    QueueFullError: Problem(503, "queue-full", "Service busy"),
-    PoolStartingError: Problem(503, "starting", "Service starting"),
-    PoolClosedError: Problem(503, "unavailable", "Service unavailable"),
-    JobTimeoutError: Problem(504, "job-timeout", "Job timed out"),
-    WorkerCrashedError: Problem(500, "worker-crashed", "Worker crashed"),
-    JobFailedError: Problem(500, "internal-error", "Internal error"),
-    InternalError: Problem(500, "internal-error", "Internal error"),
-    RequestValidationError: Problem(422, "validation-error", "Request validation failed"),
+PROBLEMS: dict[type[BaseException], ProblemKind] = {
+    InvalidImageError: ProblemKind(400, "invalid-image", "Invalid image"),
+    ImageTooLargeError: ProblemKind(413, "image-too-large", "Image too large"),
+    JobTooLargeError: ProblemKind(413, "job-too-large", "Job too large"),
+    EmptyMaskError: ProblemKind(422, "empty-mask", "Empty mask"),
+    InvalidPolygonError: ProblemKind(422, "invalid-polygon", "Invalid polygon"),
+    InvalidOptionError: ProblemKind(422, "invalid-option", "Invalid option"),
+    UnmatchableShapeError: ProblemKind(422, "unmatchable-shape", "Shape cannot be matched"),
+    SkelpruneError: ProblemKind(422, "invalid-input", "Invalid input"),
+    BodyTooLargeError: ProblemKind(413, "body-too-large", "Request body too large"),
+    BadRequestError: ProblemKind(400, "bad-request", "Bad request"),
+    HeaderTooLargeError: ProblemKind(431, "header-too-large", "Request header fields too large"),
+    RequestTimeoutError: ProblemKind(408, "request-timeout", "Request timeout"),
+    UnsupportedMediaTypeError: ProblemKind(415, "unsupported-media-type", "Unsupported media type"),
+    NotAcceptableError: ProblemKind(406, "not-acceptable", "Not acceptable"),
+    UnauthorizedError: ProblemKind(401, "unauthorized", "Unauthorized"),
+    QueueFullError: ProblemKind(503, "queue-full", "Service busy"),
+    PoolStartingError: ProblemKind(503, "starting", "Service starting"),
+    PoolClosedError: ProblemKind(503, "unavailable", "Service unavailable"),
+    JobTimeoutError: ProblemKind(504, "job-timeout", "Job timed out"),
+    WorkerCrashedError: ProblemKind(500, "worker-crashed", "Worker crashed"),
+    JobFailedError: ProblemKind(500, "internal-error", "Internal error"),
+    InternalError: ProblemKind(500, "internal-error", "Internal error"),
+    RequestValidationError: ProblemKind(422, "validation-error", "Request validation failed"),
 }
 
 
-def lookup(exc: BaseException) -> Problem | None:
+def lookup(exc: BaseException) -> ProblemKind | None:
     """The table row for ``exc``'s type or its nearest ancestor."""
     for cls in type(exc).__mro__:
         if cls in PROBLEMS:

@@ -15,7 +15,7 @@ __all__ = [
     "PRUNE_REQUEST_BODY",
     "PRUNE_RESPONSES",
     "UNAUTHORIZED",
-    "problem_response",
+    "problem_example",
 ]
 
 REF = "#/components/schemas/"
@@ -166,7 +166,7 @@ METRICS_EXAMPLE = (
 )
 
 
-def problem_response(
+def problem_example(
     status: int, slug: str | None, title: str, detail: str, instance: str = "/v1/prune"
 ) -> dict[str, Any]:
     """A documented problem+json response with one example."""
@@ -197,7 +197,7 @@ def problem_response(
 
 
 #: Only when SKELPRUNE_API_KEY is set.
-UNAUTHORIZED: dict[str, Any] = problem_response(
+UNAUTHORIZED: dict[str, Any] = problem_example(
     401,
     "unauthorized",
     "Unauthorized",
@@ -240,14 +240,14 @@ PRUNE_RESPONSES: dict[int | str, dict[str, Any]] = {
             },
         },
     },
-    400: problem_response(
+    400: problem_example(
         400,
         "invalid-image",
         "Invalid image",
         "truncated PNG: file ends at byte 60 before the IEND chunk",
     ),
     401: UNAUTHORIZED,
-    406: problem_response(
+    406: problem_example(
         406,
         "not-acceptable",
         "Not acceptable",
@@ -255,7 +255,7 @@ PRUNE_RESPONSES: dict[int | str, dict[str, Any]] = {
         "image/png, application/geo+json",
     ),
     413: {
-        **problem_response(
+        **problem_example(
             413,
             "image-too-large",
             "Image too large",
@@ -265,31 +265,31 @@ PRUNE_RESPONSES: dict[int | str, dict[str, Any]] = {
         "overlay over the pixel limit), or job too large (`job-too-large`: its memory or "
         "time, estimated from the input before any work, over the job's budget).",
     },
-    415: problem_response(
+    415: problem_example(
         415,
         "unsupported-media-type",
         "Unsupported media type",
         "Content-Type 'text/plain' is not supported; send image/png, "
         "multipart/form-data (field 'file') or application/json (GeoJSON)",
     ),
-    422: problem_response(
+    422: problem_example(
         422,
         "invalid-polygon",
         "Invalid polygon",
         "$.coordinates[0]: ring is not closed, first position [0.0, 0.0] "
         "differs from last [0.0, 20.0]",
     ),
-    500: problem_response(
+    500: problem_example(
         500,
         "worker-crashed",
         "Worker crashed",
         "the worker process died while running this job (killed by signal "
         "SIGKILL); it has been replaced",
     ),
-    503: problem_response(
+    503: problem_example(
         503, "queue-full", "Service busy", "all 4 workers are busy and 16 jobs are already waiting"
     ),
-    504: problem_response(
+    504: problem_example(
         504, "job-timeout", "Job timed out", "job exceeded the time limit of 30 s and was stopped"
     ),
 }

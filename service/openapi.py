@@ -15,7 +15,7 @@ from service.examples import (
     PRUNE_RESPONSES,
     SQUARE_POLYGON,
     UNAUTHORIZED,
-    problem_response,
+    problem_example,
 )
 from service.http.bodies import BATCH_MAX_ITEMS
 from service.http.negotiation import NDJSON
@@ -87,7 +87,7 @@ BATCH_RESPONSES: Responses = {
             }
         },
     },
-    413: problem_response(
+    413: problem_example(
         413,
         "body-too-large",
         "Request body too large",
@@ -215,7 +215,7 @@ VERSION_RESPONSES: Responses = {
 
 READY_RESPONSES: Responses = {
     200: _ok({"status": "ready", "workers": 4, "busy": 1, "queued": 0, "queue_size": 16}),
-    503: problem_response(
+    503: problem_example(
         503, "queue-full", "Service busy", "the queue is full (16 jobs waiting)", "/readyz"
     ),
 }

@@ -29,9 +29,7 @@ numba nor scipy): a command line that prints its help, or a program that only ne
 errors, does not pay for the pipeline.
 """
 
-import sys
-import types
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from ._lazy import lazy_exports
 from ._version import ALGORITHM_VERSION
@@ -48,19 +46,19 @@ from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
 
 if TYPE_CHECKING:
     from .api import components, prune
-    from .graph import BranchGraph
+    from .grid.graph import BranchGraph
+    from .grid.medial_axis import MedialAxis, medial_axis, squared_distance
+    from .grid.reconstruction import reconstruction, reconstruction_error
     from .io.frame import PixelFrame
     from .io.input import Input, read_input
     from .matching import Match, SkeletonDescriptor, UnmatchableShapeError, describe, match
-    from .medial_axis import MedialAxis, medial_axis, squared_distance
     from .output.document import ComponentResult, PruneResult
-    from .reconstruction import reconstruction, reconstruction_error
 
 #: Where each lazily imported name lives (a submodule of this package).
 _LAZY = {
     "components": "api",
     "prune": "api",
-    "BranchGraph": "graph",
+    "BranchGraph": "grid.graph",
     "PixelFrame": "io.frame",
     "Input": "io.input",
     "read_input": "io.input",
@@ -69,34 +67,18 @@ _LAZY = {
     "UnmatchableShapeError": "matching",
     "describe": "matching",
     "match": "matching",
-    "MedialAxis": "medial_axis",
-    "medial_axis": "medial_axis",
-    "squared_distance": "medial_axis",
+    "MedialAxis": "grid.medial_axis",
+    "medial_axis": "grid.medial_axis",
+    "squared_distance": "grid.medial_axis",
     "ComponentResult": "output.document",
     "PruneResult": "output.document",
-    "reconstruction": "reconstruction",
-    "reconstruction_error": "reconstruction",
+    "reconstruction": "grid.reconstruction",
+    "reconstruction_error": "grid.reconstruction",
 }
 
 
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY, submodules=True)
 
-
-class _Package(types.ModuleType):
-    """The package, whose names ``medial_axis`` and ``reconstruction`` stay the functions.
-
-    Importing a submodule binds it on its package; the submodules of these two names
-    would then hide the functions of the same names, which the package exported (and
-    bound last) when it imported everything at once.
-    """
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        if isinstance(value, types.ModuleType) and _LAZY.get(name) == name:
-            return
-        super().__setattr__(name, value)
-
-
-sys.modules[__name__].__class__ = _Package
 
 __all__ = [
     "ALGORITHM_VERSION",

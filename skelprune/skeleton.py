@@ -22,10 +22,10 @@ from functools import cached_property
 import numpy as np
 from numba import njit
 
-from ._orientation import IDENTITY_ORIENTATION, Orientation, oriented
-from .graph import SQRT2, BranchGraph, step_length
-from .medial_axis import oriented_medial_axis, squared_distance
-from .reconstruction import reconstruction
+from .grid import IDENTITY_ORIENTATION, Orientation, oriented
+from .grid.graph import SQRT2, BranchGraph, step_length
+from .grid.medial_axis import oriented_medial_axis, squared_distance
+from .grid.reconstruction import reconstruction
 
 __all__ = ["Normalisation", "Skeleton", "normalisation"]
 
@@ -65,7 +65,7 @@ def normalisation(graph: BranchGraph, r2: np.ndarray, beta: float) -> Normalisat
 def _path_lengths(nbr, seed):
     """Shortest path lengths along the skeleton from ``seed`` (Dijkstra; steps 1, √2).
 
-    Neighbour slots follow :data:`skelprune.medial_axis.NEIGHBOURS`: even slots are
+    Neighbour slots follow :data:`skelprune.grid.medial_axis.NEIGHBOURS`: even slots are
     diagonal.
     """
     dist = np.full(nbr.shape[0], np.inf)
@@ -92,7 +92,7 @@ class Skeleton:
 
     Attributes
     ----------
-    shape : (H, W) bool array
+    mask : (H, W) bool array
         The shape ``D``: the component's padded crop, seen in ``orientation``.
     rows, cols, r2 : (n,) int64 arrays
         Every medial-axis pixel of the shape and its squared radius (shared by all
@@ -101,7 +101,7 @@ class Skeleton:
         Which of those pixels are in this skeleton, as branches and junctions. Read it;
         never change it (take :meth:`working_graph` for that).
     orientation : Orientation
-        How ``shape`` is turned from the crop as it lies in the image.
+        How ``mask`` is turned from the crop as it lies in the image.
     origin : (int, int)
         (row, col) of the crop's corner in the image.
 
@@ -113,7 +113,7 @@ class Skeleton:
     (4, 144, 24.31)
     """
 
-    shape: np.ndarray
+    mask: np.ndarray
     rows: np.ndarray
     cols: np.ndarray
     r2: np.ndarray
@@ -143,7 +143,7 @@ class Skeleton:
     @cached_property
     def area(self) -> int:
         """Pixels of the shape."""
-        return int(self.shape.sum())
+        return int(self.mask.sum())
 
     @property
     def length(self) -> float:
@@ -181,12 +181,12 @@ class Skeleton:
     def reconstruction(self) -> np.ndarray:
         """``R(S)``: the union of the skeleton's maximal disks, in the frame of ``shape``."""
         idx = self.points()
-        return reconstruction(self.shape.shape, self.rows[idx], self.cols[idx], self.r2[idx])
+        return reconstruction(self.mask.shape, self.rows[idx], self.cols[idx], self.r2[idx])
 
     def image_coordinates(
         self, rows: np.ndarray, cols: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """Rows and columns of pixels of ``shape`` in the image frame: back to the crop's
         own orientation, then ``+ origin``."""
-        rows, cols = self.orientation.points_back(rows, cols, self.shape.shape)
+        rows, cols = self.orientation.points_back(rows, cols, self.mask.shape)
         return rows + self.origin[0], cols + self.origin[1]

@@ -11,10 +11,10 @@ from typing import Any
 
 import numpy as np
 
+from skelprune.grid.reconstruction import reconstruction
 from skelprune.io.frame import IDENTITY, PixelFrame
 from skelprune.output.document import ComponentResult
 from skelprune.pruning.margin import Margins
-from skelprune.reconstruction import reconstruction
 from skelprune.skeleton import Skeleton
 
 __all__ = ["branch_line", "component_dict"]
@@ -114,8 +114,8 @@ def _sequence(comp: ComponentResult) -> dict[str, Any]:
             held[kept][0].extend(more_b)
             held[kept][1].extend(more_j)
     idx = start.points()
-    covered = reconstruction(start.shape.shape, start.rows[idx], start.cols[idx], start.r2[idx])
-    miss_r, miss_c = np.nonzero(start.shape & ~covered)
+    covered = reconstruction(start.mask.shape, start.rows[idx], start.cols[idx], start.r2[idx])
+    miss_r, miss_c = np.nonzero(start.mask & ~covered)
     miss_r, miss_c = comp.image_coordinates(miss_r, miss_c)
     gone = np.ones(start.rows.size, bool)
     gone[idx] = False

@@ -14,8 +14,8 @@ import networkx as nx
 import numpy as np
 from scipy import ndimage
 
+from skelprune.grid.reconstruction import reconstruction
 from skelprune.output.document import branch_line
-from skelprune.reconstruction import reconstruction
 
 EIGHT = np.ones((3, 3), bool)
 

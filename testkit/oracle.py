@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from skelprune.graph import BranchGraph
+from skelprune.grid.graph import BranchGraph
 
 
 def objective(lost: int, area: int, na: int, nd: int, alpha: float, lbar: float) -> float:

@@ -15,9 +15,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._orientation import Orientation
 from .._version import ALGORITHM_VERSION, __version__
-from ..graph import BranchGraph, step_length
+from ..grid import Orientation
+from ..grid.graph import BranchGraph, step_length
 from ..io.foreground import Foreground
 from ..io.frame import IDENTITY, PixelFrame
 from ..options import OutputOptions, PruneOptions
@@ -63,7 +63,7 @@ class ComponentResult:
     """
 
     skeleton: Skeleton
-    medial_axis: GraphSummary
+    axis_summary: GraphSummary
     sequence: PruningSequence
     chosen_step: int
     ma_rer: float
@@ -107,8 +107,8 @@ class ComponentResult:
         if t is None or seq.alpha is None:
             return (
                 float(seq.length[k]),
-                float(seq.ar[k]),
-                float(seq.lr[k]),
+                float(seq.rer[k]),
+                float(seq.ss[k]),
                 float(seq.objective[k]),
             )
         length = float(step_length(t.na, t.nd))
@@ -157,7 +157,7 @@ class ComponentResult:
     ) -> ComponentDoc:
         view = self.table.framed(frame)
         nodes = node_dicts(view)
-        ma = self.medial_axis
+        ma = self.axis_summary
         seq = self.sequence
         chosen = self.chosen_point()
         doc: ComponentDoc = {
@@ -187,8 +187,8 @@ class ComponentResult:
                 for i, (L, a, lr, o) in enumerate(
                     zip(
                         length,
-                        np.asarray(seq.ar, np.float64).tolist(),
-                        np.asarray(seq.lr, np.float64).tolist(),
+                        np.asarray(seq.rer, np.float64).tolist(),
+                        np.asarray(seq.ss, np.float64).tolist(),
                         np.asarray(seq.objective, np.float64).tolist(),
                         strict=True,
                     )

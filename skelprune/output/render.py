@@ -7,7 +7,7 @@ import io
 
 import numpy as np
 
-from ..reconstruction import reconstruction
+from ..grid.reconstruction import reconstruction
 
 __all__ = ["COLOURS", "auto_scale", "encode_png", "render_overlay"]
 

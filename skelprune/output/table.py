@@ -1,6 +1,6 @@
 """The branch table: a pruned skeleton as flat arrays, the one source of every output.
 
-A component's answer is read out of its mutable :class:`~skelprune.graph.BranchGraph`
+A component's answer is read out of its mutable :class:`~skelprune.grid.graph.BranchGraph`
 once, into a :class:`BranchTable` in image pixel coordinates: one coordinate array
 (``x``, ``y``, ``radius`` of every skeleton pixel) and, per node and per branch, a row
 of plain arrays, with each branch's path and off-path pixels (and each junction's

@@ -20,7 +20,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .._digital import isqrt
+from ..grid import isqrt
 
 __all__ = ["cover_counts", "cut_counts", "exclusive_losses", "uncover", "uncover_count"]
 

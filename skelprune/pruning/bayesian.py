@@ -4,7 +4,7 @@ Starting from the medial axis ``M``, end branches are removed one at a time, eac
 time the one whose removal gives the smallest target ``λ = α·AR + LR``; the
 skeleton of the whole sequence with the smallest ``λ`` is the answer.
 
-Each step costs only the owners that change: :class:`~skelprune.reconstruction.Coverage`
+Each step costs only the owners that change: :class:`~skelprune.grid.reconstruction.Coverage`
 keeps the area each branch alone covers, so the candidates' lost areas are read,
 not recomputed, and a removed or merged branch costs the area of the union of its
 disks. The naive oracle in ``testkit/oracle.py`` recomputes everything from
@@ -22,15 +22,15 @@ from functools import cached_property
 import numpy as np
 from numba import njit
 
-from ..graph import BranchGraph, step_length
-from ..reconstruction import Coverage
+from ..grid.graph import BranchGraph, step_length
+from ..grid.reconstruction import Coverage
 from ..skeleton import Skeleton
 
 __all__ = [
     "PruningSequence",
-    "bayesian_sequence",
     "choose_step",
     "objective",
+    "pruning_sequence",
     "remove_unsupported",
 ]
 
@@ -59,7 +59,7 @@ class PruningSequence:
     #: The graph of ``S(n)``, the last skeleton of the sequence.
     end: BranchGraph
     #: Flat indices (into the mask) of the pixels of ``D`` that ``S(0)`` misses; recorded
-    #: only when asked for (``bayesian_sequence(..., uncovered=True)``).
+    #: only when asked for (``pruning_sequence(..., uncovered=True)``).
     uncovered: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     #: Per step ``i`` before the last: the end branches of ``S(i)`` and the area each alone
     #: covers (what removing it would lose), as read for the choice; for the margins.
@@ -72,11 +72,11 @@ class PruningSequence:
         return step_length(np.asarray(self.na, float), np.asarray(self.nd, float))
 
     @cached_property
-    def ar(self) -> np.ndarray:
+    def rer(self) -> np.ndarray:
         return np.asarray(self.lost, float) / self.area
 
     @cached_property
-    def lr(self) -> np.ndarray:
+    def ss(self) -> np.ndarray:
         if not self.lbar > 0:
             return np.zeros(len(self.lost))
         return np.log(self.length / self.lbar + 1.0)
@@ -84,7 +84,7 @@ class PruningSequence:
     @cached_property
     def objective(self) -> np.ndarray:
         if self.alpha is None:
-            return self.lr
+            return self.ss
         return np.array(
             [
                 objective(lo, self.area, a, d, self.alpha, self.lbar)
@@ -111,7 +111,7 @@ def choose_step(objectives: np.ndarray) -> int:
     return best
 
 
-def bayesian_sequence(
+def pruning_sequence(
     start: Skeleton,
     alpha: float | None,
     lbar: float,
@@ -134,7 +134,7 @@ def bayesian_sequence(
     uncovered : bool
         Also record which pixels ``S(0)`` misses (``PruningSequence.uncovered``).
     """
-    graph, mask, r2 = start.working_graph(), start.shape, start.r2
+    graph, mask, r2 = start.working_graph(), start.mask, start.r2
     area = start.area
     nb = len(graph.branches)
     labels = np.zeros(graph.rows.size, np.int64)

@@ -32,7 +32,7 @@ from itertools import chain
 import numba
 import numpy as np
 
-from ..graph import BranchGraph
+from ..grid.graph import BranchGraph
 from ..skeleton import Skeleton
 from ._generating import SegmentRaster, rim_label_set, rim_labels
 from .bayesian import remove_unsupported
@@ -428,7 +428,7 @@ def coarse_dce(skeleton: Skeleton) -> Skeleton:
     True
     """
     graph = skeleton.working_graph()
-    coarse_removals(graph, skeleton.shape, skeleton.r2)
+    coarse_removals(graph, skeleton.mask, skeleton.r2)
     return skeleton.with_graph(graph)
 
 

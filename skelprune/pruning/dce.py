@@ -32,7 +32,7 @@ from itertools import pairwise
 import numba
 import numpy as np
 
-from .._contours import trace_boundaries
+from ..grid import trace_boundaries
 from ..options import DEFAULT_DCE_THRESHOLD
 from ._generating import TOUCH_TOLERANCE, generated_in_several_segments, generating_segments
 from ._partition import BoundaryPartition

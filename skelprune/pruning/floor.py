@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..medial_axis import squared_distance
+from ..grid.medial_axis import squared_distance
 from ._rowcover import cover_counts, uncover_count
 from .bayesian import PruningSequence, choose_step
 
@@ -28,7 +28,7 @@ RIM = 2
 def floor_lost(seq: PruningSequence) -> np.ndarray:
     """Per skeleton ``S(i)`` of the sequence: the pixels deeper than the rim it misses."""
     start = seq.start
-    shape = start.shape
+    shape = start.mask
     deep = squared_distance(shape) > RIM
     idx = start.points()
     h, w = shape.shape
@@ -49,5 +49,5 @@ def floor_step(seq: PruningSequence) -> int:
     (ties to the later skeleton); the plain argmin where ``α`` is undefined."""
     if seq.alpha is None:
         return choose_step(seq.objective)
-    lam = seq.alpha * floor_lost(seq) / seq.area + seq.lr
+    lam = seq.alpha * floor_lost(seq) / seq.area + seq.ss
     return choose_step(lam)

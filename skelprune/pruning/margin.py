@@ -24,7 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from ..graph import BranchGraph
+from ..grid.graph import BranchGraph
 from .bayesian import PruningSequence, objective
 
 if TYPE_CHECKING:

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..reconstruction import reconstruction
+from ..grid.reconstruction import reconstruction
 from ..skeleton import Skeleton
 
 __all__ = ["SequenceEvents", "replay", "start_repaint"]
@@ -80,8 +80,8 @@ def start_repaint(start: Skeleton) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     does not reconstruct, and the indices of the graph's points not in ``S(0)`` (the
     medial axis's pixels a coarse stage removed before step 0)."""
     idx = start.points()
-    covered = reconstruction(start.shape.shape, start.rows[idx], start.cols[idx], start.r2[idx])
-    miss_r, miss_c = np.nonzero(start.shape & ~covered)
+    covered = reconstruction(start.mask.shape, start.rows[idx], start.cols[idx], start.r2[idx])
+    miss_r, miss_c = np.nonzero(start.mask & ~covered)
     gone = np.ones(start.rows.size, bool)
     gone[idx] = False
     return miss_r, miss_c, np.flatnonzero(gone)

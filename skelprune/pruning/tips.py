@@ -16,7 +16,7 @@ Ends are cut one after another, each on the skeleton the earlier cuts left, in a
 order: the longest cut first (as measured on ``Ŝ`` alone), then by endpoint (row, col).
 ``λ`` of the answer can only fall: ``k = 0`` is always a candidate.
 
-The points a cut drops are those of :meth:`~skelprune.graph.BranchGraph.tip`: the branch's
+The points a cut drops are those of :meth:`~skelprune.grid.graph.BranchGraph.tip`: the branch's
 path from the endpoint, each pixel beside the path (a dissolved junction cluster's)
 going with the last path point it touches. The naive oracle (``testkit/oracle.py``)
 recomputes every candidate's area from scratch and must agree exactly.
@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..graph import BranchGraph, step_length
+from ..grid.graph import BranchGraph, step_length
 from ..skeleton import Skeleton
 from ._rowcover import cover_counts, cut_counts, exclusive_losses, uncover
 
@@ -63,7 +63,7 @@ class _Tips:
     def __init__(self, sk: Skeleton, graph: BranchGraph) -> None:
         self.sk, self.graph = sk, graph
         idx = graph.alive_points()
-        h, w = sk.shape.shape
+        h, w = sk.mask.shape
         self.c = cover_counts(h, w, sk.rows[idx], sk.cols[idx], sk.r2[idx])
 
     def candidates(
@@ -79,7 +79,7 @@ class _Tips:
         pts = np.asarray(points, np.int64)
         dr = np.asarray(drop, np.int64)
         lost, cut, box, only = cut_counts(
-            sk.shape,
+            sk.mask,
             self.c,
             sk.rows,
             sk.cols,
@@ -98,7 +98,7 @@ class _Tips:
         pts = np.asarray(br.points, np.int64)
         # every point the same drop index: lost all together
         loss = exclusive_losses(
-            sk.shape,
+            sk.mask,
             self.c,
             sk.rows[pts],
             sk.cols[pts],
@@ -153,7 +153,7 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
     >>> m = ((yy - 20) ** 2 + (xx - 58) ** 2 < 15**2) | ((abs(yy - 20) < 4) & (xx > 3) & (xx < 60))
     >>> sk = Skeleton.medial_axis(np.pad(m, 1))
     >>> norm = sk.normalisation(9.0)
-    >>> lost = int((sk.shape & ~sk.reconstruction()).sum())
+    >>> lost = int((sk.mask & ~sk.reconstruction()).sum())
     >>> t = trim_tips(sk, lost, norm.alpha, norm.lbar)
     >>> t.skeleton.n_endpoints == sk.n_endpoints, t.skeleton.n_points < sk.n_points
     (True, True)

@@ -14,7 +14,7 @@ from evaluation.__main__ import main as evaluation_main
 from evaluation.baseline import cut_end_branches, skeletonize_cut
 from evaluation.perturb import PERTURBATIONS, Perturbation
 from evaluation.stability import VARIANTS, load_dataset, measure, run_stability
-from skelprune.graph import BranchGraph
+from skelprune.grid.graph import BranchGraph
 from testkit import DATA
 
 

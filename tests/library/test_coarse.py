@@ -9,8 +9,8 @@ import pytest
 
 from evaluation.perturb import boundary_noise, noisy_rectangle
 from skelprune.api import components
-from skelprune.graph import BranchGraph
-from skelprune.medial_axis import medial_axis, squared_distance
+from skelprune.grid.graph import BranchGraph
+from skelprune.grid.medial_axis import medial_axis, squared_distance
 from skelprune.pruning._generating import SegmentRaster, rim_label_set
 from skelprune.pruning.bayesian import remove_unsupported
 from skelprune.pruning.coarse import (

@@ -1,4 +1,4 @@
-"""The numba boundary tracer (``skelprune._contours``) equals skimage's ``find_contours``.
+"""The numba boundary tracer (``skelprune.grid._contours``) equals skimage's ``find_contours``.
 
 ``boundary_polygons`` replays marching squares without skimage; DCE breaks ties by vertex
 index, so the polygons must be the same arrays (same start vertex, orientation and polygon
@@ -13,7 +13,7 @@ import pytest
 from skimage.measure import find_contours
 
 from evaluation.perturb import boundary_noise, rotate
-from skelprune._contours import boundary_polygons as _boundary_polygons
+from skelprune.grid._contours import boundary_polygons as _boundary_polygons
 from skelprune.pruning.dce import boundary_partition, generated_in_several_segments
 from testkit.shapes import (
     blobs,
@@ -215,7 +215,7 @@ def reference_generated(points, r2, part, tolerance=1.0):
 
 @pytest.mark.parametrize("tolerance", [0.0, 0.25, 0.5, 1.0, 2.5])
 def test_generated_equals_brute_force(tolerance):
-    from skelprune.medial_axis import medial_axis, squared_distance
+    from skelprune.grid.medial_axis import medial_axis, squared_distance
 
     for raw in [load(K216[40]), blobs(11, size=56, n=4, holes=2), rectangle_with_holes()]:
         m = np.pad(raw, 1)  # the blob touches the border

@@ -1,4 +1,4 @@
-"""Disk-count kernels (skelprune._disk_counts) and the redundant-anchor pass against plain
+"""Disk-count kernels (skelprune.grid._disk_counts) and the redundant-anchor pass against plain
 per-pixel counts."""
 
 from __future__ import annotations
@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from evaluation.perturb import boundary_noise
-from skelprune._digital import disk_half_width, isqrt
-from skelprune._disk_counts import (
+from skelprune.api import components
+from skelprune.grid._digital import disk_half_width, isqrt
+from skelprune.grid._disk_counts import (
     BLOCK,
     capped_coverage,
     coverage,
@@ -19,10 +20,9 @@ from skelprune._disk_counts import (
     drop_redundant_anchors,
     last_cover,
 )
-from skelprune.api import components
 from testkit.shapes import blobs, dataset, load
 
-ma = importlib.import_module("skelprune.medial_axis")
+ma = importlib.import_module("skelprune.grid.medial_axis")
 
 
 def true_counts(cover: np.ndarray, lazy: np.ndarray) -> np.ndarray:

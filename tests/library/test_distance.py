@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from skelprune.medial_axis import squared_distance
+from skelprune.grid.medial_axis import squared_distance
 from testkit.shapes import dataset, load
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from skelprune.api import components
-from skelprune.pruning.bayesian import bayesian_sequence
+from skelprune.pruning.bayesian import pruning_sequence
 from skelprune.skeleton import Skeleton
 from testkit.oracle import naive_sequence
 from testkit.shapes import (
@@ -64,9 +64,9 @@ def test_fast_equals_naive(case):
         norm = medial.normalisation(9.0)
         if norm.alpha is None:
             continue
-        fast = bayesian_sequence(medial, norm.alpha, norm.lbar)
+        fast = pruning_sequence(medial, norm.alpha, norm.lbar)
         removed, lams = naive_sequence(
-            medial.working_graph(), medial.shape, medial.r2, norm.alpha, norm.lbar
+            medial.working_graph(), medial.mask, medial.r2, norm.alpha, norm.lbar
         )
         assert fast.removed == removed
         np.testing.assert_allclose(fast.objective, lams, rtol=0, atol=1e-9)
@@ -106,9 +106,9 @@ def test_fast_equals_naive_from_the_coarse_dce_skeleton(case):
         norm = start.normalisation(9.0)
         if norm.alpha is None:
             continue
-        fast = bayesian_sequence(start, norm.alpha, norm.lbar)
+        fast = pruning_sequence(start, norm.alpha, norm.lbar)
         removed, lams = naive_sequence(
-            start.working_graph(), start.shape, start.r2, norm.alpha, norm.lbar
+            start.working_graph(), start.mask, start.r2, norm.alpha, norm.lbar
         )
         assert fast.removed == removed
         np.testing.assert_allclose(fast.objective, lams, rtol=0, atol=1e-9)

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from skelprune.api import components
-from skelprune.medial_axis import squared_distance
-from skelprune.pruning.bayesian import bayesian_sequence
+from skelprune.grid.medial_axis import squared_distance
+from skelprune.pruning.bayesian import pruning_sequence
 from skelprune.pruning.floor import RIM, floor_lost
 from skelprune.skeleton import Skeleton
 from testkit.oracle import disk_pixels, uncovered
@@ -26,7 +26,7 @@ def test_floor_lost_equals_painting(mask: np.ndarray) -> None:
         norm = start.normalisation(9.0)
         if norm.alpha is None:
             continue
-        seq = bayesian_sequence(start, norm.alpha, norm.lbar)
+        seq = pruning_sequence(start, norm.alpha, norm.lbar)
         lost = floor_lost(seq)
         deep = (squared_distance(start.shape) > RIM).ravel()
         disks = disk_pixels(start.rows, start.cols, start.r2, start.shape.shape)

@@ -1,12 +1,12 @@
-"""Run sets (skelprune._intervals) and the owner coverage, against brute-force painting."""
+"""Run sets (skelprune.grid._intervals) and the owner coverage, against brute-force painting."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from skelprune._intervals import disk_runs, owner_runs, union
-from skelprune.reconstruction import Coverage, reconstruction
+from skelprune.grid._intervals import disk_runs, owner_runs, union
+from skelprune.grid.reconstruction import Coverage, reconstruction
 from testkit.oracle import disk_pixels
 
 SHAPE = (48, 56)

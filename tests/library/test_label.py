@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from skelprune._label import components8, label8
+from skelprune.grid._label import components8, label8
 
 EIGHT = np.ones((3, 3), bool)
 
@@ -48,7 +48,7 @@ def test_import_loads_no_pipeline_and_keeps_the_function_names():
     code = (
         "import sys, skelprune\n"
         "heavy = [m for m in ('numba', 'scipy', 'PIL', 'cv2', 'shapely') if m in sys.modules]\n"
-        "import skelprune.medial_axis, skelprune.reconstruction\n"
+        "import skelprune.grid.medial_axis, skelprune.grid.reconstruction\n"
         "print(heavy, callable(skelprune.medial_axis), callable(skelprune.reconstruction),\n"
         "      type(skelprune.prune).__name__, 'scipy.optimize' in sys.modules,\n"
         "      skelprune.api.prune is skelprune.prune, hasattr(skelprune, 'no_such_name'))\n"

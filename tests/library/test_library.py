@@ -12,8 +12,8 @@ from skimage.measure import euler_number, label
 
 import skelprune
 from skelprune.api import components
-from skelprune.medial_axis import DEGREE, SIMPLE, medial_axis, squared_distance
-from skelprune.reconstruction import reconstruction, reconstruction_error
+from skelprune.grid.medial_axis import DEGREE, SIMPLE, medial_axis, squared_distance
+from skelprune.grid.reconstruction import reconstruction, reconstruction_error
 from testkit.shapes import (
     blobs,
     dataset,
@@ -91,7 +91,7 @@ def test_medial_axis_is_thin_homotopic_and_exact_radii(make):
 @pytest.mark.parametrize("name", ["kimia216", "kimia99"])
 def test_medial_axis_end_branches_reach_the_boundary(name):
     """docs/algorithm.md: every end branch of M ends within a pixel or two of the boundary."""
-    from skelprune.graph import BranchGraph
+    from skelprune.grid.graph import BranchGraph
 
     tips = []
     for path in dataset(name)[::3]:

@@ -13,12 +13,12 @@ from fastapi.testclient import TestClient
 import skelprune
 from service.app import create_app
 from service.settings import Settings
-from skelprune._orientation import oriented
 from skelprune.api import components
 from skelprune.errors import InvalidOptionError
+from skelprune.grid._orientation import oriented
+from skelprune.grid.reconstruction import reconstruction
 from skelprune.options import DEFAULT_MIN_MARGIN
 from skelprune.pruning.bayesian import choose_step
-from skelprune.reconstruction import reconstruction
 from testkit.oracle import objective
 from testkit.shapes import blobs, dataset, load, rectangle_with_holes, two_components
 

@@ -1,6 +1,6 @@
 """A shape turned by 90° or mirrored gets exactly the turned or mirrored skeleton.
 
-Before the canonical orientation (``skelprune._orientation``), thinning and the
+Before the canonical orientation (``skelprune.grid._orientation``), thinning and the
 ``(row, col)`` tie rules worked in raster order, and 24 % of the kimia216 shapes got
 another endpoint count when merely turned by 90°.
 """
@@ -12,10 +12,10 @@ import pytest
 
 import skelprune
 from evaluation.perturb import boundary_noise
-from skelprune._orientation import Orientation, canonical_orientation
 from skelprune.api import components
 from skelprune.errors import InvalidImageError
-from skelprune.medial_axis import medial_axis, squared_distance
+from skelprune.grid._orientation import Orientation, canonical_orientation
+from skelprune.grid.medial_axis import medial_axis, squared_distance
 from testkit.shapes import (
     blobs,
     dataset,

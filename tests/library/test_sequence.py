@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import skelprune
+from skelprune.grid.reconstruction import reconstruction
 from skelprune.io import read_mask
-from skelprune.reconstruction import reconstruction
 from testkit import DATA
 
 

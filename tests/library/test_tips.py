@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 import skelprune
 from skelprune.api import components
-from skelprune.pruning.bayesian import bayesian_sequence, choose_step
+from skelprune.pruning.bayesian import choose_step, pruning_sequence
 from skelprune.pruning.coarse import coarse_dce
 from skelprune.pruning.tips import trim_tips
 from skelprune.skeleton import Skeleton
@@ -43,12 +43,12 @@ def fast_and_naive(start: Skeleton, alpha: float, lbar: float) -> tuple[int, int
 
     Returns the number of ends and of points cut.
     """
-    seq = bayesian_sequence(start, alpha, lbar)
+    seq = pruning_sequence(start, alpha, lbar)
     chosen = choose_step(seq.objective)
     answer = seq.skeleton_at(chosen)
     fast = trim_tips(answer, seq.lost[chosen], alpha, lbar)
     graph = answer.working_graph()
-    cuts, lam = naive_trim(graph, answer.shape, answer.r2, alpha, lbar)
+    cuts, lam = naive_trim(graph, answer.mask, answer.r2, alpha, lbar)
     assert fast.cuts == cuts
     assert objective(fast.lost, answer.area, fast.na, fast.nd, alpha, lbar) == pytest.approx(
         lam, abs=1e-9
@@ -59,9 +59,9 @@ def fast_and_naive(start: Skeleton, alpha: float, lbar: float) -> tuple[int, int
     assert lam <= seq.objective[chosen] + 1e-12
     assert fast.skeleton.n_endpoints == answer.n_endpoints
     # each end branch's exclusive pixels: those only its kept points' disks cover
-    disks = disk_pixels(graph.rows, graph.cols, answer.r2, answer.shape.shape)
-    size = answer.shape.size
-    flat = answer.shape.ravel()
+    disks = disk_pixels(graph.rows, graph.cols, answer.r2, answer.mask.shape)
+    size = answer.mask.size
+    flat = answer.mask.ravel()
 
     def count(points: list[int]) -> np.ndarray:
         hit = [disks[p] for p in points]
@@ -152,15 +152,15 @@ def test_trim_false_is_the_untrimmed_answer_and_trim_only_lowers_the_target():
 
 
 def test_the_document_describes_the_trimmed_skeleton():
-    from skelprune.reconstruction import reconstruction
+    from skelprune.grid.reconstruction import reconstruction
 
     res = skelprune.prune(DRAWN["stick_figure"]())
     comp = res.components[0]
     doc = res.to_dict()["components"][0]
     idx = comp.skeleton.points()
     sk = comp.skeleton
-    rec = reconstruction(sk.shape.shape, sk.rows[idx], sk.cols[idx], sk.r2[idx])
-    assert doc["rer"] == pytest.approx((sk.shape & ~rec).sum() / sk.area, abs=1e-15)
+    rec = reconstruction(sk.mask.shape, sk.rows[idx], sk.cols[idx], sk.r2[idx])
+    assert doc["rer"] == pytest.approx((sk.mask & ~rec).sum() / sk.area, abs=1e-15)
     point = doc["curve"][doc["chosen_step"]]
     assert (point["ar"], point["objective"]) == (doc["rer"], doc["objective"])
     assert point["length"] == doc["skeleton"]["length"]

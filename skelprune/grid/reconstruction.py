@@ -3,7 +3,7 @@
 Besides the plain reconstruction, :class:`Coverage` keeps the area each owner (a branch
 or a junction cluster) alone covers with its disks, the area its removal would lose,
 exactly up to date. Each owner's disks are held as one union, a set of row runs
-(:mod:`skelprune._intervals`), and the shape is cut into square tiles: a tile that two
+(:mod:`skelprune.grid._intervals`), and the shape is cut into square tiles: a tile that two
 owners cover whole holds no pixel with fewer than two owners, so it is only counted
 (how many owners cover it whole), and its pixels are looked at once that count falls
 below two. Work then follows the pixels near the owners' edges and the shape's
@@ -79,7 +79,7 @@ def count_covered(
 
     For a few pixels and many disks: the pixels are a bitmap in tiles that each disk
     walks a row of tiles at a time, skipping the tiles with no pixel left to find
-    (:func:`~skelprune._disk_counts.last_cover`), so a disk costs about its height in
+    (:func:`~skelprune.grid._disk_counts.last_cover`), so a disk costs about its height in
     tiles, not its area nor a test per pixel.
 
     Examples
@@ -116,7 +116,7 @@ def _count_covered(pixels, width, rows, cols, r2):
 
 
 # Coverage counts owners, not disks: each owner (a branch, or a junction cluster) is the
-# union of its disks, a run set (skelprune._intervals), held in one growing buffer
+# union of its disks, a run set (skelprune.grid._intervals), held in one growing buffer
 # (``buf``; owner ``b``'s runs are ``buf[lo[b]:hi[b]]``). Per-pixel counts live in tiles
 # (``c``, ``s``: tile-major, so that a tile never looked at costs no memory), and only
 # in the tiles that are "open" (``opened``); a closed tile has ``full[t] >= 2`` owners

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from ..errors import InvalidImageError
 from ._digital import (
     DEGREE,
     NEIGHBOURS,
@@ -37,7 +38,6 @@ from ._disk_counts import (
     drop_redundant_anchors,
 )
 from ._orientation import IDENTITY_ORIENTATION, oriented
-from .errors import InvalidImageError
 
 __all__ = [
     "DEGREE",
@@ -486,7 +486,7 @@ def medial_axis(padded: np.ndarray, r2: np.ndarray | None = None) -> MedialAxis:
     """Medial axis of a shape given with a background border.
 
     The axis is computed in the shape's canonical orientation
-    (:mod:`skelprune._orientation`) and mapped back, so that a shape turned by 90° or
+    (:mod:`skelprune.grid._orientation`) and mapped back, so that a shape turned by 90° or
     mirrored gets exactly the turned or mirrored axis.
 
     Parameters

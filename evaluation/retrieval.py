@@ -93,7 +93,7 @@ def baseline_descriptor(mask: np.ndarray, min_length: float = BASELINE_CUT) -> S
     # the document's node and branch table, as for a pruned skeleton
     comp = ComponentResult(
         skeleton=sk,
-        medial_axis=None,
+        axis_summary=None,
         sequence=None,  # type: ignore[arg-type]
         chosen_step=0,
         ma_rer=0.0,

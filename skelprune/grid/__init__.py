@@ -18,9 +18,10 @@ if TYPE_CHECKING:
     from ._digital import disk_half_width, isqrt
     from ._label import components8, label8
     from ._orientation import IDENTITY_ORIENTATION, Orientation, oriented
+    from .coverage import Coverage
     from .graph import BranchGraph, step_length
     from .medial_axis import MedialAxis, medial_axis, oriented_medial_axis, squared_distance
-    from .reconstruction import Coverage, count_covered, reconstruction, reconstruction_error
+    from .reconstruction import count_covered, reconstruction, reconstruction_error
 
 #: Where each name lives (a module of this package).
 _LAZY = {
@@ -39,7 +40,7 @@ _LAZY = {
     "medial_axis": "medial_axis",
     "oriented_medial_axis": "medial_axis",
     "squared_distance": "medial_axis",
-    "Coverage": "reconstruction",
+    "Coverage": "coverage",
     "count_covered": "reconstruction",
     "reconstruction": "reconstruction",
     "reconstruction_error": "reconstruction",

@@ -1,5 +1,5 @@
 """Pixel sets as row runs, for the incremental reconstruction
-(:class:`~skelprune.grid.reconstruction.Coverage`).
+(:class:`~skelprune.grid.coverage.Coverage`).
 
 A run set is an ``(m, 3)`` int64 array of runs ``(row, lo, hi)``, the pixels
 ``lo <= col <= hi`` of ``row``, sorted by ``(row, lo)``, disjoint and not touching

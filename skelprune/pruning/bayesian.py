@@ -4,7 +4,7 @@ Starting from the medial axis ``M``, end branches are removed one at a time, eac
 time the one whose removal gives the smallest target ``λ = α·AR + LR``; the
 skeleton of the whole sequence with the smallest ``λ`` is the answer.
 
-Each step costs only the owners that change: :class:`~skelprune.grid.reconstruction.Coverage`
+Each step costs only the owners that change: :class:`~skelprune.grid.coverage.Coverage`
 keeps the area each branch alone covers, so the candidates' lost areas are read,
 not recomputed, and a removed or merged branch costs the area of the union of its
 disks. The naive oracle in ``testkit/oracle.py`` recomputes everything from
@@ -22,8 +22,8 @@ from functools import cached_property
 import numpy as np
 from numba import njit
 
+from ..grid.coverage import Coverage
 from ..grid.graph import BranchGraph, step_length
-from ..grid.reconstruction import Coverage
 from ..skeleton import Skeleton
 
 __all__ = [

@@ -28,8 +28,8 @@ def test_floor_lost_equals_painting(mask: np.ndarray) -> None:
             continue
         seq = pruning_sequence(start, norm.alpha, norm.lbar)
         lost = floor_lost(seq)
-        deep = (squared_distance(start.shape) > RIM).ravel()
-        disks = disk_pixels(start.rows, start.cols, start.r2, start.shape.shape)
+        deep = (squared_distance(start.mask) > RIM).ravel()
+        disks = disk_pixels(start.rows, start.cols, start.r2, start.mask.shape)
         graph = start.working_graph()
         want = [uncovered(deep, disks, graph.alive_points())]
         for b in seq.removed:

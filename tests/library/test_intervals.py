@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from skelprune.grid._intervals import disk_runs, owner_runs, union
-from skelprune.grid.reconstruction import Coverage, reconstruction
+from skelprune.grid.coverage import Coverage
+from skelprune.grid.reconstruction import reconstruction
 from testkit.oracle import disk_pixels
 
 SHAPE = (48, 56)

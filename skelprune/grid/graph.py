@@ -15,7 +15,6 @@ implementations that do the same removals get bit-identical lengths.
 from __future__ import annotations
 
 import heapq
-import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -29,6 +28,7 @@ from ._label import label8
 __all__ = ["SQRT2", "Branch", "BranchGraph", "step_length"]
 
 SQRT2 = math.sqrt(2.0)
+_AXIAL, _DIAGONAL = (1, 0), (0, 1)  # (axial, diagonal) step counts of one step
 
 
 @register_jitable
@@ -248,10 +248,6 @@ class BranchGraph:
         self._build(shape)
 
     # -- construction -------------------------------------------------------------
-    def _step(self, a: int, b: int) -> tuple[int, int]:
-        diag = self.rows[a] != self.rows[b] and self.cols[a] != self.cols[b]
-        return (0, 1) if diag else (1, 0)
-
     def _build(self, shape: tuple[int, int]) -> None:
         pts, starts, att, counts = _trace(self.nbr, self.degree, self.rows, self.cols)
         # Junction nodes: 8-connected clusters of junction pixels, numbered in the order
@@ -423,10 +419,10 @@ class BranchGraph:
                     drop[p] = len(path) - 1
                 break
             pending = left
-        steps = [
-            int(self.rows[p] != self.rows[q] and self.cols[p] != self.cols[q])
-            for p, q in itertools.pairwise(path)
-        ]
+        # one vectorised comparison: indexing the arrays point by point dominated here
+        pa = np.asarray(path, np.int64)
+        r, c = self.rows[pa], self.cols[pa]
+        steps = ((r[1:] != r[:-1]) & (c[1:] != c[:-1])).astype(np.int64).tolist()
         return path + side, list(range(len(path))) + [drop[p] for p in side], steps
 
     # -- mutation -----------------------------------------------------------------
@@ -478,19 +474,22 @@ class BranchGraph:
 
     def _cluster_path(self, jid: int, a: int, z: int) -> tuple[list[int], int, int]:
         """Shortest path from pixel ``a`` to ``z`` inside junction cluster ``jid``."""
+        if a == z:  # (most clusters: one pixel, a tip's own attach pixel)
+            return [a], 0, 0
         members = set(self.junctions[jid].points)
         best: dict[int, float] = {a: 0.0}
         prev: dict[int, tuple[int, tuple[int, int]]] = {}
         heap = [(0.0, a)]
+        nbr = self.nbr
         while heap:
             d, u = heapq.heappop(heap)
             if u == z or d > best[u]:
                 continue
-            for q in self.nbr[u]:
-                q = int(q)
+            # the neighbour slot says the step: even slots are diagonal (NEIGHBOURS)
+            for i, q in enumerate(nbr[u].tolist()):
                 if q < 0 or q not in members:
                     continue
-                step = self._step(u, q)
+                step = _DIAGONAL if i % 2 == 0 else _AXIAL
                 nd = d + step_length(*step)
                 if nd < best.get(q, math.inf) - 1e-12:
                     best[q] = nd

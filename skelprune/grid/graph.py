@@ -182,7 +182,9 @@ class Branch:
 
     ``side`` lists the points of ``points`` that are not on the branch's path: pixels of
     a dissolved junction cluster beside the path through it. ``points`` keeps them, in
-    the order the pruning has always seen them; :meth:`path` leaves them out.
+    the order the pruning has always seen them; :meth:`path` leaves them out. Both lists
+    are replaced, never changed in place, and a removed branch is never changed again:
+    :meth:`BranchGraph.copy` shares them.
     """
 
     points: list[int]
@@ -296,20 +298,18 @@ class BranchGraph:
         g.shape = self.shape
         g.extra_na, g.extra_nd = self.extra_na, self.extra_nd
         g.na, g.nd = self.na, self.nd
+        # A removed branch or junction is never changed again, and a branch's ``points``
+        # and ``side`` (a junction's ``points``) are only ever replaced, never changed in
+        # place: the copies share those.
         g.branches = [
-            Branch(
-                list(b.points),
-                list(b.node),
-                list(b.attach),
-                b.na,
-                b.nd,
-                b.loop,
-                b.alive,
-                list(b.side),
-            )
+            Branch(b.points, list(b.node), list(b.attach), b.na, b.nd, b.loop, True, b.side)
+            if b.alive
+            else b
             for b in self.branches
         ]
-        g.junctions = [Junction(list(j.points), list(j.ends), j.alive) for j in self.junctions]
+        g.junctions = [
+            Junction(j.points, list(j.ends), True) if j.alive else j for j in self.junctions
+        ]
         g.ends = set(self.ends)
         return g
 

@@ -15,6 +15,7 @@ implementations that do the same removals get bit-identical lengths.
 from __future__ import annotations
 
 import heapq
+import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -311,6 +312,7 @@ class BranchGraph:
             Junction(j.points, list(j.ends), True) if j.alive else j for j in self.junctions
         ]
         g.ends = set(self.ends)
+        g._lists = self._coordinate_lists()
         return g
 
     # -- queries ------------------------------------------------------------------
@@ -349,7 +351,9 @@ class BranchGraph:
         for junc in self.junctions:
             if junc.alive:
                 keep.extend(junc.points)
-        return np.array(sorted(keep), dtype=np.int64)
+        out = np.fromiter(keep, np.int64, len(keep))  # (faster than sorting the list)
+        out.sort()
+        return out
 
     def counts_without(self, b: int) -> tuple[int, int]:
         """(axial, diagonal) step counts of the skeleton once end branch ``b`` is removed,
@@ -401,6 +405,11 @@ class BranchGraph:
         path = br.path()
         if e == 1:
             path = path[::-1]
+        # (Python lists: a tip is tens of points, too few for numpy's per-call cost)
+        rl, cl = self._coordinate_lists()
+        steps = [int(rl[p] != rl[q] and cl[p] != cl[q]) for p, q in itertools.pairwise(path)]
+        if not br.side:
+            return path, list(range(len(path))), steps
         index = {p: i for i, p in enumerate(path)}
         side = [p for p in br.points if p not in index]
         drop: dict[int, int] = {}
@@ -419,11 +428,14 @@ class BranchGraph:
                     drop[p] = len(path) - 1
                 break
             pending = left
-        # one vectorised comparison: indexing the arrays point by point dominated here
-        pa = np.asarray(path, np.int64)
-        r, c = self.rows[pa], self.cols[pa]
-        steps = ((r[1:] != r[:-1]) & (c[1:] != c[:-1])).astype(np.int64).tolist()
         return path + side, list(range(len(path))) + [drop[p] for p in side], steps
+
+    def _coordinate_lists(self) -> tuple[list[int], list[int]]:
+        """``rows`` and ``cols`` as Python lists, made once and shared by copies."""
+        lists = self.__dict__.get("_lists")
+        if lists is None:
+            lists = self._lists = (self.rows.tolist(), self.cols.tolist())
+        return lists
 
     # -- mutation -----------------------------------------------------------------
     def cut_tip(self, b: int, e: int, gone: list[int], na: int, nd: int) -> None:

@@ -24,7 +24,6 @@ from numba import njit
 from numba.extending import register_jitable
 
 from ._digital import NEIGHBOURS
-from ._label import label8
 
 __all__ = ["SQRT2", "Branch", "BranchGraph", "step_length"]
 
@@ -67,6 +66,33 @@ def _neighbours(rows, cols, index):
                 nbr[k, i] = q
                 deg[k] += 1
     return nbr, deg
+
+
+@njit(cache=True)
+def _junction_clusters(nbr, deg):
+    """The 8-connected cluster of each junction pixel (degree 3 or more; -1 for the
+    others), numbered in the order of their first pixel, and the number of clusters."""
+    n = deg.size
+    out = np.full(n, -1, dtype=np.int64)
+    stack = np.empty(n, dtype=np.int64)
+    n_clusters = 0
+    for k in range(n):
+        if deg[k] < 3 or out[k] >= 0:
+            continue
+        out[k] = n_clusters
+        stack[0] = k
+        top = 1
+        while top:
+            top -= 1
+            u = stack[top]
+            for i in range(8):
+                q = nbr[u, i]
+                if q >= 0 and deg[q] >= 3 and out[q] < 0:
+                    out[q] = n_clusters
+                    stack[top] = q
+                    top += 1
+        n_clusters += 1
+    return out, n_clusters
 
 
 @njit(cache=True)
@@ -248,24 +274,17 @@ class BranchGraph:
         self.extra_nd = 0
         self.branches: list[Branch] = []
         self.junctions: list[Junction] = []
-        self._build(shape)
+        self._build()
 
     # -- construction -------------------------------------------------------------
-    def _build(self, shape: tuple[int, int]) -> None:
+    def _build(self) -> None:
         pts, starts, att, counts = _trace(self.nbr, self.degree, self.rows, self.cols)
         # Junction nodes: 8-connected clusters of junction pixels, numbered in the order
         # of their first pixel.
         jpix = np.flatnonzero(self.degree >= 3)
-        junction_of = np.full(self.rows.size, -1, dtype=np.int64)
+        junction_of, n_junctions = _junction_clusters(self.nbr, self.degree)
         if jpix.size:
-            img = np.zeros(shape, bool)
-            img[self.rows[jpix], self.cols[jpix]] = True
-            lab, _ = label8(img)
-            raw = lab[self.rows[jpix], self.cols[jpix]]
-            _, first, inverse = np.unique(raw, return_index=True, return_inverse=True)
-            order = np.argsort(np.argsort(first))
-            junction_of[jpix] = order[inverse]
-            members: list[list[int]] = [[] for _ in range(len(first))]
+            members: list[list[int]] = [[] for _ in range(n_junctions)]
             for p, j in zip(jpix.tolist(), junction_of[jpix].tolist(), strict=True):
                 members[j].append(p)
             self.junctions = [Junction(m) for m in members]

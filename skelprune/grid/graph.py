@@ -24,11 +24,11 @@ from numba import njit
 from numba.extending import register_jitable
 
 from ._digital import NEIGHBOURS
-from ._label import label8
 
 __all__ = ["SQRT2", "Branch", "BranchGraph", "step_length"]
 
 SQRT2 = math.sqrt(2.0)
+_AXIAL, _DIAGONAL = (1, 0), (0, 1)  # (axial, diagonal) step counts of one step
 
 
 @register_jitable
@@ -66,6 +66,33 @@ def _neighbours(rows, cols, index):
                 nbr[k, i] = q
                 deg[k] += 1
     return nbr, deg
+
+
+@njit(cache=True)
+def _junction_clusters(nbr, deg):
+    """The 8-connected cluster of each junction pixel (degree 3 or more; -1 for the
+    others), numbered in the order of their first pixel, and the number of clusters."""
+    n = deg.size
+    out = np.full(n, -1, dtype=np.int64)
+    stack = np.empty(n, dtype=np.int64)
+    n_clusters = 0
+    for k in range(n):
+        if deg[k] < 3 or out[k] >= 0:
+            continue
+        out[k] = n_clusters
+        stack[0] = k
+        top = 1
+        while top:
+            top -= 1
+            u = stack[top]
+            for i in range(8):
+                q = nbr[u, i]
+                if q >= 0 and deg[q] >= 3 and out[q] < 0:
+                    out[q] = n_clusters
+                    stack[top] = q
+                    top += 1
+        n_clusters += 1
+    return out, n_clusters
 
 
 @njit(cache=True)
@@ -182,7 +209,9 @@ class Branch:
 
     ``side`` lists the points of ``points`` that are not on the branch's path: pixels of
     a dissolved junction cluster beside the path through it. ``points`` keeps them, in
-    the order the pruning has always seen them; :meth:`path` leaves them out.
+    the order the pruning has always seen them; :meth:`path` leaves them out. Both lists
+    are replaced, never changed in place, and a removed branch is never changed again:
+    :meth:`BranchGraph.copy` shares them.
     """
 
     points: list[int]
@@ -245,28 +274,17 @@ class BranchGraph:
         self.extra_nd = 0
         self.branches: list[Branch] = []
         self.junctions: list[Junction] = []
-        self._build(shape)
+        self._build()
 
     # -- construction -------------------------------------------------------------
-    def _step(self, a: int, b: int) -> tuple[int, int]:
-        diag = self.rows[a] != self.rows[b] and self.cols[a] != self.cols[b]
-        return (0, 1) if diag else (1, 0)
-
-    def _build(self, shape: tuple[int, int]) -> None:
+    def _build(self) -> None:
         pts, starts, att, counts = _trace(self.nbr, self.degree, self.rows, self.cols)
         # Junction nodes: 8-connected clusters of junction pixels, numbered in the order
         # of their first pixel.
         jpix = np.flatnonzero(self.degree >= 3)
-        junction_of = np.full(self.rows.size, -1, dtype=np.int64)
+        junction_of, n_junctions = _junction_clusters(self.nbr, self.degree)
         if jpix.size:
-            img = np.zeros(shape, bool)
-            img[self.rows[jpix], self.cols[jpix]] = True
-            lab, _ = label8(img)
-            raw = lab[self.rows[jpix], self.cols[jpix]]
-            _, first, inverse = np.unique(raw, return_index=True, return_inverse=True)
-            order = np.argsort(np.argsort(first))
-            junction_of[jpix] = order[inverse]
-            members: list[list[int]] = [[] for _ in range(len(first))]
+            members: list[list[int]] = [[] for _ in range(n_junctions)]
             for p, j in zip(jpix.tolist(), junction_of[jpix].tolist(), strict=True):
                 members[j].append(p)
             self.junctions = [Junction(m) for m in members]
@@ -300,21 +318,20 @@ class BranchGraph:
         g.shape = self.shape
         g.extra_na, g.extra_nd = self.extra_na, self.extra_nd
         g.na, g.nd = self.na, self.nd
+        # A removed branch or junction is never changed again, and a branch's ``points``
+        # and ``side`` (a junction's ``points``) are only ever replaced, never changed in
+        # place: the copies share those.
         g.branches = [
-            Branch(
-                list(b.points),
-                list(b.node),
-                list(b.attach),
-                b.na,
-                b.nd,
-                b.loop,
-                b.alive,
-                list(b.side),
-            )
+            Branch(b.points, list(b.node), list(b.attach), b.na, b.nd, b.loop, True, b.side)
+            if b.alive
+            else b
             for b in self.branches
         ]
-        g.junctions = [Junction(list(j.points), list(j.ends), j.alive) for j in self.junctions]
+        g.junctions = [
+            Junction(j.points, list(j.ends), True) if j.alive else j for j in self.junctions
+        ]
         g.ends = set(self.ends)
+        g._lists = self._coordinate_lists()
         return g
 
     # -- queries ------------------------------------------------------------------
@@ -353,7 +370,9 @@ class BranchGraph:
         for junc in self.junctions:
             if junc.alive:
                 keep.extend(junc.points)
-        return np.array(sorted(keep), dtype=np.int64)
+        out = np.fromiter(keep, np.int64, len(keep))  # (faster than sorting the list)
+        out.sort()
+        return out
 
     def counts_without(self, b: int) -> tuple[int, int]:
         """(axial, diagonal) step counts of the skeleton once end branch ``b`` is removed,
@@ -405,6 +424,11 @@ class BranchGraph:
         path = br.path()
         if e == 1:
             path = path[::-1]
+        # (Python lists: a tip is tens of points, too few for numpy's per-call cost)
+        rl, cl = self._coordinate_lists()
+        steps = [int(rl[p] != rl[q] and cl[p] != cl[q]) for p, q in itertools.pairwise(path)]
+        if not br.side:
+            return path, list(range(len(path))), steps
         index = {p: i for i, p in enumerate(path)}
         side = [p for p in br.points if p not in index]
         drop: dict[int, int] = {}
@@ -423,11 +447,14 @@ class BranchGraph:
                     drop[p] = len(path) - 1
                 break
             pending = left
-        steps = [
-            int(self.rows[p] != self.rows[q] and self.cols[p] != self.cols[q])
-            for p, q in itertools.pairwise(path)
-        ]
         return path + side, list(range(len(path))) + [drop[p] for p in side], steps
+
+    def _coordinate_lists(self) -> tuple[list[int], list[int]]:
+        """``rows`` and ``cols`` as Python lists, made once and shared by copies."""
+        lists = self.__dict__.get("_lists")
+        if lists is None:
+            lists = self._lists = (self.rows.tolist(), self.cols.tolist())
+        return lists
 
     # -- mutation -----------------------------------------------------------------
     def cut_tip(self, b: int, e: int, gone: list[int], na: int, nd: int) -> None:
@@ -478,19 +505,22 @@ class BranchGraph:
 
     def _cluster_path(self, jid: int, a: int, z: int) -> tuple[list[int], int, int]:
         """Shortest path from pixel ``a`` to ``z`` inside junction cluster ``jid``."""
+        if a == z:  # (most clusters: one pixel, a tip's own attach pixel)
+            return [a], 0, 0
         members = set(self.junctions[jid].points)
         best: dict[int, float] = {a: 0.0}
         prev: dict[int, tuple[int, tuple[int, int]]] = {}
         heap = [(0.0, a)]
+        nbr = self.nbr
         while heap:
             d, u = heapq.heappop(heap)
             if u == z or d > best[u]:
                 continue
-            for q in self.nbr[u]:
-                q = int(q)
+            # the neighbour slot says the step: even slots are diagonal (NEIGHBOURS)
+            for i, q in enumerate(nbr[u].tolist()):
                 if q < 0 or q not in members:
                     continue
-                step = self._step(u, q)
+                step = _DIAGONAL if i % 2 == 0 else _AXIAL
                 nd = d + step_length(*step)
                 if nd < best.get(q, math.inf) - 1e-12:
                     best[q] = nd

@@ -124,6 +124,18 @@ def _best(lost0, na0, nd0, cand_lost, cand_steps, area, alpha, lbar):
     return best
 
 
+def _disk_box(rows: np.ndarray, cols: np.ndarray, r2: np.ndarray) -> tuple[int, int, int, int]:
+    """The box (top, left, bottom, right) these points' disks can reach, as
+    :func:`~skelprune.pruning._rowcover.cut_counts` bounds a tip's."""
+    rad = np.sqrt(r2).astype(np.int64) + 1
+    return (
+        int((rows - rad).min()),
+        int((cols - rad).min()),
+        int((rows + rad).max()),
+        int((cols + rad).max()),
+    )
+
+
 def _meet(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> bool:
     return a[0] <= b[2] and b[0] <= a[2] and a[1] <= b[3] and b[1] <= a[3]
 
@@ -201,8 +213,12 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
         gone = np.asarray(
             [p for p, d in zip(points, drop.tolist(), strict=True) if d < k], np.int64
         )
-        uncover(tips.c, answer.rows[gone], answer.cols[gone], answer.r2[gone])
-        changed.append(box)  # (the whole tip's box holds the dropped points' disks)
+        gr, gc, g2 = answer.rows[gone], answer.cols[gone], answer.r2[gone]
+        uncover(tips.c, gr, gc, g2)
+        # Only the dropped points' disks changed the counts: their box, not the whole
+        # tip's (whose large disks near the junction reach most of a small shape), so
+        # that fewer later tips are counted again.
+        changed.append(_disk_box(gr, gc, g2))
         cut_branches.add(b)
         lost += int(cl[k])
         graph.cut_tip(b, e, gone.tolist(), int(cs[k, 0]), int(cs[k, 1]))

@@ -142,6 +142,7 @@ async def prune_batch(
     pool: WorkerPool = request.app.state.pool
     accept_ndjson(request.headers.get("accept", ""))
     ctype = content_type(request)
+    refuse_encoding(request)
     body = await request.body()  # size-limited by BodyLimitMiddleware
     items: list[Any]
     form_options = None

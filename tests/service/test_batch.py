@@ -73,6 +73,14 @@ def test_json_list_of_polygons(client: TestClient) -> None:
         ({"json": [rect(4, 2)], "params": {"beta": "-1"}}, 422, "beta"),
         ({"json": [rect(4, 2)], "params": {"foreground": "zero"}}, 422, "only apply to PNG"),
         ({"content": b"x", "headers": {"content-type": "text/plain"}}, 415, "not supported"),
+        (
+            {
+                "content": b"[]",
+                "headers": {"content-type": "application/json", "content-encoding": "gzip"},
+            },
+            415,
+            "Content-Encoding 'gzip'",
+        ),
     ],
 )
 def test_a_bad_batch_is_refused_whole(client: TestClient, kwargs, status, fragment) -> None:

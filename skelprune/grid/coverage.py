@@ -109,10 +109,17 @@ class Coverage:
         self.lost = int(lost)
 
     def _state(self) -> tuple:
+        """What the tile kernels share, in the order of their trailing parameters."""
         return (
+            self.tile,
+            self.tw,
+            self.mask,
             self.buf,
             self.lo,
             self.hi,
+            self.tiles,
+            self.tlo,
+            self.thi,
             self.start,
             self.owners,
             self.alias,
@@ -121,6 +128,8 @@ class Coverage:
             self.c,
             self.s,
             self.exclusive,
+            self.full,
+            self.opened,
         )
 
     def remove_label(self, old: int) -> int:
@@ -128,31 +137,7 @@ class Coverage:
 
         The pruning knows the label of the branch it removes, so no point is looked at.
         """
-        buf, lo, hi, start, owners, alias, alive, stamp, c, s, excl = self._state()
-        lost = int(
-            _remove_owner(
-                old,
-                self.tile,
-                self.tw,
-                self.mask,
-                buf,
-                lo,
-                hi,
-                self.tiles,
-                self.tlo,
-                self.thi,
-                start,
-                owners,
-                alias,
-                alive,
-                stamp,
-                c,
-                s,
-                excl,
-                self.full,
-                self.opened,
-            )
-        )
+        lost = int(_remove_owner(old, *self._state()))
         self.hi[old] = self.lo[old]
         self.thi[old] = self.tlo[old]
         self.lost += lost
@@ -175,33 +160,7 @@ class Coverage:
             bigger = np.empty(2 * (self.tused + need), np.int64)
             bigger[: self.tused] = self.tiles[: self.tused]
             self.tiles = bigger
-        buf, lo, hi, start, owners, alias, alive, stamp, c, s, excl = self._state()
-        self.tused, lost = _merge(
-            old,
-            new,
-            mlo,
-            self.used,
-            self.tile,
-            self.tw,
-            self.mask,
-            buf,
-            lo,
-            hi,
-            self.tiles,
-            self.tused,
-            self.tlo,
-            self.thi,
-            start,
-            owners,
-            alias,
-            alive,
-            stamp,
-            c,
-            s,
-            excl,
-            self.full,
-            self.opened,
-        )
+        self.tused, lost = _merge(old, new, mlo, self.used, self.tused, *self._state())
         self.lost += int(lost)
 
     def counts(self) -> np.ndarray:

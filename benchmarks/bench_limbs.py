@@ -20,15 +20,19 @@ which cuts whole limbs), side by side:
 * **ground truth**: mean F1 of skeleton pixels at 2 px on ``data/skelneton-dev``
   (as :mod:`evaluation.groundtruth` measures it).
 
-``python -m benchmarks limbs`` (about a minute or two on one core).
+``python -m benchmarks limbs`` (a few minutes on one core);
+``python -m benchmarks.bench_limbs --figure`` draws ``docs/figures/limbs.png`` instead.
 """
 
 from __future__ import annotations
 
+import io
+import sys
 import time
 from collections import defaultdict
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -41,6 +45,10 @@ from testkit.limbs import BODIES, limb_reach, limb_shapes, round_ended
 from testkit.shapes import DRAWN
 
 from .common import DATA, table
+
+FIGURE = Path(__file__).resolve().parents[1] / "docs" / "figures" / "limbs.png"
+#: Blobs of the figure: (seed, body) of :func:`testkit.limbs.limb_shape`.
+FIGURE_SHAPES = ((56, "circle"), (0, "ellipse"), (24, "fruit"), (100, "ellipse"))
 
 #: name -> (tip rule, options of :func:`skelprune.prune`)
 VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
@@ -211,5 +219,45 @@ def main() -> None:
     print(f"\n{time.perf_counter() - t:.0f} s")
 
 
+def figure() -> None:
+    """Blobs with limbs: ``trim=false``, the trade-off alone, the default (columns)."""
+    from PIL import Image, ImageDraw
+
+    from testkit.limbs import limb_shape
+
+    columns = (
+        ("trim=false", "both", {"trim": False}),
+        ("trade-off alone", "none", {}),
+        ("default (remnants only)", "both", {}),
+    )
+    rows = []
+    for seed, body in FIGURE_SHAPES:
+        mask = limb_shape(seed, body).mask
+        tiles = []
+        for title, rule_name, options in columns:
+            with rule(rule_name):
+                png = skelprune.prune(mask, **options).overlay_png(scale=2, legend=True)
+            tile = Image.open(io.BytesIO(png)).convert("RGB")
+            head = Image.new("RGB", (tile.width, 16), "white")
+            ImageDraw.Draw(head).text((4, 2), title, fill="black")
+            both = Image.new("RGB", (tile.width, tile.height + 16), "white")
+            both.paste(head, (0, 0))
+            both.paste(tile, (0, 16))
+            tiles.append(both)
+        rows.append(tiles)
+    width = sum(max(r[i].width for r in rows) + 8 for i in range(len(columns)))
+    height = sum(max(t.height for t in r) + 8 for r in rows)
+    out = Image.new("RGB", (width, height), "white")
+    y = 0
+    for r in rows:
+        x = 0
+        for i, t in enumerate(r):
+            out.paste(t, (x, y))
+            x += max(rr[i].width for rr in rows) + 8
+        y += max(t.height for t in r) + 8
+    out.save(FIGURE)
+    print(f"wrote {FIGURE}")
+
+
 if __name__ == "__main__":
-    main()
+    figure() if "--figure" in sys.argv[1:] else main()

@@ -1,15 +1,19 @@
 """Tips cut where the trade-off says: the answer's end branches trimmed point by point.
 
 The greedy pruning removes whole end branches only, so a kept end branch still runs on
-to the boundary along whatever digital spur merged into it: a hook at a round end,
-length that reconstructs nothing. After the answer ``Ŝ`` is chosen, each of its end
-branches (both ends of a single path) is cut back from its endpoint to the cut that
-minimises ``λ = α·AR + LR`` along it:
+to the boundary along whatever digital spur merged into it: a hook at a round end, a
+staircase into a corner, length that reconstructs nothing. After the answer ``Ŝ`` is
+chosen, each of its end branches (both ends of a single path) is cut back from its
+endpoint to the cut that minimises ``λ = α·AR + LR`` among those that drop a *remnant*
+only:
 
 - drop the first ``k`` points of the tip, ``k = 0 … len − 1`` (a branch is never removed
   whole, and a single path keeps two points, so the endpoint count does not change);
 - the length falls by the steps between those points, the lost area rises by the pixels
   that only those points' disks covered (exact counts);
+- a remnant: every dropped point lies within one pixel of the new end's disk, and the
+  cut loses at most one pixel per point it drops (:func:`remnant_cuts`); a limb is more
+  than that, so the trade-off can never cut one off;
 - the smallest ``λ`` wins, ties to the shorter tip (the larger ``k``).
 
 Ends are cut one after another, each on the skeleton the earlier cuts left, in a fixed
@@ -19,7 +23,8 @@ order: the longest cut first (as measured on ``Ŝ`` alone), then by endpoint (ro
 The points a cut drops are those of :meth:`~skelprune.grid.graph.BranchGraph.tip`: the branch's
 path from the endpoint, each pixel beside the path (a dissolved junction cluster's)
 going with the last path point it touches. The naive oracle (``testkit/oracle.py``)
-recomputes every candidate's area from scratch and must agree exactly.
+recomputes every candidate's area from scratch, applies the remnant rule again, and must
+agree exactly.
 """
 
 from __future__ import annotations

@@ -309,3 +309,21 @@ def test_a_hair_one_pixel_wide_is_not_a_remnant(tip_rule):
     assert reach() >= 70
     tip_rule("area")  # the area rule alone takes it for a remnant: a pixel per point
     assert reach() < 40
+
+
+@pytest.mark.parametrize("size", [(40, 100), (160, 300)])
+def test_a_corner_loses_its_staircase_spur_and_no_more(size):
+    # the corner branches' last pixels go (a spur the trade-off does not want), but
+    # the cut stays at the pixel scale whatever the rectangle's size
+    h, w = size
+    mask = np.zeros((h + 10, w + 10), bool)
+    mask[5 : h + 5, 5 : w + 5] = True
+    corners = np.array([(y, x) for y in (4.5, h + 4.5) for x in (4.5, w + 4.5)])
+
+    def from_corner(**options) -> list[float]:
+        ends = tip_points(skelprune.prune(mask, min_margin=0, **options))
+        return [float(np.hypot(*(corners - p).T).min()) for p in ends]
+
+    assert len(from_corner()) == 4
+    assert max(from_corner(trim=False)) < 3
+    assert all(3 < d < 11 for d in from_corner())

@@ -97,11 +97,43 @@ def naive_sequence(
     return removed, lams
 
 
+def is_remnant(
+    graph: BranchGraph, r2: np.ndarray, path: list[int], gone: set[int], lost: int, rule: str
+) -> bool:
+    """docs/algorithm.md ("Tips"): may a cut that leaves ``path[k]`` as the end, dropping
+    the points ``gone`` (``k`` of them on the path) and losing ``lost`` pixels, be taken?
+
+    ``area``: at most one lost pixel per dropped path point; ``reach``: every dropped
+    point lies inside the new end's disk (``|p − s|² < r(s)²``); ``either``: one of the
+    two; ``none``: any cut.
+    """
+    k = sum(1 for p in path if p in gone)
+    if rule == "none" or k == 0:
+        return True
+    end = path[k]
+    ey, ex = int(graph.rows[end]), int(graph.cols[end])
+    far = max(math.hypot(int(graph.rows[p]) - ey, int(graph.cols[p]) - ex) for p in gone)
+    radius = math.sqrt(int(r2[end]))
+    small = lost <= k
+    return {
+        "reach": far < radius + 1.0,
+        "disk": far < radius,
+        "area": small,
+        "both": small and far < radius + 1.0,
+    }[rule]
+
+
 def naive_trim(
-    graph: BranchGraph, mask: np.ndarray, r2: np.ndarray, alpha: float, lbar: float
+    graph: BranchGraph,
+    mask: np.ndarray,
+    r2: np.ndarray,
+    alpha: float,
+    lbar: float,
+    rule: str = "both",
 ) -> tuple[list[tuple[int, int, int]], float]:
     """The tip cuts of docs/algorithm.md ("Tips") on the skeleton ``graph`` (changed in
-    place), recomputed from scratch: every candidate cut's skeleton painted anew.
+    place), recomputed from scratch: every candidate cut's skeleton painted anew, and
+    only the cuts the remnant ``rule`` allows (:func:`is_remnant`) taken.
 
     Which points a cut drops is the graph's model (:meth:`BranchGraph.tip`, as the
     topology is); lengths are counted again from the points' coordinates, areas painted
@@ -139,10 +171,13 @@ def naive_trim(
 
         assert drop[:n_path] == list(range(n_path))
         here = points_now()
+        lost_now = uncovered(flat, disks, sorted(here))
         best = None
         for k in range(n_path - 1 if single else n_path):
             gone = {p for p, i in zip(points, drop, strict=True) if i < k}
             lost = uncovered(flat, disks, sorted(here - gone))
+            if not is_remnant(graph, r2, path, gone, lost - lost_now, rule):
+                continue
             ka, kd = cut_steps(path, k)
             lam = objective(lost, area, na - ka, nd - kd, alpha, lbar)
             if best is None or lam <= best[1]:  # ties: the shorter tip

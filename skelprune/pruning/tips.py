@@ -1,15 +1,19 @@
 """Tips cut where the trade-off says: the answer's end branches trimmed point by point.
 
 The greedy pruning removes whole end branches only, so a kept end branch still runs on
-to the boundary along whatever digital spur merged into it: a hook at a round end,
-length that reconstructs nothing. After the answer ``Ŝ`` is chosen, each of its end
-branches (both ends of a single path) is cut back from its endpoint to the cut that
-minimises ``λ = α·AR + LR`` along it:
+to the boundary along whatever digital spur merged into it: a hook at a round end, a
+staircase into a corner, length that reconstructs nothing. After the answer ``Ŝ`` is
+chosen, each of its end branches (both ends of a single path) is cut back from its
+endpoint to the cut that minimises ``λ = α·AR + LR`` among those that drop a *remnant*
+only:
 
 - drop the first ``k`` points of the tip, ``k = 0 … len − 1`` (a branch is never removed
   whole, and a single path keeps two points, so the endpoint count does not change);
 - the length falls by the steps between those points, the lost area rises by the pixels
   that only those points' disks covered (exact counts);
+- a remnant: every dropped point lies within one pixel of the new end's disk, and the
+  cut loses at most one pixel per point it drops (:func:`remnant_cuts`); a limb is more
+  than that, so the trade-off can never cut one off;
 - the smallest ``λ`` wins, ties to the shorter tip (the larger ``k``).
 
 Ends are cut one after another, each on the skeleton the earlier cuts left, in a fixed
@@ -19,7 +23,8 @@ order: the longest cut first (as measured on ``Ŝ`` alone), then by endpoint (ro
 The points a cut drops are those of :meth:`~skelprune.grid.graph.BranchGraph.tip`: the branch's
 path from the endpoint, each pixel beside the path (a dissolved junction cluster's)
 going with the last path point it touches. The naive oracle (``testkit/oracle.py``)
-recomputes every candidate's area from scratch and must agree exactly.
+recomputes every candidate's area from scratch, applies the remnant rule again, and must
+agree exactly.
 """
 
 from __future__ import annotations
@@ -34,7 +39,16 @@ from ..grid.graph import BranchGraph, step_length
 from ..skeleton import Skeleton
 from ._rowcover import cover_counts, cut_counts, exclusive_losses, uncover
 
-__all__ = ["Trim", "trim_tips"]
+__all__ = ["RULES", "Trim", "trim_tips"]
+
+#: The remnant rules: which cuts a tip may take (docs/algorithm.md, "Tips"). ``"both"``
+#: (the default): the dropped points lie within one pixel of the new end's disk
+#: (``"reach"``) and the cut loses at most one pixel per point it drops (``"area"``);
+#: ``"disk"``: inside that disk; ``"none"``: any cut (the trade-off alone, which cuts
+#: whole limbs). Not an option of the library: ``python -m benchmarks limbs`` compares
+#: them by setting :data:`RULE`.
+RULES = ("both", "reach", "disk", "area", "none")
+RULE = "both"
 
 
 @dataclass(frozen=True)
@@ -68,10 +82,13 @@ class _Tips:
 
     def candidates(
         self, b: int, e: int
-    ) -> tuple[list[int], np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int], int]:
+    ) -> tuple[
+        list[int], np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int], int, np.ndarray
+    ]:
         """The tip's points, their drop indices, per cut ``k = 0 … len − 1`` of the path
         (``len − 2`` on a single path) the pixels lost and the (axial, diagonal) steps
-        dropped, the box the tip's disks can reach, and the pixels only they cover."""
+        dropped, the box the tip's disks can reach, the pixels only they cover, and per
+        cut whether it cuts a remnant only (:data:`RULE`)."""
         sk, graph = self.sk, self.graph
         points, drop, steps = graph.tip(b, e)
         # a single path keeps two points: one would be a single endpoint
@@ -90,7 +107,8 @@ class _Tips:
             m,
         )
         box_ = (int(box[0]), int(box[1]), int(box[2]), int(box[3]))
-        return points, dr, lost, cut, box_, int(only)
+        allowed = remnant_cuts(sk.rows, sk.cols, sk.r2, pts, dr, lost, RULES.index(RULE))
+        return points, dr, lost, cut, box_, int(only), allowed
 
     def exclusive(self, b: int) -> int:
         """Pixels only branch ``b``'s disks cover."""
@@ -110,12 +128,53 @@ class _Tips:
 
 
 @njit(cache=True)
-def _best(lost0, na0, nd0, cand_lost, cand_steps, area, alpha, lbar):
-    """``argmin λ`` over the cuts, ties to the larger ``k``; λ with exactly the operations
-    of :func:`~skelprune.pruning.bayesian.objective`, so that the choice is bit-identical
-    to the oracle's."""
+def remnant_cuts(rows, cols, r2, pts, drop, lost, rule):
+    """Per cut ``k`` of a tip (its points ``pts`` and their ``drop`` indices, the path's
+    ``k``-th point from the end being ``pts[k]``; ``lost[k]`` its lost pixels): whether it
+    drops a remnant only, under rule ``RULES[rule]`` (docs/algorithm.md, "Tips"):
+
+    - *reach*: every dropped point ``p`` lies within one pixel of the disk of the new
+      end ``s = pts[k]``: ``|p − s| < r(s) + 1``;
+    - *area*: the cut loses at most one pixel per point of the path it drops:
+      ``lost[k] ≤ k``;
+    - *both* (the default): both; *disk*: ``|p − s| < r(s)``; *none*: any cut.
+    """
+    m = lost.size
+    ok = np.ones(m, np.bool_)
+    if rule == 4:
+        return ok
+    for k in range(1, m):
+        if rule in (0, 3) and lost[k] > k:
+            ok[k] = False
+            continue
+        if rule == 3:
+            continue
+        s = pts[k]
+        for j in range(pts.size):
+            if drop[j] < k:
+                dy, dx = rows[pts[j]] - rows[s], cols[pts[j]] - cols[s]
+                d2 = dy * dy + dx * dx
+                if rule == 2:
+                    inside = d2 < r2[s]
+                else:
+                    # |p − s| < r + 1 in integers (d ≥ 1): d − 1 < r, d² + 1 − r² < 2d
+                    a = d2 + 1 - r2[s]
+                    inside = a < 0 or a * a < 4 * d2
+                if not inside:
+                    ok[k] = False
+                    break
+    return ok
+
+
+@njit(cache=True)
+def _best(lost0, na0, nd0, cand_lost, cand_steps, allowed, area, alpha, lbar):
+    """``argmin λ`` over the allowed cuts, ties to the larger ``k``; λ with exactly the
+    operations of :func:`~skelprune.pruning.bayesian.objective`, so that the choice is
+    bit-identical to the oracle's."""
     best, best_lam = 0, math.inf
     for k in range(cand_lost.size):
+        if not allowed[k]:
+            continue
         lam = alpha * (lost0 + cand_lost[k]) / area + math.log(
             step_length(na0 - cand_steps[k, 0], nd0 - cand_steps[k, 1]) / lbar + 1.0
         )
@@ -180,7 +239,7 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
     for b, e in ends:
         cand = tips.candidates(b, e)
         cl, cs = cand[2], cand[3]
-        k = _best(lost, graph.na, graph.nd, cl, cs, area, alpha, lbar)
+        k = _best(lost, graph.na, graph.nd, cl, cs, cand[6], area, alpha, lbar)
         p = graph.free_end_point(b, e)
         first[b, e] = cand
         keyed.append(
@@ -200,11 +259,11 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
     # how many changes that count has seen
     kept: dict[int, tuple[int, tuple[int, int, int, int], int]] = {}
     for *_, b, e in keyed:
-        points, drop, cl, cs, box, only = first[b, e]
+        points, drop, cl, cs, box, only, allowed = first[b, e]
         if b in cut_branches or any(_meet(box, c) for c in changed):
             # an earlier cut changed what this tip's disks share: count again
-            points, drop, cl, cs, box, only = tips.candidates(b, e)
-        k = _best(lost, graph.na, graph.nd, cl, cs, area, alpha, lbar)
+            points, drop, cl, cs, box, only, allowed = tips.candidates(b, e)
+        k = _best(lost, graph.na, graph.nd, cl, cs, allowed, area, alpha, lbar)
         cuts.append((b, e, k))
         # a pixel only the kept points cover had all its disks in the tip, one kept
         kept[b] = (only - int(cl[k]), box, len(changed) + (k > 0))

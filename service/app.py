@@ -8,7 +8,6 @@ import logging
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
-from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +22,6 @@ from prometheus_fastapi_instrumentator import Instrumentator
 from pydantic.json_schema import models_json_schema
 
 from service import __version__, examples
-from service.budget import cap_address_space
 from service.errors import install_error_handlers
 from service.http.middleware import BodyLimitMiddleware, HeadMiddleware
 from service.jobs import warmup
@@ -83,8 +81,15 @@ def _metrics(registry: CollectorRegistry, pool: WorkerPool) -> Metrics:
         pool.alive
     )
     Gauge(
-        "skelprune_worker_restarts", "Workers replaced after a timeout or crash.", registry=registry
+        "skelprune_worker_restarts",
+        "Workers replaced (a timeout, a crash, over the memory budget, or recycled).",
+        registry=registry,
     ).set_function(lambda: pool.restarts)
+    Gauge(
+        "skelprune_workers_recycled",
+        "Workers replaced because their memory did not come back after a job.",
+        registry=registry,
+    ).set_function(lambda: pool.recycled)
     pool.on_job_done = m.job_seconds.observe
     return m
 
@@ -209,12 +214,11 @@ def create_app(
         settings.workers,
         queue_size=settings.queue_size,
         job_timeout=settings.job_timeout,
-        initializer=partial(warmup, memory_budget=settings.job_memory_mb * 2**20)
-        if settings.warmup
-        else partial(cap_address_space, settings.job_memory_mb * 2**20),
+        initializer=warmup if settings.warmup else None,
         startup_timeout=settings.startup_timeout,
         context=settings.mp_context,
         preload=("skelprune", "service.jobs"),
+        memory_limit=settings.job_memory_mb * 2**20,
     )
 
     async def start_in_background() -> None:

@@ -14,7 +14,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from service.budget import cap_address_space, check_budget, estimate, out_of_memory
+from service.budget import check_budget, estimate, out_of_memory
 from skelprune.errors import ImageTooLargeError, SkelpruneError
 from skelprune.io.input import Input, Kind, read_input
 from skelprune.options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
@@ -96,10 +96,8 @@ def kernel_counts() -> tuple[int, int]:
     return loaded, compiled
 
 
-def warmup(memory_budget: int | None = None) -> str:
-    """Worker initialiser: import the library and run it once so the JIT is compiled;
-    then cap the worker's address space for ``memory_budget`` bytes a job, if given
-    (:func:`service.budget.cap_address_space`).
+def warmup() -> str:
+    """Worker initialiser: import the library and run it once so the JIT is compiled.
 
     The shape has a hole (the loop code paths) and a noisy boundary whose spurs the
     coarse stage removes (its code paths); ``coarse=None``, ``method="dce"`` and
@@ -129,8 +127,6 @@ def warmup(memory_budget: int | None = None) -> str:
     skelprune.match(res, res).to_dict()  # the matching kernels of POST /v1/match
     loaded, compiled = kernel_counts()
     took = f"{time.perf_counter() - t0:.1f} s"
-    if memory_budget is not None:
-        cap_address_space(memory_budget)
     if compiled:
         return (
             f"compiled {compiled} numba kernels ({loaded} loaded from the cache) "

@@ -51,12 +51,17 @@ __all__ = [
     "shape_counts",
 ]
 
-#: Bytes per input pixel: mask, distance transform, labels, crops (4096² blobs: ~45) ...
-BYTES_PER_PIXEL = 64
+# The memory coefficients are fitted so that what a warm worker holds plus the estimate
+# is within 1.5x of the worker's measured peak on every mask of the adversarial corpus
+# that runs and every silhouette of ``python -m benchmarks large`` (docs/hostile-input.md):
+# a tight estimate refuses no job that fits; the resident-memory watchdog is the bound.
+#: Bytes per input pixel: the PNG decoded, mask, distance transform, labels, crops
+#: (4096² silhouettes: 13-37) ...
+BYTES_PER_PIXEL = 32
 #: ... per pixel that can be a skeleton point, at most min(shape pixels, boundary
-#: pixels): graph, branch lists and their copies (pixel noise: ~1,100) ...
-BYTES_PER_SKELETON_POINT = 1536
-#: ... per 8-connected component: its crop, result and document (isolated dots: ~9,000) ...
+#: pixels): graph, branch lists and their copies (pixel noise, checkerboards: 400-1,000) ...
+BYTES_PER_SKELETON_POINT = 768
+#: ... per 8-connected component: its crop, result and document (isolated dots: ~13,000) ...
 BYTES_PER_COMPONENT = 16 * 1024
 #: ... and per pixel of an answer image (the overlay, RGB, and its PNG encoding).
 BYTES_PER_ANSWER_PIXEL = 16

@@ -85,3 +85,23 @@ def test_a_palette_image_without_a_palette_is_invalid() -> None:
     )
     with pytest.raises(InvalidImageError, match="without a PLTE chunk"):
         read_mask(data)
+
+
+def test_too_much_text_in_all_is_refused_without_the_decoders_names() -> None:
+    """Seventy zTXt chunks of 1 MB each, inflated: over the decoder's total for text."""
+    head = struct.pack(">IIBBBBB", 4, 4, 8, 0, 0, 0, 0)
+    rows = b"".join(b"\x00" + bytes(4) for _ in range(4))
+    text = b"".join(
+        chunk(b"zTXt", b"k%d\x00\x00" % i + zlib.compress(b"a" * 1_000_000)) for i in range(70)
+    )
+    data = (
+        SIGNATURE
+        + chunk(b"IHDR", head)
+        + text
+        + chunk(b"IDAT", zlib.compress(rows))
+        + chunk(b"IEND", b"")
+    )
+    with pytest.raises(InvalidImageError) as err:
+        read_mask(data)
+    assert "text chunks are too large" in str(err.value)
+    assert "MAX_TEXT" not in str(err.value)

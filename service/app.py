@@ -8,6 +8,7 @@ import logging
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +24,7 @@ from pydantic.json_schema import models_json_schema
 
 from service import __version__, examples
 from service.errors import install_error_handlers
-from service.http.middleware import BodyLimitMiddleware, HeadMiddleware
+from service.http.middleware import BodyLimitMiddleware, HeadMiddleware, SlashRedirectMiddleware
 from service.jobs import warmup
 from service.match_job import MatchDocument, MatchPolygons
 from service.pool import WorkerPool
@@ -92,6 +93,12 @@ def _metrics(registry: CollectorRegistry, pool: WorkerPool) -> Metrics:
     ).set_function(lambda: pool.recycled)
     pool.on_job_done = m.job_seconds.observe
     return m
+
+
+def _fixed_paths(app: FastAPI) -> set[str]:
+    """The application's paths without parameters (those a trailing slash redirects to)."""
+    routes = [*app.routes, *(r for router in ROUTERS for r in router.routes)]
+    return {p for p in (getattr(r, "path", "") for r in routes) if p and "{" not in p}
 
 
 def _simplify_query_params(schema: dict[str, Any]) -> None:
@@ -262,6 +269,7 @@ def create_app(
         lifespan=lifespan,
         docs_url=None,
         redoc_url=None,  # served below from installed assets, not a CDN
+        redirect_slashes=False,  # SlashRedirectMiddleware: a relative Location
     )
     registry = CollectorRegistry()
     app.state.settings = settings
@@ -295,6 +303,7 @@ def create_app(
             expose_headers=[REQUEST_ID_HEADER, "Retry-After", "WWW-Authenticate"],
             max_age=600,
         )
+    app.add_middleware(SlashRedirectMiddleware, paths=partial(_fixed_paths, app))
     app.add_middleware(RequestContextMiddleware, access_log_enabled=settings.access_log)
     app.add_middleware(HeadMiddleware)
     app.openapi = _openapi(app)  # type: ignore[method-assign]

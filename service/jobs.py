@@ -21,6 +21,7 @@ from skelprune.options import OutputOptions, PruneOptions, RasterOptions, ReadOp
 from skelprune.output.render import auto_scale
 
 __all__ = [
+    "PNG_HEADER_COMPONENTS",
     "Job",
     "JobResult",
     "answer_pixels",
@@ -64,12 +65,20 @@ class Job:
 
 
 #: Response headers of the PNG answer: one value a component, comma-separated, in the
-#: document's order (``repr`` of the float: it reads back exactly).
+#: document's order (``repr`` of the float: it reads back exactly), for at most
+#: :data:`PNG_HEADER_COMPONENTS` components.
 PNG_HEADERS = {
     "X-Skelprune-RER": "rer",
     "X-Skelprune-SS": "ss",
     "X-Skelprune-Objective": "objective",
 }
+
+
+#: Most components whose values the PNG answer's headers list (three values of at most
+#: 24 characters each: about 2.4 KB of headers). Proxies pass a few kilobytes of
+#: response headers (nginx's default buffer: one 4-KiB page); past this the values are
+#: left out and ``X-Skelprune-Values`` says where they are.
+PNG_HEADER_COMPONENTS = 32
 
 
 @dataclass(frozen=True)
@@ -192,11 +201,14 @@ def _run_job(job: Job) -> JobResult:
     headers: dict[str, str] = {}
     if job.output == "png":
         body = res.overlay_png()
-        headers = {
-            name: ",".join(repr(float(getattr(c, key))) for c in res.components)
-            for name, key in PNG_HEADERS.items()
-        }
-        headers["X-Skelprune-Components"] = str(len(res.components))
+        headers = {"X-Skelprune-Components": str(len(res.components))}
+        if len(res.components) <= PNG_HEADER_COMPONENTS:
+            for name, key in PNG_HEADERS.items():
+                headers[name] = ",".join(repr(float(getattr(c, key))) for c in res.components)
+        else:  # headers stay small: the values are in the JSON document
+            headers["X-Skelprune-Values"] = (
+                f"omitted: more than {PNG_HEADER_COMPONENTS} components; ask for application/json"
+            )
         if res.warnings:  # a polygon the raster does not hold as it is
             headers["X-Skelprune-Warnings"] = str(len(res.warnings))
     elif job.output == "geojson":

@@ -148,3 +148,22 @@ def test_a_match_body_counts_both_shapes(client: TestClient) -> None:
     resp = client.post("/v1/match", json={"a": circle(900), "b": circle(1200)})
     detail = problem(resp, 422, "invalid-polygon")
     assert "more than 2000 allowed" in detail
+
+
+@pytest.mark.parametrize(
+    ("accept", "status"),
+    [
+        ("application/x-ndjson", 200),
+        ("application/json;q=0.5, text/html", 200),
+        ("*/*", 200),
+        ("application/x-ndjson;q=0, application/json;q=0", 406),
+        ("application/x-ndjson;q=0", 406),
+        ("text/application/x-ndjsonx", 406),  # contains the name, is not it
+        ("image/png, text/*;q=0.9", 406),
+    ],
+)
+def test_the_batch_negotiates_by_q_values_and_whole_media_types(
+    client: TestClient, accept: str, status: int
+) -> None:
+    resp = client.post("/v1/prune/batch", json=[SQUARE], headers={"accept": accept})
+    assert resp.status_code == status, resp.text

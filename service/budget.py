@@ -74,8 +74,9 @@ SECONDS_PER_COMPONENT = 0.7e-3
 #: A polygon's cost before it has pixels: seconds per position (decoding, validation,
 #: the geometry's construction; 100,000 positions: ~2 s on a busy machine) ...
 SECONDS_PER_POSITION = 20e-6
-#: ... per part (each part's validation, fitting and its share of the union) ...
-SECONDS_PER_PART = 0.3e-3
+#: ... per part (its validation, fitting, share of the union, and its pruning as a
+#: component of the raster: ~2.3 ms a unit square) ...
+SECONDS_PER_PART = 2.5e-3
 #: ... and per pair of parts: the fitting and union of many parts grow faster than
 #: their number (20,000 unit squares: ~20 s, 10,000: ~4 s).
 SECONDS_PER_PART_PAIR = 60e-9
@@ -141,7 +142,7 @@ def polygon_estimate(parts: int, positions: int) -> Estimate:
     positions, before its pixels exist (their cost is :func:`estimate`'s, after).
 
     >>> round(polygon_estimate(20_000, 100_000).seconds)
-    32
+    76
     """
     seconds = (
         SECONDS_PER_POSITION * positions

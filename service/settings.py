@@ -99,9 +99,11 @@ class Settings(BaseSettings):
     job_memory_mb: int = Field(
         2048,
         ge=256,
-        description="Memory a worker may hold for one job, MiB, its own ~300 MiB included: "
-        "a job whose estimate (from its pixels, boundary, components and answer image) is "
-        "over it gets 413 before any work, and so does one that runs out all the same.",
+        description="Resident memory a worker may hold for one job, MiB, its own ~250 MiB "
+        "included: a job whose estimate (from its pixels, boundary, components and answer "
+        "image) is over it gets 413 before any work; a worker that goes over it while a job "
+        "runs is stopped and replaced (413), and one whose memory did not come back after a "
+        "job is replaced.",
     )
     header_timeout: float = Field(
         10.0,

@@ -14,8 +14,9 @@ One ``python -m service`` with its default budgets (``SKELPRUNE_JOB_MEMORY_MB`` 
 - ``silhouettes``: every 4096² silhouette of ``python -m benchmarks large`` in a row,
   then small shapes: all must answer 200.
 
-Before each request the worker's peak-RSS counter is reset (``/proc/PID/clear_refs``);
-after it its peak (``VmHWM``) is read, and the main process's too. "predicted" is what
+Before each request the workers' peak-RSS counters are reset (``/proc/PID/clear_refs``);
+while it runs they are read every 5 ms (a worker replaced after its job is measured
+before it goes), and the main process's peak after it. "predicted" is what
 the worker held before the job plus the service's own estimate
 (:func:`service.budget.estimate`): the estimate is calibrated so that it is within 1.5x
 of the measured peak, and the peak must stay under the budget.
@@ -28,10 +29,12 @@ from __future__ import annotations
 
 import contextlib
 import io
+import itertools
 import json
 import os
 import struct
 import tempfile
+import threading
 import time
 import zlib
 from collections.abc import Callable
@@ -225,18 +228,49 @@ def _answer(r: httpx.Response) -> str:
     return answer
 
 
+class _Sampler(threading.Thread):
+    """The largest resident set of the service's children, read every 5 ms, and their
+    peak counters (``VmHWM``) read at each pass: a worker replaced after its job (killed,
+    or recycled because its memory did not come back) is measured before it goes."""
+
+    def __init__(self, server_pid: int) -> None:
+        super().__init__(daemon=True)
+        self.server_pid = server_pid
+        self.peak = 0.0
+        self.done = threading.Event()
+
+    def run(self) -> None:
+        pids: list[int] = []
+        for n in itertools.count():
+            if self.done.is_set():
+                return
+            if n % 20 == 0:  # a replacement worker joins: walking /proc costs, not often
+                pids = _workers(self.server_pid)
+            for pid in pids:
+                self.peak = max(self.peak, _status(pid, "VmHWM:"))
+            time.sleep(0.005)
+
+
 def run(cases: list[Case], proc_pid: int, client: httpx.Client, budget_mib: int) -> list[list[str]]:
     rows = []
+    warm = _png(np.pad(np.ones((8, 8), bool), 2))
     for case in cases:
+        # a tiny job first: a worker replaced after the last case is warm again, so that
+        # what it holds is what the next job starts from
+        client.post("/v1/prune", content=warm, headers={"Content-Type": "image/png"})
         workers = _workers(proc_pid)
         held = max((_status(p, "VmRSS:") for p in workers), default=0.0)
         for pid in [proc_pid, *workers]:
             with contextlib.suppress(OSError):
                 Path(f"/proc/{pid}/clear_refs").write_text("5")
+        sampler = _Sampler(proc_pid)
+        sampler.start()
         t = time.perf_counter()
         r = case.send(client)
         took = time.perf_counter() - t
-        peak = max((_status(p, "VmHWM:") for p in workers), default=0.0)
+        sampler.done.set()
+        sampler.join()
+        peak = sampler.peak
         main_peak = _status(proc_pid, "VmHWM:")
         predicted = "—" if case.estimate_mib is None else f"{held + case.estimate_mib:,.0f}"
         ratio = (

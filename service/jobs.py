@@ -61,7 +61,7 @@ class Job:
     max_pixels: int | None = None
     max_vertices: int | None = None
     memory_budget: int | None = None  # bytes a worker may hold for the job
-    time_budget: float | None = None  # seconds the job may take (the job time limit)
+    time_budget: float | None = None  # seconds its time estimate may reach (None: no screen)
 
 
 #: Response headers of the PNG answer: one value a component, comma-separated, in the

@@ -73,7 +73,11 @@ async def match(
         shapes = await validate_json(
             parse_pair,
             body,
-            check_polygon_body(settings.max_vertices, 2 * settings.job_timeout, shapes=2),
+            check_polygon_body(
+                settings.max_vertices,
+                None if settings.estimate_seconds is None else 2 * settings.estimate_seconds,
+                shapes=2,
+            ),
         )
     else:
         raise UnsupportedMediaTypeError(

@@ -87,7 +87,7 @@ async def prune(
         envelope, geojson = await validate_json(
             parse_polygon,
             body,
-            check_polygon_body(settings.max_vertices, settings.job_timeout),
+            check_polygon_body(settings.max_vertices, settings.estimate_seconds),
         )
         png = None
     else:
@@ -124,7 +124,9 @@ def _batch_item(
             check_png_size(item, settings.max_pixels)
             return build.job(png=item)
         counts = item.counts
-        check_polygon(counts.parts, counts.positions, settings.max_vertices, settings.job_timeout)
+        check_polygon(
+            counts.parts, counts.positions, settings.max_vertices, settings.estimate_seconds
+        )
         return build.job(geojson=polygon_item(item.decode()))
     except SkelpruneError as exc:
         return {"index": index, "problem": _item_problem(exc)}

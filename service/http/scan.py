@@ -23,8 +23,8 @@ from fastapi.exceptions import RequestValidationError
 
 __all__ = ["BatchItem", "count_polygon", "split_batch"]
 
-_POSITION = re.compile(rb"\[\s*-?[0-9]")
-_PART = re.compile(rb"\[\s*\[\s*\[\s*-?[0-9]")
+_BLANKS = b" \t\r\n"
+_NUMBER_STARTS = [bytes([c]) for c in b"-0123456789"]
 _STRING = rb'"(?:[^"\\]|\\.)*"'
 #: An array of flat arrays (a ring of positions) or one flat array: one token, so that
 #: the split below steps over a polygon's coordinates ring by ring, not number by number.
@@ -50,8 +50,13 @@ def count_polygon(body: bytes) -> PolygonCounts:
     >>> count_polygon(b'{"type":"Polygon","coordinates":[[[0,0],[1,0],[1,1],[0,0]]]}')
     PolygonCounts(parts=1, positions=4)
     """
-    # subn counts without keeping the matches: memory bounded by the body
-    return PolygonCounts(_PART.subn(b"", body)[1], _POSITION.subn(b"", body)[1])
+    # One copy without blanks, then C-speed counts of "[" before a number's first
+    # character: no object per match (a regex's matches would cost ~100 B each).
+    tight = body.translate(None, _BLANKS)
+    return PolygonCounts(
+        sum(tight.count(b"[[[" + c) for c in _NUMBER_STARTS),
+        sum(tight.count(b"[" + c) for c in _NUMBER_STARTS),
+    )
 
 
 def _invalid(message: str) -> RequestValidationError:

@@ -23,9 +23,8 @@ from prometheus_fastapi_instrumentator import Instrumentator
 from pydantic.json_schema import models_json_schema
 
 from service import __version__, examples
-from service.budget import cap_address_space
 from service.errors import install_error_handlers
-from service.http.middleware import BodyLimitMiddleware, HeadMiddleware
+from service.http.middleware import BodyLimitMiddleware, HeadMiddleware, SlashRedirectMiddleware
 from service.jobs import warmup
 from service.match_job import MatchDocument, MatchPolygons
 from service.pool import WorkerPool
@@ -83,10 +82,23 @@ def _metrics(registry: CollectorRegistry, pool: WorkerPool) -> Metrics:
         pool.alive
     )
     Gauge(
-        "skelprune_worker_restarts", "Workers replaced after a timeout or crash.", registry=registry
+        "skelprune_worker_restarts",
+        "Workers replaced (a timeout, a crash, over the memory budget, or recycled).",
+        registry=registry,
     ).set_function(lambda: pool.restarts)
+    Gauge(
+        "skelprune_workers_recycled",
+        "Workers replaced because their memory did not come back after a job.",
+        registry=registry,
+    ).set_function(lambda: pool.recycled)
     pool.on_job_done = m.job_seconds.observe
     return m
+
+
+def _fixed_paths(app: FastAPI) -> set[str]:
+    """The application's paths without parameters (those a trailing slash redirects to)."""
+    routes = [*app.routes, *(r for router in ROUTERS for r in router.routes)]
+    return {p for p in (getattr(r, "path", "") for r in routes) if p and "{" not in p}
 
 
 def _simplify_query_params(schema: dict[str, Any]) -> None:
@@ -209,12 +221,11 @@ def create_app(
         settings.workers,
         queue_size=settings.queue_size,
         job_timeout=settings.job_timeout,
-        initializer=partial(warmup, memory_budget=settings.job_memory_mb * 2**20)
-        if settings.warmup
-        else partial(cap_address_space, settings.job_memory_mb * 2**20),
+        initializer=warmup if settings.warmup else None,
         startup_timeout=settings.startup_timeout,
         context=settings.mp_context,
         preload=("skelprune", "service.jobs"),
+        memory_limit=settings.job_memory_mb * 2**20,
     )
 
     async def start_in_background() -> None:
@@ -258,6 +269,7 @@ def create_app(
         lifespan=lifespan,
         docs_url=None,
         redoc_url=None,  # served below from installed assets, not a CDN
+        redirect_slashes=False,  # SlashRedirectMiddleware: a relative Location
     )
     registry = CollectorRegistry()
     app.state.settings = settings
@@ -291,6 +303,7 @@ def create_app(
             expose_headers=[REQUEST_ID_HEADER, "Retry-After", "WWW-Authenticate"],
             max_age=600,
         )
+    app.add_middleware(SlashRedirectMiddleware, paths=partial(_fixed_paths, app))
     app.add_middleware(RequestContextMiddleware, access_log_enabled=settings.access_log)
     app.add_middleware(HeadMiddleware)
     app.openapi = _openapi(app)  # type: ignore[method-assign]

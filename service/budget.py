@@ -13,22 +13,22 @@ the most seen per unit on the adversarial masks of ``python -m benchmarks advers
 (see ``docs/hostile-input.md``); the time coefficients are typical of a busy two-core
 machine, so the estimate is a first screen and the time limit stays the hard stop.
 
-As a backstop, each worker's address space is capped at what it holds when warm plus the
-budget (:func:`cap_address_space`): an allocation the estimate missed fails with
-``MemoryError``, which the job answers as the same 413, instead of the machine's
-out-of-memory killer ending the worker (or a neighbour).
+The estimate is a screen, not the bound: what bounds a job is its worker's resident
+set, which the pool samples while the job runs (:class:`service.pool.WorkerPool`,
+``memory_limit``): a worker over the budget is killed and replaced and the job answered
+with the same 413. Virtual memory is not what a job uses (allocators and thread arenas
+reserve far more address space than they touch), so it is not capped.
 """
 
 from __future__ import annotations
 
-import os
-import resource
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage
 
-from skelprune.errors import SkelpruneError
+from service.pool import resident_bytes as _resident
+from skelprune.errors import InvalidPolygonError, SkelpruneError
 
 __all__ = [
     "BYTES_PER_ANSWER_PIXEL",
@@ -36,23 +36,32 @@ __all__ = [
     "BYTES_PER_PIXEL",
     "BYTES_PER_SKELETON_POINT",
     "SECONDS_PER_COMPONENT",
+    "SECONDS_PER_PART",
+    "SECONDS_PER_PART_PAIR",
     "SECONDS_PER_PIXEL",
+    "SECONDS_PER_POSITION",
     "SECONDS_PER_SKELETON_POINT",
     "Estimate",
     "JobTooLargeError",
-    "cap_address_space",
     "check_budget",
+    "check_polygon",
     "estimate",
+    "polygon_estimate",
     "resident_bytes",
     "shape_counts",
 ]
 
-#: Bytes per input pixel: mask, distance transform, labels, crops (4096² blobs: ~45) ...
-BYTES_PER_PIXEL = 64
+# The memory coefficients are fitted so that what a warm worker holds plus the estimate
+# is within 1.5x of the worker's measured peak on every mask of the adversarial corpus
+# that runs and every silhouette of ``python -m benchmarks large`` (docs/hostile-input.md):
+# a tight estimate refuses no job that fits; the resident-memory watchdog is the bound.
+#: Bytes per input pixel: the PNG decoded, mask, distance transform, labels, crops
+#: (4096² silhouettes: 13-37) ...
+BYTES_PER_PIXEL = 32
 #: ... per pixel that can be a skeleton point, at most min(shape pixels, boundary
-#: pixels): graph, branch lists and their copies (pixel noise: ~1,100) ...
-BYTES_PER_SKELETON_POINT = 1536
-#: ... per 8-connected component: its crop, result and document (isolated dots: ~9,000) ...
+#: pixels): graph, branch lists and their copies (pixel noise, checkerboards: 400-1,000) ...
+BYTES_PER_SKELETON_POINT = 768
+#: ... per 8-connected component: its crop, result and document (isolated dots: ~13,000) ...
 BYTES_PER_COMPONENT = 16 * 1024
 #: ... and per pixel of an answer image (the overlay, RGB, and its PNG encoding).
 BYTES_PER_ANSWER_PIXEL = 16
@@ -62,6 +71,15 @@ SECONDS_PER_PIXEL = 0.5e-6
 SECONDS_PER_SKELETON_POINT = 60e-6
 #: ... and per component (isolated dots: 0.3–0.7 ms).
 SECONDS_PER_COMPONENT = 0.7e-3
+#: A polygon's cost before it has pixels: seconds per position (decoding, validation,
+#: the geometry's construction; 100,000 positions: ~2 s on a busy machine) ...
+SECONDS_PER_POSITION = 20e-6
+#: ... per part (its validation, fitting, share of the union, and its pruning as a
+#: component of the raster: ~2.3 ms a unit square) ...
+SECONDS_PER_PART = 2.5e-3
+#: ... and per pair of parts: the fitting and union of many parts grow faster than
+#: their number (20,000 unit squares: ~20 s, 10,000: ~4 s).
+SECONDS_PER_PART_PAIR = 60e-9
 _EIGHT = np.ones((3, 3), bool)
 
 
@@ -119,13 +137,51 @@ def estimate(mask: np.ndarray, answer_pixels: int = 0) -> Estimate:
     )
 
 
+def polygon_estimate(parts: int, positions: int) -> Estimate:
+    """Time to read, fit and union a polygon of ``parts`` parts and ``positions``
+    positions, before its pixels exist (their cost is :func:`estimate`'s, after).
+
+    >>> round(polygon_estimate(20_000, 100_000).seconds)
+    76
+    """
+    seconds = (
+        SECONDS_PER_POSITION * positions
+        + SECONDS_PER_PART * parts
+        + SECONDS_PER_PART_PAIR * parts * parts
+    )
+    return Estimate(bytes=0, seconds=seconds)
+
+
+def check_polygon(
+    parts: int, positions: int, max_vertices: int | None, seconds: float | None
+) -> None:
+    """Refuse a polygon over the vertex limit, or whose reading alone
+    (:func:`polygon_estimate`) would take longer than ``seconds``, before any work.
+
+    Raises
+    ------
+    InvalidPolygonError
+        More than ``max_vertices`` positions.
+    JobTooLargeError
+        Estimated over the time limit.
+    """
+    if max_vertices is not None and positions > max_vertices:
+        raise InvalidPolygonError(
+            f"too many vertices: {positions} positions, more than {max_vertices} allowed"
+        )
+    cost = polygon_estimate(parts, positions)
+    if seconds is not None and cost.seconds > seconds:
+        raise JobTooLargeError(
+            f"this polygon would take about {cost.seconds:.0f} s to read, fit and combine "
+            f"(judged by its {parts} parts and {positions} positions), over the job time "
+            f"limit of {seconds:g} s: send fewer parts (merge touching ones) or fewer "
+            "vertices"
+        )
+
+
 def resident_bytes() -> int:
     """This process's resident set now, bytes (0 where ``/proc`` is missing)."""
-    try:
-        with open("/proc/self/statm") as f:
-            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
-    except (OSError, ValueError, IndexError):
-        return 0
+    return _resident()
 
 
 def _mib(n: float) -> str:
@@ -163,20 +219,3 @@ def out_of_memory(budget: int | None) -> JobTooLargeError:
     """The error of a job that ran out of memory all the same."""
     limit = f"the memory budget of {_mib(budget)} a job" if budget else "the memory available"
     return JobTooLargeError(f"this input needs more than {limit}: send fewer pixels")
-
-
-def cap_address_space(budget: int) -> None:
-    """Cap this process's address space at its current size plus what the budget leaves
-    above its resident set (virtual memory is larger than resident: the cap only stops
-    what the estimate missed). Silently nothing where the limit cannot be set."""
-    try:
-        with open("/proc/self/statm") as f:
-            size_pages, resident_pages = (int(v) for v in f.read().split()[:2])
-        page = os.sysconf("SC_PAGE_SIZE")
-        cap = (size_pages - resident_pages) * page + budget
-        _, hard = resource.getrlimit(resource.RLIMIT_AS)
-        if hard != resource.RLIM_INFINITY:
-            cap = min(cap, hard)
-        resource.setrlimit(resource.RLIMIT_AS, (cap, hard))
-    except (OSError, ValueError, AttributeError):
-        pass

@@ -146,7 +146,7 @@ class JobBuilder:
             max_pixels=settings.max_pixels,
             max_vertices=settings.max_vertices,
             memory_budget=settings.job_memory_mb * 2**20,
-            time_budget=settings.job_timeout,
+            time_budget=settings.estimate_seconds,
         )
 
     def match_job(self, a: Job, b: Job) -> MatchJob:

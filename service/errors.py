@@ -24,6 +24,7 @@ from service.budget import JobTooLargeError
 from service.logs import request_id_var
 from service.pool import (
     JobFailedError,
+    JobOverMemoryError,
     JobTimeoutError,
     PoolClosedError,
     PoolStartingError,
@@ -111,6 +112,7 @@ PROBLEMS: dict[type[BaseException], ProblemKind] = {
     InvalidImageError: ProblemKind(400, "invalid-image", "Invalid image"),
     ImageTooLargeError: ProblemKind(413, "image-too-large", "Image too large"),
     JobTooLargeError: ProblemKind(413, "job-too-large", "Job too large"),
+    JobOverMemoryError: ProblemKind(413, "job-too-large", "Job too large"),
     EmptyMaskError: ProblemKind(422, "empty-mask", "Empty mask"),
     InvalidPolygonError: ProblemKind(422, "invalid-polygon", "Invalid polygon"),
     InvalidOptionError: ProblemKind(422, "invalid-option", "Invalid option"),

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from service.jobs import PNG_HEADER_COMPONENTS
 from skelprune import ALGORITHM_VERSION, __version__
 
 __all__ = [
@@ -212,20 +213,30 @@ UNAUTHORIZED["headers"] = {
     }
 }
 
+LISTED = (
+    "one value a component, comma-separated, in the document's order, for at most "
+    f"{PNG_HEADER_COMPONENTS} components"
+)
+
 PRUNE_RESPONSES: dict[int | str, dict[str, Any]] = {
     200: {
         "description": "The pruned skeleton, in the format chosen by `Accept`.",
         "headers": {
             f"X-Skelprune-{name}": {
-                "description": f"`image/png` answers only: {what}, one value a component, "
-                "comma-separated, in the document's order.",
+                "description": f"`image/png` answers only: {what}.",
                 "schema": {"type": "string"},
             }
             for name, what in (
                 ("Components", "the number of components (one value)"),
-                ("RER", "each component's `rer`"),
-                ("SS", "each component's `ss`"),
-                ("Objective", "each component's `objective`"),
+                ("RER", f"each component's `rer`, {LISTED}"),
+                ("SS", f"each component's `ss`, {LISTED}"),
+                ("Objective", f"each component's `objective`, {LISTED}"),
+                (
+                    "Values",
+                    f"present when the answer has more than {PNG_HEADER_COMPONENTS} "
+                    "components: the three lists are left out (headers stay a few "
+                    "kilobytes, what proxies pass); the JSON document has every value",
+                ),
             )
         },
         "content": {

@@ -14,13 +14,14 @@ from typing import Any, Literal
 
 import numpy as np
 
-from service.budget import cap_address_space, check_budget, estimate, out_of_memory
+from service.budget import check_budget, estimate, out_of_memory
 from skelprune.errors import ImageTooLargeError, SkelpruneError
 from skelprune.io.input import Input, Kind, read_input
 from skelprune.options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
 from skelprune.output.render import auto_scale
 
 __all__ = [
+    "PNG_HEADER_COMPONENTS",
     "Job",
     "JobResult",
     "answer_pixels",
@@ -60,16 +61,24 @@ class Job:
     max_pixels: int | None = None
     max_vertices: int | None = None
     memory_budget: int | None = None  # bytes a worker may hold for the job
-    time_budget: float | None = None  # seconds the job may take (the job time limit)
+    time_budget: float | None = None  # seconds its time estimate may reach (None: no screen)
 
 
 #: Response headers of the PNG answer: one value a component, comma-separated, in the
-#: document's order (``repr`` of the float: it reads back exactly).
+#: document's order (``repr`` of the float: it reads back exactly), for at most
+#: :data:`PNG_HEADER_COMPONENTS` components.
 PNG_HEADERS = {
     "X-Skelprune-RER": "rer",
     "X-Skelprune-SS": "ss",
     "X-Skelprune-Objective": "objective",
 }
+
+
+#: Most components whose values the PNG answer's headers list (three values of at most
+#: 24 characters each: about 2.4 KB of headers). Proxies pass a few kilobytes of
+#: response headers (nginx's default buffer: one 4-KiB page); past this the values are
+#: left out and ``X-Skelprune-Values`` says where they are.
+PNG_HEADER_COMPONENTS = 32
 
 
 @dataclass(frozen=True)
@@ -96,10 +105,8 @@ def kernel_counts() -> tuple[int, int]:
     return loaded, compiled
 
 
-def warmup(memory_budget: int | None = None) -> str:
-    """Worker initialiser: import the library and run it once so the JIT is compiled;
-    then cap the worker's address space for ``memory_budget`` bytes a job, if given
-    (:func:`service.budget.cap_address_space`).
+def warmup() -> str:
+    """Worker initialiser: import the library and run it once so the JIT is compiled.
 
     The shape has a hole (the loop code paths) and a noisy boundary whose spurs the
     coarse stage removes (its code paths); ``coarse=None``, ``method="dce"`` and
@@ -129,8 +136,6 @@ def warmup(memory_budget: int | None = None) -> str:
     skelprune.match(res, res).to_dict()  # the matching kernels of POST /v1/match
     loaded, compiled = kernel_counts()
     took = f"{time.perf_counter() - t0:.1f} s"
-    if memory_budget is not None:
-        cap_address_space(memory_budget)
     if compiled:
         return (
             f"compiled {compiled} numba kernels ({loaded} loaded from the cache) "
@@ -196,11 +201,14 @@ def _run_job(job: Job) -> JobResult:
     headers: dict[str, str] = {}
     if job.output == "png":
         body = res.overlay_png()
-        headers = {
-            name: ",".join(repr(float(getattr(c, key))) for c in res.components)
-            for name, key in PNG_HEADERS.items()
-        }
-        headers["X-Skelprune-Components"] = str(len(res.components))
+        headers = {"X-Skelprune-Components": str(len(res.components))}
+        if len(res.components) <= PNG_HEADER_COMPONENTS:
+            for name, key in PNG_HEADERS.items():
+                headers[name] = ",".join(repr(float(getattr(c, key))) for c in res.components)
+        else:  # headers stay small: the values are in the JSON document
+            headers["X-Skelprune-Values"] = (
+                f"omitted: more than {PNG_HEADER_COMPONENTS} components; ask for application/json"
+            )
         if res.warnings:  # a polygon the raster does not hold as it is
             headers["X-Skelprune-Warnings"] = str(len(res.warnings))
     elif job.output == "geojson":

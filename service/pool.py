@@ -8,7 +8,12 @@ worker breaks the whole executor. Here every worker is one process with one pipe
 - a worker that dies mid-job (EOF on the pipe) is replaced and that job fails with
   :class:`WorkerCrashedError`; the pool keeps serving;
 - at most ``queue_size`` jobs wait for a free worker; one more raises
-  :class:`QueueFullError` at once.
+  :class:`QueueFullError` at once;
+- with a ``memory_limit``, the parent samples the worker's resident set (``/proc``)
+  while a job runs: a worker over the limit is killed and replaced
+  (:class:`JobOverMemoryError`), and a worker whose resident set did not come back
+  within ``recycle_slack`` of what it held when warm is replaced after its job, so that
+  one large job never leaves a worker holding memory that the next job needs.
 
 The event loop never blocks: each job's pipe wait runs in a thread of a private
 executor (one thread per worker), and that thread hands the worker back to the pool
@@ -22,6 +27,7 @@ import contextlib
 import contextvars
 import logging
 import multiprocessing as mp
+import os
 import signal
 import threading
 import time
@@ -35,6 +41,7 @@ from skelprune.errors import SkelpruneError
 
 __all__ = [
     "JobFailedError",
+    "JobOverMemoryError",
     "JobTimeoutError",
     "PoolClosedError",
     "PoolError",
@@ -45,6 +52,31 @@ __all__ = [
 ]
 
 log = logging.getLogger("service.pool")
+
+#: Seconds between two samples of a running job's resident set.
+MEMORY_SAMPLE_SECONDS = 0.02
+_PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
+
+
+def resident_bytes(pid: int | None = None) -> int:
+    """Resident set of process ``pid`` (this one by default), bytes; 0 where ``/proc``
+    cannot say (another OS, the process gone)."""
+    try:
+        with open(f"/proc/{pid or 'self'}/statm", "rb") as f:
+            return int(f.read().split()[1]) * _PAGE
+    except (OSError, ValueError, IndexError):
+        return 0
+
+
+def _trim_heap() -> None:
+    """Give the C heap's free pages back to the system (glibc), so that the resident
+    set after a job is what the worker still uses."""
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        pass
 
 
 class PoolError(Exception):
@@ -69,6 +101,10 @@ class JobTimeoutError(PoolError):
 
 class WorkerCrashedError(PoolError):
     """The worker process died while running the job; it was replaced."""
+
+
+class JobOverMemoryError(PoolError):
+    """The job's worker held more than its memory limit; it was killed and replaced."""
 
 
 class JobFailedError(PoolError):
@@ -102,10 +138,13 @@ def _worker_main(conn: Connection, initializer: Callable[[], object] | None) -> 
             reply = ("error", exc)
         except Exception as exc:
             reply = ("failed", (f"{type(exc).__name__}: {exc}", traceback.format_exc()))
+        del msg, fn, args  # the job's input is freed before the heap is trimmed
         try:
             conn.send(reply)
         except Exception as exc:  # unpicklable result or exception
             conn.send(("failed", (f"cannot send result: {exc}", traceback.format_exc())))
+        del reply
+        _trim_heap()
 
 
 def _exit_reason(code: int | None) -> str:
@@ -130,6 +169,7 @@ class _Worker:
         self.proc.start()
         child.close()
         self.ready = False
+        self.warm_bytes = 0  # resident set when warm (the parent measures it)
         # kill() can race: the job's thread replacing a dead worker and close()
         # stopping every worker may both get here; the pipe must be closed once.
         self._kill_lock = threading.Lock()
@@ -146,6 +186,7 @@ class _Worker:
         if tag != "ready":
             raise WorkerCrashedError(f"worker failed to start: {info}")
         self.ready = True
+        self.warm_bytes = resident_bytes(self.proc.pid)
         return info
 
     def _receive(self, died: str) -> tuple[str, Any]:
@@ -156,10 +197,19 @@ class _Worker:
             self.proc.join(1)
             raise WorkerCrashedError(died.format(reason=_exit_reason(self.proc.exitcode))) from None
 
-    def call(self, fn: Callable[..., Any], args: tuple[Any, ...], timeout: float) -> Any:
+    def resident(self) -> int:
+        """The worker's resident set now, bytes."""
+        return resident_bytes(self.proc.pid)
+
+    def call(
+        self,
+        fn: Callable[..., Any],
+        args: tuple[Any, ...],
+        timeout: float,
+        memory_limit: int | None = None,
+    ) -> Any:
         self.conn.send((fn, args))
-        if not self.conn.poll(timeout):
-            raise JobTimeoutError(f"job exceeded the time limit of {timeout:g} s and was stopped")
+        self._wait(timeout, memory_limit)
         tag, payload = self._receive(
             "the worker process died while running this job ({reason}); it has been replaced"
         )
@@ -171,6 +221,29 @@ class _Worker:
         log.error("job failed in worker: %s", message)
         log.debug("worker traceback:\n%s", trace)  # only at SKELPRUNE_LOG_LEVEL=debug
         raise JobFailedError("the job failed with an internal error")
+
+    def _wait(self, timeout: float, memory_limit: int | None) -> None:
+        """Wait for the job's answer; its resident set is sampled meanwhile."""
+        if memory_limit is None:
+            if not self.conn.poll(timeout):
+                raise JobTimeoutError(
+                    f"job exceeded the time limit of {timeout:g} s and was stopped"
+                )
+            return
+        deadline = time.monotonic() + timeout
+        while not self.conn.poll(MEMORY_SAMPLE_SECONDS):
+            held = self.resident()
+            if held > memory_limit:
+                raise JobOverMemoryError(
+                    f"this input needed more than the memory budget of "
+                    f"{memory_limit / 2**20:,.0f} MiB a job (its worker held "
+                    f"{held / 2**20:,.0f} MiB) and was stopped: send fewer pixels or a "
+                    "cleaner mask"
+                )
+            if time.monotonic() > deadline:
+                raise JobTimeoutError(
+                    f"job exceeded the time limit of {timeout:g} s and was stopped"
+                )
 
     def stop(self, grace: float = 1.0) -> None:
         with contextlib.suppress(OSError):
@@ -209,6 +282,13 @@ class WorkerPool:
         so replacing a killed worker takes milliseconds, not an interpreter start.
     preload : sequence of str
         Modules the fork server imports up front (``forkserver`` only).
+    memory_limit : int, optional
+        Bytes a worker may hold while it runs a job (its own memory included): its
+        resident set is sampled every :data:`MEMORY_SAMPLE_SECONDS`, and a worker over
+        the limit is killed and replaced (:class:`JobOverMemoryError`).
+    recycle_slack : int
+        A worker holding more than this many bytes above its warm resident set after a
+        job is replaced (only with a ``memory_limit``).
     """
 
     def __init__(
@@ -221,8 +301,12 @@ class WorkerPool:
         startup_timeout: float = 300.0,
         context: str = "forkserver",
         preload: Sequence[str] = (),
+        memory_limit: int | None = None,
+        recycle_slack: int = 256 * 2**20,
     ) -> None:
         self.size = size
+        self.memory_limit = memory_limit
+        self.recycle_slack = recycle_slack
         self.queue_size = queue_size
         self.job_timeout = job_timeout
         self.startup_timeout = startup_timeout
@@ -239,6 +323,7 @@ class WorkerPool:
         self.waiting = 0
         self.busy = 0
         self.restarts = 0
+        self.recycled = 0
         self.started = False
         self.starting = False
         self.closed = False
@@ -379,6 +464,20 @@ class WorkerPool:
         fut = self._loop.run_in_executor(self._executor, ctx.run, self._run_on, worker, fn, args)
         return await fut
 
+    def _recycle_if_grown(self, worker: _Worker) -> _Worker:
+        """Replace a worker whose resident set did not come back after its job."""
+        if self.memory_limit is None or not worker.warm_bytes:
+            return worker
+        held = worker.resident()
+        if held <= worker.warm_bytes + self.recycle_slack:
+            return worker
+        self.recycled += 1
+        return self._replace(
+            worker,
+            f"it held {held / 2**20:,.0f} MiB after a job, "
+            f"{(held - worker.warm_bytes) / 2**20:,.0f} MiB more than when warm",
+        )
+
     def _release(self, worker: _Worker) -> None:
         self.busy -= 1
         if self.closed:
@@ -401,8 +500,8 @@ class WorkerPool:
                 raise
             t0 = time.perf_counter()
             try:
-                result = worker.call(fn, args, self.job_timeout)
-            except (JobTimeoutError, WorkerCrashedError) as exc:
+                result = worker.call(fn, args, self.job_timeout, self.memory_limit)
+            except (JobTimeoutError, WorkerCrashedError, JobOverMemoryError) as exc:
                 worker = self._replace(worker, str(exc))
                 raise
             except OSError as exc:  # broken pipe on send: the worker is gone
@@ -410,6 +509,10 @@ class WorkerPool:
                 raise WorkerCrashedError(
                     "the worker process died before it took this job; it has been replaced"
                 ) from None
+            except BaseException:  # the input's error: the worker lives on, if it shrank
+                worker = self._recycle_if_grown(worker)
+                raise
+            worker = self._recycle_if_grown(worker)
             if self.on_job_done is not None:
                 self.on_job_done(time.perf_counter() - t0)
             return result

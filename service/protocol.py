@@ -12,8 +12,11 @@ subclass that
   stays silent is closed without a word);
 - answers a request the parser cannot read (malformed, or an unknown method: 400)
 
-each with problem details and ``Connection: close``. The body's deadline is the
-application's (:class:`service.app.BodyLimitMiddleware`): it knows when a body is done.
+each with problem details and ``Connection: close``. A refusal that follows valid
+requests on the same connection (pipelining) is written after their answers, in order;
+nothing after it is read. An ``Upgrade`` (WebSocket) is not taken up: the request is
+answered as plain HTTP. The body's deadline is the application's
+(:class:`service.app.BodyLimitMiddleware`): it knows when a body is done.
 """
 
 from __future__ import annotations
@@ -78,7 +81,8 @@ class GuardedHttpToolsProtocol(HttpToolsProtocol):
         self._fed = 0  # bytes fed to the parser on this connection
         self._head_start = 0
         self._head_timer: asyncio.TimerHandle | None = None
-        self._discarding = False  # answered and closing: what comes is dropped
+        self._discarding = False  # refused: what comes is dropped
+        self._refusal: Exception | None = None  # to write once the answers before it are
 
     # -- the header deadline ------------------------------------------------------
     def _arm(self) -> None:
@@ -155,14 +159,38 @@ class GuardedHttpToolsProtocol(HttpToolsProtocol):
         log.info("refused a request: %s", error, extra={"status": problem(error).status_code})
         if self.transport.is_closing() or self._discarding:
             return
+        self._discarding = True
+        if self._answering():
+            # pipelined after requests still being answered: their answers go first
+            self._refusal = error
+            return
+        self._refuse(error)
+
+    def _answering(self) -> bool:
+        """A request before this one is still being answered, or waits to be."""
+        return bool(self.pipeline) or (self.cycle is not None and not self.cycle.response_complete)
+
+    def _refuse(self, error: Exception) -> None:
         self.transport.write(_raw_answer(error))
         # A lingering close: closing with the client's bytes still unread would reset the
         # connection, and the client could lose the answer. Half-close, drop what still
         # comes for a moment, then close.
-        self._discarding = True
         if self.transport.can_write_eof():
             self.transport.write_eof()
         self.loop.call_later(LINGER_SECONDS, self.transport.close)
+
+    def on_response_complete(self) -> None:
+        super().on_response_complete()
+        if self._refusal is not None and not self._answering():
+            error, self._refusal = self._refusal, None
+            if not self.transport.is_closing():
+                self._refuse(error)
+
+    def _should_upgrade(self) -> bool:
+        return False  # no WebSocket here: the request is answered as HTTP
+
+    def _unsupported_upgrade_warning(self) -> None:
+        pass  # not a server problem: the Upgrade header is ignored, as HTTP allows
 
     def data_received(self, data: bytes) -> None:
         # uvicorn's, but a refusal or a parser error is answered with problem details

@@ -99,9 +99,19 @@ class Settings(BaseSettings):
     job_memory_mb: int = Field(
         2048,
         ge=256,
-        description="Memory a worker may hold for one job, MiB, its own ~300 MiB included: "
-        "a job whose estimate (from its pixels, boundary, components and answer image) is "
-        "over it gets 413 before any work, and so does one that runs out all the same.",
+        description="Resident memory a worker may hold for one job, MiB, its own ~250 MiB "
+        "included: a job whose estimate (from its pixels, boundary, components and answer "
+        "image) is over it gets 413 before any work; a worker that goes over it while a job "
+        "runs is stopped and replaced (413), and one whose memory did not come back after a "
+        "job is replaced.",
+    )
+    time_estimate_scale: float = Field(
+        1.0,
+        ge=0,
+        description="Factor on the jobs' time estimates, which were measured on a busy "
+        "two-core machine (below 1 on a faster one): a job whose scaled estimate is over "
+        "SKELPRUNE_JOB_TIMEOUT gets 413 before any work; 0 turns this screen off and "
+        "leaves the job time limit alone.",
     )
     header_timeout: float = Field(
         10.0,
@@ -164,6 +174,13 @@ class Settings(BaseSettings):
         description="Seconds a graceful shutdown (SIGTERM) waits for requests "
         "in flight before closing them; keep it below the orchestrator's grace period.",
     )
+
+    @property
+    def estimate_seconds(self) -> float | None:
+        """The time an unscaled estimate may reach (None: no time screen)."""
+        if self.time_estimate_scale <= 0:
+            return None
+        return self.job_timeout / self.time_estimate_scale
 
     @field_validator("api_key", mode="before")
     @classmethod

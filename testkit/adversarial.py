@@ -1,24 +1,30 @@
-"""Masks a hostile or careless client can send: tiny as PNGs, as hard as a mask can be.
+"""Inputs a hostile or careless client can send: tiny as PNGs or JSON, as hard as they
+can be.
 
-Each generator makes a square ``n``-pixel mask whose boundary, skeleton or component
-count is as large as the pixel count allows. The tests run them small (a few dozen
-pixels, fast); ``python -m benchmarks adversarial`` runs them at the service's pixel
-limit against the real server.
+Each mask generator makes a square ``n``-pixel mask whose boundary, skeleton or
+component count is as large as the pixel count allows; the polygon generators make
+GeoJSON with many parts or many vertices. The tests run them small (fast);
+``python -m benchmarks adversarial`` runs them at the service's limits against the real
+server.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
 __all__ = [
     "CORPUS",
     "checkerboard",
+    "circle_polygon",
     "dots",
     "fractal",
     "lines",
     "noise",
+    "unit_squares",
 ]
 
 
@@ -83,3 +89,27 @@ CORPUS: dict[str, Callable[[int], np.ndarray]] = {
     "1-px lines": lines,
     "tiny components": dots,
 }
+
+
+def unit_squares(n: int, gap: float = 2.0) -> dict[str, Any]:
+    """A MultiPolygon of ``n`` unit squares on a grid, ``gap`` apart: many small parts
+    (20,000 of them are a 1.2 MB body)."""
+    side = math.ceil(math.sqrt(n))
+    parts = []
+    for i in range(n):
+        x, y = gap * (i % side), gap * (i // side)
+        parts.append([[[x, y], [x + 1, y], [x + 1, y + 1], [x, y + 1], [x, y]]])
+    return {"type": "MultiPolygon", "coordinates": parts}
+
+
+def circle_polygon(vertices: int, radius: float = 1000.0, digits: int = 6) -> dict[str, Any]:
+    """A Polygon of ``vertices`` positions on a circle (coordinates rounded to
+    ``digits``): one part, many vertices."""
+    ring = [
+        [
+            round(radius * math.cos(2 * math.pi * k / vertices), digits),
+            round(radius * math.sin(2 * math.pi * k / vertices), digits),
+        ]
+        for k in range(vertices)
+    ]
+    return {"type": "Polygon", "coordinates": [[*ring, ring[0]]]}

@@ -8,7 +8,6 @@ whichever endpoint it was sent to (the problems are mapped to statuses in
 from __future__ import annotations
 
 import asyncio
-import json
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, TypeVar
@@ -18,8 +17,10 @@ from fastapi.exceptions import RequestValidationError
 from pydantic import ValidationError
 from starlette.datastructures import QueryParams, UploadFile
 
+from service.budget import check_polygon
 from service.errors import BodyTooLargeError, UnsupportedMediaTypeError
 from service.http.query import parse_query, validation_error
+from service.http.scan import BatchItem, count_polygon, split_batch
 from service.match_job import MatchPolygons
 from service.schemas import PolygonJob, PruneQuery, polygon_request_adapter
 from skelprune.errors import InvalidOptionError, InvalidPolygonError
@@ -31,8 +32,9 @@ __all__ = [
     "Form",
     "batch_size",
     "body_errors",
+    "check_polygon_body",
     "content_type",
-    "parse_json_list",
+    "parse_batch",
     "parse_pair",
     "parse_polygon",
     "polygon_item",
@@ -72,12 +74,37 @@ def refuse_encoding(request: Request) -> None:
         )
 
 
-async def validate_json(parse: Callable[[bytes], T], body: bytes) -> T:
-    """``parse(body)``; a big body takes a while to validate: off the event loop, so that
-    other requests (health checks included) keep being served meanwhile."""
+async def validate_json(
+    parse: Callable[[bytes], T], body: bytes, check: Callable[[bytes], None] | None = None
+) -> T:
+    """``check(body)`` then ``parse(body)``; a big body takes a while to measure and
+    validate: off the event loop, so that other requests (health checks included) keep
+    being served meanwhile."""
+
+    def run() -> T:
+        if check is not None:
+            check(body)
+        return parse(body)
+
     if len(body) > BIG_JSON:
-        return await asyncio.to_thread(parse, body)
-    return parse(body)
+        return await asyncio.to_thread(run)
+    return run()
+
+
+def check_polygon_body(
+    max_vertices: int | None, seconds: float | None, shapes: int = 1
+) -> Callable[[bytes], None]:
+    """The check of a JSON body holding ``shapes`` polygons: their positions counted on
+    the bytes, refused over ``shapes × max_vertices`` or when reading them would take
+    longer than ``seconds`` (:func:`service.budget.check_polygon`), before any object
+    is built."""
+
+    def check(body: bytes) -> None:
+        counts = count_polygon(body)
+        limit = None if max_vertices is None else max_vertices * shapes
+        check_polygon(counts.parts, counts.positions, limit, seconds)
+
+    return check
 
 
 def body_errors(errors: list[Any]) -> list[dict[str, Any]]:
@@ -122,39 +149,27 @@ def parse_pair(body: bytes) -> tuple[dict[str, Any], dict[str, Any]]:
     )
 
 
-def parse_json_list(body: bytes) -> list[Any]:
-    """A batch's JSON body: a list, its items not validated yet (one bad item fails alone)."""
+def parse_batch(body: bytes) -> list[BatchItem]:
+    """A batch's JSON body: its items, split on the bytes and measured, not decoded
+    (each item is decoded and validated alone: one bad item fails alone).
+
+    Raises
+    ------
+    RequestValidationError
+        Not UTF-8, or not a JSON list.
+    BodyTooLargeError
+        More than :data:`BATCH_MAX_ITEMS` items (the rest is not read).
+    InvalidOptionError
+        An empty list.
+    """
     try:
-        # UTF-8 only, as POST /v1/prune reads JSON (json.loads would guess UTF-16/32)
-        items = json.loads(body.decode("utf-8"))
-    except UnicodeDecodeError as exc:
-        raise RequestValidationError(
-            [
-                {
-                    "loc": ("body",),
-                    "type": "json_invalid",
-                    "msg": f"invalid JSON: not UTF-8 (byte {exc.start})",
-                }
-            ]
+        items = split_batch(body, BATCH_MAX_ITEMS)
+    except OverflowError:
+        raise BodyTooLargeError(
+            f"a batch holds at most {BATCH_MAX_ITEMS} shapes; this one holds more"
         ) from None
-    except ValueError as exc:
-        raise RequestValidationError(
-            [{"loc": ("body",), "type": "json_invalid", "msg": f"invalid JSON: {exc}"}]
-        ) from None
-    except RecursionError:  # nesting deeper than the parser's stack
-        raise RequestValidationError(
-            [{"loc": ("body",), "type": "json_invalid", "msg": "invalid JSON: nested too deep"}]
-        ) from None
-    if not isinstance(items, list):
-        raise RequestValidationError(
-            [
-                {
-                    "loc": ("body",),
-                    "type": "list_type",
-                    "msg": "a batch is a JSON list of GeoJSON objects",
-                }
-            ]
-        )
+    if not items:
+        raise InvalidOptionError("the batch is empty: send at least one shape")
     return items
 
 
@@ -180,7 +195,8 @@ def polygon_item(item: Any) -> dict[str, Any]:
 
 
 def batch_size(items: list[Any]) -> None:
-    """Refuse an empty batch, and one over :data:`BATCH_MAX_ITEMS` shapes."""
+    """Refuse an empty batch, and one over :data:`BATCH_MAX_ITEMS` shapes (a multipart
+    batch; a JSON batch is counted as it is split, :func:`parse_batch`)."""
     if not items:
         raise InvalidOptionError("the batch is empty: send at least one shape")
     if len(items) > BATCH_MAX_ITEMS:

@@ -1,15 +1,19 @@
-"""The request guards that wrap the application: the body's size and time limits, and
-``HEAD`` answered as ``GET``."""
+"""The request guards that wrap the application: the body's size and time limits,
+``HEAD`` answered as ``GET``, and a trailing slash redirected without the client's
+``Host``."""
 
 from __future__ import annotations
 
 import asyncio
+from collections.abc import Callable
+from urllib.parse import quote
 
+from starlette.responses import RedirectResponse
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from service.errors import BodyTooLargeError, RequestTimeoutError, problem
 
-__all__ = ["BodyLimitMiddleware", "HeadMiddleware"]
+__all__ = ["BodyLimitMiddleware", "HeadMiddleware", "SlashRedirectMiddleware"]
 
 
 class BodyLimitMiddleware:
@@ -76,4 +80,31 @@ class HeadMiddleware:
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] == "http" and scope["method"] == "HEAD":
             scope = {**scope, "method": "GET"}  # a copy: the server's own says HEAD
+        await self.app(scope, receive, send)
+
+
+class SlashRedirectMiddleware:
+    """A known path with a trailing slash is redirected (307) to the path without it, by
+    a relative ``Location``: the router's own redirect writes the request's ``Host``
+    header into it, so that any client could make the service point elsewhere.
+
+    ``paths`` gives the application's fixed paths (called once, at the first request).
+    """
+
+    def __init__(self, app: ASGIApp, paths: Callable[[], set[str]]) -> None:
+        self.app = app
+        self._paths = paths
+        self._known: set[str] | None = None
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        path = scope.get("path", "")
+        if scope["type"] == "http" and len(path) > 1 and path.endswith("/"):
+            if self._known is None:
+                self._known = self._paths()
+            bare = path.rstrip("/")
+            if bare in self._known:
+                query = scope.get("query_string", b"").decode("latin-1")
+                location = quote(bare) + (f"?{query}" if query else "")
+                await RedirectResponse(location, status_code=307)(scope, receive, send)
+                return
         await self.app(scope, receive, send)

@@ -17,16 +17,9 @@ PRODUCES: dict[str, Output] = {
 NDJSON = "application/x-ndjson"
 
 
-def negotiate(accept: str | None) -> Output:
-    """Pick the output for an ``Accept`` header (q-values honoured; none means JSON).
-
-    Raises
-    ------
-    NotAcceptableError
-        When no producible type has q > 0.
-    """
-    if not accept or not accept.strip():
-        return "json"
+def _ranges(accept: str) -> list[tuple[str, float]]:
+    """The media ranges of an ``Accept`` header and their q-values (1 when not given,
+    0 when unreadable)."""
     ranges: list[tuple[str, float]] = []
     for part in accept.split(","):
         fields = [f.strip() for f in part.split(";")]
@@ -42,27 +35,36 @@ def negotiate(accept: str | None) -> Output:
                 except ValueError:
                     q = 0.0
         ranges.append((media, q))
+    return ranges
 
-    def quality(candidate: str) -> float:
-        main = candidate.split("/")[0]
-        best, best_rank = 0.0, -1
-        for media, q in ranges:
-            rank = (
-                2
-                if media == candidate
-                else 1
-                if media == f"{main}/*"
-                else 0
-                if media == "*/*"
-                else -1
-            )
-            if rank > best_rank:
-                best, best_rank = q, rank
-        return best if best_rank >= 0 else 0.0
 
+def _quality(ranges: list[tuple[str, float]], candidate: str) -> float:
+    """The q-value of ``candidate`` by its most specific matching range (0: none)."""
+    main = candidate.split("/")[0]
+    best, best_rank = 0.0, -1
+    for media, q in ranges:
+        rank = (
+            2 if media == candidate else 1 if media == f"{main}/*" else 0 if media == "*/*" else -1
+        )
+        if rank > best_rank:
+            best, best_rank = q, rank
+    return best if best_rank >= 0 else 0.0
+
+
+def negotiate(accept: str | None) -> Output:
+    """Pick the output for an ``Accept`` header (q-values honoured; none means JSON).
+
+    Raises
+    ------
+    NotAcceptableError
+        When no producible type has q > 0.
+    """
+    if not accept or not accept.strip():
+        return "json"
+    ranges = _ranges(accept)
     if not ranges:  # only commas and blanks: no preference stated, as without the header
         return "json"
-    scored = [(quality(m), -i, out) for i, (m, out) in enumerate(PRODUCES.items())]
+    scored = [(_quality(ranges, m), -i, out) for i, (m, out) in enumerate(PRODUCES.items())]
     q, _, out = max(scored)
     if q <= 0:
         raise NotAcceptableError(
@@ -72,12 +74,22 @@ def negotiate(accept: str | None) -> Output:
 
 
 def accept_ndjson(accept: str) -> None:
-    """Refuse an ``Accept`` header that admits neither NDJSON nor JSON.
+    """Refuse an ``Accept`` header that admits neither NDJSON nor JSON (q-values
+    honoured, media types matched whole).
 
     Raises
     ------
     NotAcceptableError
-        When the header is given and names none of them (nor ``*/*``).
+        When the header states a preference and gives both q = 0 or leaves them out.
+
+    Examples
+    --------
+    >>> accept_ndjson("application/x-ndjson, */*;q=0.1")
+    >>> accept_ndjson("text/application/x-ndjson")  # a substring is not a match
+    Traceback (most recent call last):
+    ...
+    service.errors.NotAcceptableError: cannot produce any of 'text/application/x-ndjson'; ...
     """
-    if accept.strip() and not any(m in accept for m in (NDJSON, "application/json", "*/*")):
+    ranges = _ranges(accept)
+    if ranges and max(_quality(ranges, m) for m in (NDJSON, "application/json")) <= 0:
         raise NotAcceptableError(f"cannot produce any of {accept!r}; available: {NDJSON}")

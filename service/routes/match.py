@@ -12,6 +12,7 @@ from service.builder import job_builder
 from service.errors import UnsupportedMediaTypeError
 from service.http.bodies import (
     JSON_TYPES,
+    check_polygon_body,
     content_type,
     parse_pair,
     read_form,
@@ -69,7 +70,15 @@ async def match(
         for png in pngs:
             check_png_size(png, settings.max_pixels)
     elif ctype in JSON_TYPES:
-        shapes = await validate_json(parse_pair, body)
+        shapes = await validate_json(
+            parse_pair,
+            body,
+            check_polygon_body(
+                settings.max_vertices,
+                None if settings.estimate_seconds is None else 2 * settings.estimate_seconds,
+                shapes=2,
+            ),
+        )
     else:
         raise UnsupportedMediaTypeError(
             f"Content-Type {ctype or 'none'!r} is not supported; send multipart/form-data "

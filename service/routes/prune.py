@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import json
 import logging
 from collections.abc import AsyncIterator, Callable
@@ -11,6 +12,7 @@ from fastapi import APIRouter, Depends, Request, Response
 from fastapi.responses import StreamingResponse
 
 from service import openapi
+from service.budget import check_polygon
 from service.builder import JobBuilder, job_builder
 from service.errors import InternalError, UnsupportedMediaTypeError, lookup, problem
 from service.examples import PRUNE_RESPONSES
@@ -18,8 +20,9 @@ from service.http.bodies import (
     BATCH_MAX_ITEMS,
     JSON_TYPES,
     batch_size,
+    check_polygon_body,
     content_type,
-    parse_json_list,
+    parse_batch,
     parse_polygon,
     polygon_item,
     read_form,
@@ -28,6 +31,7 @@ from service.http.bodies import (
 )
 from service.http.negotiation import NDJSON, accept_ndjson, negotiate
 from service.http.query import parse_query
+from service.http.scan import BatchItem
 from service.jobs import Job, run_job
 from service.pool import PoolError, WorkerPool
 from service.settings import Settings
@@ -80,7 +84,11 @@ async def prune(
         check_png_size(png, settings.max_pixels)  # refused before it is queued
         geojson = None
     elif ctype in JSON_TYPES:
-        envelope, geojson = await validate_json(parse_polygon, body)
+        envelope, geojson = await validate_json(
+            parse_polygon,
+            body,
+            check_polygon_body(settings.max_vertices, settings.estimate_seconds),
+        )
         png = None
     else:
         shown = ctype or "none"
@@ -107,21 +115,32 @@ def _item_problem(exc: Exception) -> dict[str, Any]:
 
 
 def _batch_item(
-    index: int, item: Any, build: JobBuilder, settings: Settings, png: bool
+    index: int, item: bytes | BatchItem, build: JobBuilder, settings: Settings
 ) -> Job | dict[str, Any]:
-    """The job of one shape, or its problem line."""
+    """The job of one shape (PNG bytes, or a JSON item measured and not yet decoded),
+    or its problem line."""
     try:
-        if png:
+        if isinstance(item, bytes):
             check_png_size(item, settings.max_pixels)
             return build.job(png=item)
-        return build.job(geojson=polygon_item(item))
+        counts = item.counts
+        check_polygon(
+            counts.parts, counts.positions, settings.max_vertices, settings.estimate_seconds
+        )
+        return build.job(geojson=polygon_item(item.decode()))
     except SkelpruneError as exc:
         return {"index": index, "problem": _item_problem(exc)}
-    except RecursionError:  # an item nested deeper than validation's stack
+    except RecursionError:  # an item nested deeper than the parser's or validation's stack
         return {
             "index": index,
             "problem": _item_problem(InvalidPolygonError("shape: nested too deep")),
         }
+
+
+def _batch_jobs(
+    items: list[bytes] | list[BatchItem], build: JobBuilder, settings: Settings
+) -> list[Job | dict[str, Any]]:
+    return [_batch_item(i, item, build, settings) for i, item in enumerate(items)]
 
 
 @router.post(
@@ -144,24 +163,27 @@ async def prune_batch(
     ctype = content_type(request)
     refuse_encoding(request)
     body = await request.body()  # size-limited by BodyLimitMiddleware
-    items: list[Any]
-    form_options = None
-    if ctype == "multipart/form-data":
+    png = ctype == "multipart/form-data"
+    items: list[bytes] | list[BatchItem]
+    if png:
         form = await read_form(request, max_files=BATCH_MAX_ITEMS + 1)
         items = list(form.files("file"))
-        form_options = form.options(files="file")
+        batch_size(items)
+        # the options are checked first, once: a bad option is the batch's problem
+        build = job_builder(
+            query, form.options(files="file"), settings, polygon=False, output="json"
+        )
+        jobs = _batch_jobs(items, build, settings)
     elif ctype in JSON_TYPES:
-        items = parse_json_list(body)
+        # split, measured and validated off the event loop, item by item
+        items = await asyncio.to_thread(parse_batch, body)
+        build = job_builder(query, None, settings, polygon=True, output="json")
+        jobs = await asyncio.to_thread(_batch_jobs, items, build, settings)
     else:
         raise UnsupportedMediaTypeError(
             f"Content-Type {ctype or 'none'!r} is not supported; send multipart/form-data "
             "(fields 'file') or application/json (a list of GeoJSON objects)"
         )
-    batch_size(items)
-    png = ctype == "multipart/form-data"
-    # the options are checked first, once: a bad option is the batch's problem
-    build = job_builder(query, form_options, settings, polygon=not png, output="json")
-    jobs = [_batch_item(i, item, build, settings, png) for i, item in enumerate(items)]
 
     async def lines() -> AsyncIterator[bytes]:
         for index, job in enumerate(jobs):

@@ -12,9 +12,9 @@ Choices made where the PNG format leaves room:
   to the tRNS colour key (whose alpha is then 0, and 1 elsewhere). An RGBA file whose
   alpha is 255 everywhere is therefore read by its grey values, like the RGB file it
   really is.
-- Values are taken exactly, before any rounding (16-bit samples keep 16 bits where
-  Pillow gives them): for ``nonzero``, a colour pixel belongs to the shape unless it is
-  pure black.
+- Values are taken exactly, before any rounding: 16-bit samples keep all 16 bits in
+  every colour type (grey, grey and alpha, RGB, RGBA, and a 16-bit tRNS key, compared
+  exactly): for ``nonzero``, a colour pixel belongs to the shape unless it is pure black.
 - The chunk structure (lengths, CRCs, a final IEND) is checked before Pillow decodes, and
   the image data must inflate to every scanline the header promises, so a truncated or
   corrupted file is refused instead of half-decoded.
@@ -111,6 +111,8 @@ def _check_chunks(data: bytes) -> None:
     """Walk the chunk list: every chunk complete, every CRC right, IEND present."""
     pos = 8
     n = len(data)
+    colour = data[25] if n > 25 else 0
+    palette = False
     while True:
         if pos + 8 > n:
             raise InvalidImageError(f"truncated PNG: file ends at byte {n} before the IEND chunk")
@@ -129,6 +131,10 @@ def _check_chunks(data: bytes) -> None:
             # Pillow would decode with the last IHDR, after the size was checked on the
             # first one: a second header could smuggle in any size.
             raise InvalidImageError(f"corrupt PNG: a second IHDR chunk at byte {pos}")
+        if ctype == b"PLTE":
+            palette = True
+        if ctype == b"IDAT" and colour == 3 and not palette:
+            raise InvalidImageError("corrupt PNG: a palette image without a PLTE chunk")
         if ctype == b"IEND":
             return
         pos = end
@@ -200,6 +206,8 @@ def _plain(exc: BaseException) -> str:
     text = str(exc)
     if "MAX_TEXT_CHUNK" in text:
         return "a text chunk is too large"
+    if "MAX_TEXT_MEMORY" in text:
+        return "the text chunks are too large in all"
     text = re.sub(r"<[^<>]* at 0x[0-9a-fA-F]+>", "the data", text)
     return re.sub(r"\b\w+(ImagePlugin|File)\.\w+", "a reader limit", text) or type(exc).__name__
 
@@ -231,7 +239,27 @@ def _is_key(arr: np.ndarray, key: object) -> np.ndarray:
     return arr == int(key)  # type: ignore[call-overload]
 
 
-def _image_values(im: Image.Image, bit_depth: int) -> tuple[np.ndarray, np.ndarray | None]:
+def _deep_values(data: bytes, colour: int) -> tuple[np.ndarray, np.ndarray | None]:
+    """Colour and alpha of a 16-bit colour or grey-and-alpha PNG, all 16 bits.
+
+    Pillow keeps only the high byte of these (a background of 256 and a shape of 511
+    would be one level); OpenCV's decoder keeps every bit, and turns a tRNS colour key
+    into an alpha channel by the exact 16-bit comparison.
+    """
+    import cv2
+
+    arr = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+    if arr is None or arr.dtype != np.uint16 or arr.ndim != 3:
+        raise InvalidImageError("cannot decode PNG: the 16-bit image data is not readable")
+    alpha = arr[..., 3] if arr.shape[2] == 4 else None
+    rgb = arr[..., 2::-1]  # OpenCV's BGR as RGB
+    colour_values = rgb[..., 0] if colour == 4 else rgb  # grey and alpha: one grey channel
+    if alpha is not None and not np.any(alpha == 0):
+        alpha = None  # opaque everywhere: read by its values
+    return np.ascontiguousarray(colour_values), alpha
+
+
+def _image_values(im: Image.Image) -> tuple[np.ndarray, np.ndarray | None]:
     """Grey or colour values, and the alpha channel if the image uses transparency."""
     mode = im.mode
     if mode == "P":
@@ -249,9 +277,6 @@ def _image_values(im: Image.Image, bit_depth: int) -> tuple[np.ndarray, np.ndarr
         return colour, (alpha if np.any(alpha == 0) else None)
     key = im.info.get("transparency")
     if key is not None and not isinstance(key, bytes):
-        if mode == "RGB" and bit_depth == 16:
-            # Pillow keeps the high byte of 16-bit colour samples, the key is 16-bit.
-            key = tuple(int(k) >> 8 for k in key)
         transparent = _is_key(arr, key)
         if transparent.any():
             return arr, (~transparent).astype(np.uint8)
@@ -344,7 +369,10 @@ def read_shape(
                 f"corrupt PNG: decoded size {im.size[0]}×{im.size[1]} differs from the "
                 f"IHDR size {width}×{height}"
             )
-        values, alpha = _image_values(im, depth)
+        if depth == 16 and colour in (2, 4, 6):  # Pillow would keep the high byte
+            values, alpha = _deep_values(data, colour)
+        else:
+            values, alpha = _image_values(im)
     mask, taken = select(values, foreground, alpha)
     return np.ascontiguousarray(mask, dtype=bool), taken
 

@@ -163,7 +163,10 @@ def test_worker_killed_from_outside_mid_job(real_server: Callable[..., Any]) -> 
 def test_time_limit_and_full_queue(real_server: Callable[..., Any]) -> None:
     # The long job runs for about 20 s on the reference machine: a time limit of 3 s
     # stops it whatever the machine, and leaves the 503 checks (milliseconds) ample time.
-    with real_server(workers="1", queue_size="0", job_timeout="3", retry_after="3") as (proc, base):
+    # The time screen is off: it would refuse the job at once, and this is the hard stop.
+    with real_server(
+        workers="1", queue_size="0", job_timeout="3", retry_after="3", time_estimate_scale="0"
+    ) as (proc, base):
         (first_worker,) = worker_pids(proc.pid)
         long_job = Call(base, LONG_JOB, {"content-type": "application/json"})
         # The only worker is busy and nothing may wait: readiness and new jobs say 503.

@@ -1,16 +1,21 @@
 """Hostile connections against the real server: header limits, read timeouts, dropped
-clients, unknown methods, no banner, and TCP_NODELAY on accepted sockets."""
+clients, unknown methods, no banner, TCP_NODELAY on accepted sockets, pipelined bad
+requests, upgrades, redirects and the size of the answer's headers."""
 
 from __future__ import annotations
 
 import asyncio
+import io
+import json
 import socket
 import time
 from collections.abc import Iterator
 from pathlib import Path
 
 import httpx
+import numpy as np
 import pytest
+from PIL import Image
 
 from service.__main__ import listen
 from testkit.realserver import running_server
@@ -156,3 +161,105 @@ def test_a_client_gone_mid_body_is_not_a_server_error(server: tuple[str, int, Pa
     assert after.get("4xx", 0) == before.get("4xx", 0) + 1, (before, after)
     assert after.get("5xx", 0) == 0
     assert '"level": "ERROR"' not in log.read_text()
+
+
+# ---------------------------------------------------------------- pipelining, upgrades
+def answers(raw: bytes) -> list[tuple[int, str, bytes]]:
+    """The HTTP/1.1 answers in ``raw``, in order: status, content type, body (each
+    answer has a Content-Length)."""
+    out = []
+    while raw:
+        head, _, rest = raw.partition(b"\r\n\r\n")
+        lines = head.decode("latin-1").split("\r\n")
+        fields = {k.strip().lower(): v.strip() for k, _, v in (h.partition(":") for h in lines[1:])}
+        length = int(fields.get("content-length", "0"))
+        out.append((int(lines[0].split()[1]), fields.get("content-type", ""), rest[:length]))
+        raw = rest[length:]
+    return out
+
+
+@pytest.mark.parametrize(
+    ("bad", "status"),
+    [
+        (b"NOT HTTP AT ALL\r\n\r\n", 400),
+        (b"GET /healthz HTTP/1.1\r\nHost: x\r\nX-Big: " + b"a" * 8000 + b"\r\n\r\n", 431),
+    ],
+)
+def test_a_pipelined_bad_request_is_answered_after_the_good_one(
+    server: tuple[str, int, Path], bad: bytes, status: int
+) -> None:
+    _, port, _ = server
+    good = b"GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n"
+    got = answers(exchange(port, good + bad))
+    assert [(s, t) for s, t, _ in got] == [(200, "application/json"), (status, PROBLEM)]
+    assert b'"status":"ok"' in got[0][2].replace(b" ", b"")
+
+
+def test_a_pipelined_prune_keeps_its_answer_and_nothing_is_logged_as_an_error(
+    server: tuple[str, int, Path],
+) -> None:
+    _, port, log = server
+    body = json.dumps(
+        {"type": "Polygon", "coordinates": [[[0, 0], [8, 0], [8, 8], [0, 8], [0, 0]]]}
+    ).encode()
+    good = (
+        b"POST /v1/prune HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+        b"Content-Length: %d\r\n\r\n" % len(body) + body
+    )
+    got = answers(exchange(port, good + b"GET /healthz HTTP/1.1\r\nHost: x\r\nBad header\r\n\r\n"))
+    assert [(s, t) for s, t, _ in got] == [(200, "application/json"), (400, PROBLEM)]
+    assert json.loads(got[0][2])["components"]
+    text = log.read_text()
+    for sign in ("RuntimeError", '"level": "ERROR"', "without completing response"):
+        assert sign not in text
+
+
+def test_a_websocket_upgrade_is_answered_as_http(server: tuple[str, int, Path]) -> None:
+    _, port, _ = server
+    upgrade = (
+        b"Host: x\r\nConnection: Upgrade\r\nUpgrade: websocket\r\n"
+        b"Sec-WebSocket-Version: 13\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n\r\n"
+    )
+    got = answers(exchange(port, b"GET /healthz HTTP/1.1\r\n" + upgrade))
+    assert got[0][:2] == (200, "application/json")
+    got = answers(exchange(port, b"GET /v1/socket HTTP/1.1\r\n" + upgrade))
+    assert got[0][:2] == (404, PROBLEM) and json.loads(got[0][2])["status"] == 404
+
+
+def test_a_trailing_slash_redirect_does_not_repeat_the_clients_host(
+    server: tuple[str, int, Path],
+) -> None:
+    base, _, _ = server
+    resp = httpx.get(f"{base}/healthz/?x=1", headers={"Host": "evil.example"})
+    assert resp.status_code == 307
+    assert resp.headers["location"] == "/healthz?x=1"
+
+
+def test_png_answer_headers_stay_within_a_proxys_buffer(server: tuple[str, int, Path]) -> None:
+    """841 components: their per-component values would be ~12 KB of headers, over the
+    4-KiB page nginx buffers an upstream's headers in by default (it answers 502)."""
+    base, _, _ = server
+    mask = np.zeros((60, 60), np.uint8)
+    mask[1:-1:2, 1:-1:2] = 255
+    buf = io.BytesIO()
+    Image.fromarray(mask).save(buf, "PNG")
+    params = {"foreground": "nonzero"}
+    png_headers = {"content-type": "image/png", "accept": "image/png"}
+    resp = httpx.post(
+        f"{base}/v1/prune", content=buf.getvalue(), params=params, headers=png_headers, timeout=60
+    )
+    assert resp.status_code == 200, resp.text
+    size = sum(len(k) + len(v) + 4 for k, v in resp.headers.raw)
+    assert size < 4096 - 512, resp.headers  # room for what a proxy adds
+    assert resp.headers["x-skelprune-components"] == "841"
+    assert "application/json" in resp.headers["x-skelprune-values"]
+    assert "x-skelprune-rer" not in resp.headers
+    few = np.zeros((24, 24), np.uint8)
+    few[4:20, 4:10] = few[4:20, 14:20] = 255
+    buf = io.BytesIO()
+    Image.fromarray(few).save(buf, "PNG")
+    resp = httpx.post(
+        f"{base}/v1/prune", content=buf.getvalue(), params=params, headers=png_headers, timeout=60
+    )
+    assert len(resp.headers["x-skelprune-rer"].split(",")) == 2
+    assert "x-skelprune-values" not in resp.headers

@@ -13,6 +13,7 @@ import pytest
 
 from service.pool import (
     JobFailedError,
+    JobOverMemoryError,
     JobTimeoutError,
     PoolClosedError,
     QueueFullError,
@@ -226,3 +227,66 @@ def test_spawn_context_works_too() -> None:
         assert await pool.run(add, 2, 2) == 4
 
     run(body, context="spawn")
+
+
+# -- memory: the worker's resident set, not its address space ---------------------------
+_KEPT: list[Any] = []
+
+
+def touch(mib: int) -> int:
+    """Allocate and touch ``mib`` MiB, free it; the worker's pid."""
+    block = bytearray(mib * 2**20)
+    block[::4096] = b"\x01" * len(block[::4096])
+    del block
+    return os.getpid()
+
+
+def keep(mib: int) -> int:
+    """Allocate, touch and keep ``mib`` MiB (a job that leaves memory behind)."""
+    block = bytearray(mib * 2**20)
+    block[::4096] = b"\x01" * len(block[::4096])
+    _KEPT.append(block)
+    return os.getpid()
+
+
+def reserve(gib: int) -> int:
+    """Reserve ``gib`` GiB of address space without touching it (what allocators and
+    thread arenas do): it is not memory the job uses."""
+    import mmap
+
+    _KEPT.append(mmap.mmap(-1, gib * 2**30, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS))
+    return os.getpid()
+
+
+def test_a_worker_over_its_memory_limit_is_stopped_and_replaced() -> None:
+    async def body(pool: WorkerPool) -> None:
+        first = await pool.run(touch, 16)  # well under the limit: answered, same worker
+        assert await pool.run(touch, 16) == first and pool.restarts == 0
+        with pytest.raises(JobOverMemoryError, match="memory budget of 400 MiB"):
+            await pool.run(touch, 1024)
+        assert pool.restarts == 1
+        assert await pool.run(add, 2, 2) == 4  # the replacement serves at once
+        assert pool.alive() == 1
+
+    run(body, memory_limit=400 * 2**20)
+
+
+def test_virtual_memory_is_not_what_a_job_is_refused_for() -> None:
+    async def body(pool: WorkerPool) -> None:
+        first = await pool.run(reserve, 8)  # 8 GiB reserved, nothing touched
+        assert await pool.run(touch, 64) == first  # the same worker serves on
+        assert pool.restarts == 0
+
+    run(body, memory_limit=400 * 2**20)
+
+
+def test_a_worker_whose_memory_did_not_come_back_is_recycled() -> None:
+    async def body(pool: WorkerPool) -> None:
+        first = await pool.run(keep, 8)  # within the slack: kept
+        assert await pool.run(add, 1, 1) == 2 and pool.recycled == 0
+        assert await pool.run(keep, 96) == first  # answered, then the worker is replaced
+        assert pool.recycled == 1 and pool.restarts == 1
+        assert await pool.run(pid_after, 0) != first
+        assert pool.alive() == 1
+
+    run(body, memory_limit=600 * 2**20, recycle_slack=64 * 2**20)

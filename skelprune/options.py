@@ -33,6 +33,7 @@ __all__ = [
     "GROUPS",
     "LONGEST_SIDE_RANGE",
     "MAX_BETA",
+    "MAX_CLEAN_AREA",
     "METHODS",
     "OutputOptions",
     "PruneOptions",
@@ -62,6 +63,8 @@ DEFAULT_DCE_THRESHOLD = 0.01
 ARRAY_FOREGROUND = "nonzero"
 #: How the answer is chosen from the sequence (:mod:`skelprune.pruning.floor`).
 CHOICES = ("argmin", "noise-floor")
+#: The largest area (pixels) ``fill_holes`` and ``min_area`` take: a 2¹⁶ × 2¹⁶ image.
+MAX_CLEAN_AREA = 1 << 32
 #: Pixels across the longer side of a polygon's bounding box at the least (a polygon's
 #: narrow parts may ask for more) ...
 DEFAULT_LONGEST_SIDE = 512
@@ -175,6 +178,25 @@ class ReadOptions:
         "or zero.",
         _choice(FOREGROUND_RULES),
         FOREGROUND_RULES,
+    )
+    # label images and cleaning (docs/graph.md#label-images, #cleaning)
+    labels: bool = _option(
+        False,
+        "Label image: every distinct non-zero value of an integer image is its own shape, "
+        "pruned on its own even where two labels touch; each component carries its label.",
+        _flag,
+    )
+    fill_holes: int = _option(
+        0,
+        "Fill the shape's holes of fewer pixels than this, a whole number from 0 to "
+        f"{MAX_CLEAN_AREA} (default 0: every hole kept).",
+        _integer(0, MAX_CLEAN_AREA),
+    )
+    min_area: int = _option(
+        0,
+        "Drop the components of fewer pixels than this, a whole number from 0 to "
+        f"{MAX_CLEAN_AREA} (default 0: every component kept).",
+        _integer(0, MAX_CLEAN_AREA),
     )
 
     def __post_init__(self) -> None:
@@ -334,7 +356,8 @@ class RasterOptions:
     pixel_size: float | None = _option(
         None,
         "Raster pixel size in the polygon's units, > 0 (default: fitted to the polygon, "
-        "see pixels_per_width).",
+        "see pixels_per_width). For an image: the side of a pixel in your units, which "
+        "the tables (summary, CSV) measure in (default: pixels).",
         _number(0, strict=True),
     )
     longest_side: int | None = _option(

@@ -69,6 +69,8 @@ class ComponentResult:
     ma_rer: float
     margins: Margins = field(default_factory=Margins)
     trim: Trim | None = None
+    #: The component's label in a label image (None otherwise).
+    label: int | None = None
 
     # the answer's parts, as the reporting below reads them
     @property
@@ -160,7 +162,8 @@ class ComponentResult:
         ma = self.axis_summary
         seq = self.sequence
         chosen = self.chosen_point()
-        doc: ComponentDoc = {
+        doc: ComponentDoc = {  # type: ignore[typeddict-item]
+            **({} if self.label is None else {"label": self.label}),
             "area": self.area,
             "alpha": None if self.alpha is None else float(self.alpha),
             "rer": chosen[1],
@@ -353,6 +356,8 @@ class PruneResult:
         if self.raster is not None:
             doc["raster"] = self.raster.to_dict()
             doc["warnings"] = self.warnings
+        if self.input.hint is not None:
+            doc["hint"] = self.input.hint
         if overlay:
             doc["overlay_png"] = base64.b64encode(self.overlay_png()).decode("ascii")
         return doc

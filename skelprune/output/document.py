@@ -423,7 +423,7 @@ class PruneResult:
             "simplify": simplify,
             "cut_ends": cut_ends,
         }
-        return skeleton_geojson(  # type: ignore[return-value]
+        collection = skeleton_geojson(
             [c.table for c in self.components],
             summaries,
             self.mask,
@@ -433,6 +433,9 @@ class PruneResult:
             cut_ends,
             self.raster,
         )
+        from .summary import geojson_numbers
+
+        return geojson_numbers(self, collection)  # type: ignore[return-value]
 
     def to_networkx(self, frame: PixelFrame | None = None) -> Any:
         """The skeleton as a ``networkx.MultiGraph`` (needs the optional ``networkx``).
@@ -451,7 +454,47 @@ class PruneResult:
         (6, 5, [1, 1, 1, 1, 3, 3])
         """
         frame = self.frame if frame is None else frame
-        return to_networkx([c.table.framed(frame) for c in self.components])
+        labels = [c.label for c in self.components]
+        return to_networkx([c.table.framed(frame) for c in self.components], labels)
+
+    def summary(self, level: str = "branch") -> Any:
+        """The table people measure (docs/tables.md): one row per branch (``level=
+        "branch"``) or per component (``"component"``), in the result's unit (pixels, the
+        polygon's units or a given ``pixel_size``; the ``unit`` column says which). A
+        pandas DataFrame when pandas is installed, else a list of row dicts.
+
+        Examples
+        --------
+        >>> import skelprune
+        >>> m = np.zeros((20, 60), bool); m[5:15, 5:55] = True
+        >>> rows = skelprune.prune(m).summary("component")
+        >>> int(rows["branches"][0]), int(rows["ends"][0]), rows["unit"][0]
+        (5, 4, 'px')
+        """
+        from .summary import table
+
+        return table(self, level)
+
+    def to_csv(self, level: str = "branch") -> str:
+        """:meth:`summary` as CSV text (empty cells for null; no pandas needed)."""
+        from .summary import table_csv
+
+        return table_csv(self, level)
+
+    def to_graphml(self) -> str:
+        """The skeleton as GraphML text: nodes with their position, radius, kind and
+        label; one edge per branch with the branch table's numbers."""
+        from .summary import graphml
+
+        return graphml(self)
+
+    def skeleton_mask(self) -> np.ndarray:
+        """The pruned skeleton as an image of the input's size: boolean, or the labels
+        on the skeleton's pixels for a label image. ``skan.Skeleton(result.skeleton_mask())``
+        hands it to skan."""
+        from .summary import skeleton_mask
+
+        return skeleton_mask(self)
 
     def render_overlay(self, scale: int = 1, legend: bool = False) -> np.ndarray:
         """RGB overlay (:func:`~skelprune.output.render.render_overlay`), ``scale`` times

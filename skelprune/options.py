@@ -35,6 +35,7 @@ __all__ = [
     "MAX_BETA",
     "MAX_CLEAN_AREA",
     "METHODS",
+    "TABLES",
     "OutputOptions",
     "PruneOptions",
     "RasterOptions",
@@ -61,6 +62,8 @@ DEFAULT_DCE_THRESHOLD = 0.01
 #: The foreground rule of an array given without one: an array is a mask, its non-zero
 #: pixels the shape (an image file's default is ``auto``, :class:`ReadOptions`).
 ARRAY_FOREGROUND = "nonzero"
+#: The tables of :meth:`PruneResult.summary` (docs/tables.md).
+TABLES = ("branch", "component")
 #: How the answer is chosen from the sequence (:mod:`skelprune.pruning.floor`).
 CHOICES = ("argmin", "noise-floor")
 #: The largest area (pixels) ``fill_holes`` and ``min_area`` take: a 2¹⁶ × 2¹⁶ image.
@@ -333,6 +336,12 @@ class OutputOptions:
         "in a fork to its two corners (the JSON document keeps the fork).",
         _flag,
     )
+    table: str = _option(
+        "branch",
+        "CSV answer: the table, one row per branch (branch) or per component (component).",
+        _choice(TABLES),
+        TABLES,
+    )
 
     def __post_init__(self) -> None:
         _check_fields(self)
@@ -462,8 +471,9 @@ def option_fields(*groups: type) -> list[tuple[str, Any, str, tuple[str, ...] | 
     """``(name, default, help, choices)`` of every option of the given classes, in order:
     what the CLI and the service describe their options from.
 
-    >>> [name for name, *_ in option_fields(OutputOptions)]
-    ['curve', 'overlay', 'sequence', 'overlay_scale', 'overlay_legend', 'simplify', 'cut_ends']
+    >>> [name for name, *_ in option_fields(OutputOptions)]  # doctest: +NORMALIZE_WHITESPACE
+    ['curve', 'overlay', 'sequence', 'overlay_scale', 'overlay_legend', 'simplify',
+     'cut_ends', 'table']
     """
     return [
         (f.name, f.default, f.metadata["help"], f.metadata["choices"])

@@ -177,7 +177,9 @@ def label_values(values: np.ndarray, alpha: np.ndarray | None = None) -> np.ndar
         )
     if v.dtype.kind == "f":
         if not np.all(np.isfinite(v)) or np.any(v != np.round(v)) or np.any(v < 0):
-            raise InvalidImageError("labels needs whole, non-negative values; this image has others")
+            raise InvalidImageError(
+                "labels needs whole, non-negative values; this image has others"
+            )
         if v.size and float(v.max()) >= 2**63:
             raise InvalidImageError("labels needs values below 2**63")
     elif v.dtype.kind == "i" and v.size and int(v.min()) < 0:

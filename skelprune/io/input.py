@@ -31,6 +31,7 @@ __all__ = [
     "MASK_FOREGROUND",
     "Input",
     "Kind",
+    "check_image_size",
     "read_input",
 ]
 
@@ -192,8 +193,8 @@ def read_input(
     source : array, bytes, str, os.PathLike, GeoJSON mapping, shapely geometry or Input
         An image array (``(H, W)``, or ``(H, W, C)`` with ``C`` in 1–4, 2 and 4 with
         alpha last), PNG bytes, a file's path (``.geojson`` and ``.json``: a GeoJSON
-        polygon; anything else: a PNG or TIFF image, told by its first bytes), GeoJSON as a mapping or as text, or any object
-        with ``__geo_interface__`` (a shapely (Multi)Polygon). GeoJSON is a ``Polygon``,
+        polygon; anything else: a PNG or TIFF image, told by its first bytes), GeoJSON
+        as a mapping or as text, or any object with ``__geo_interface__`` (a shapely (Multi)Polygon). GeoJSON is a ``Polygon``,
         ``MultiPolygon``, ``Feature`` or ``FeatureCollection``. An :class:`Input` is
         returned as it is.
     read : ReadOptions, optional
@@ -249,7 +250,9 @@ def read_input(
         raise ValueError(f"kind must be 'image' or 'geojson', got {kind!r}")
     if not isinstance(source, data):
         # never open a file by a name that came as data
-        raise InvalidImageError("image input must be PNG or TIFF bytes or an array, not a file name")
+        raise InvalidImageError(
+            "image input must be PNG or TIFF bytes or an array, not a file name"
+        )
     if read is None:
         read = ReadOptions(ARRAY_FOREGROUND) if isinstance(source, np.ndarray) else ReadOptions()
     values, alpha = _image_values(source, max_pixels)
@@ -308,6 +311,24 @@ def _format(data: bytes) -> str:
         f"unsupported file: {what or 'not an image format skelprune reads'}; skelprune reads "
         f"{' and '.join(IMAGE_FORMATS)} images and GeoJSON polygons (.geojson, .json)"
     )
+
+
+def check_image_size(data: bytes, max_pixels: int | None) -> tuple[int, int]:
+    """A PNG's or TIFF's ``(width, height)`` from its header; refuses more than
+    ``max_pixels`` pixels, and a file of another format, before anything is decoded."""
+    data = bytes(data)
+    if _format(data[:64]) == "PNG":
+        from .png import check_png_size
+
+        return check_png_size(data, max_pixels)
+    from .tiff import tiff_size
+
+    width, height = tiff_size(data)
+    if max_pixels is not None and width * height > max_pixels:
+        raise ImageTooLargeError(
+            f"image has {width * height} pixels ({width}×{height}), the limit is {max_pixels}"
+        )
+    return width, height
 
 
 def _image_values(source: Any, max_pixels: int | None) -> tuple[np.ndarray, np.ndarray | None]:

@@ -466,7 +466,7 @@ class PruneResult:
         Examples
         --------
         >>> import skelprune
-        >>> m = np.zeros((20, 60), bool); m[5:15, 5:55] = True
+        >>> m = np.zeros((40, 60), bool); m[5:35, 5:55] = True
         >>> rows = skelprune.prune(m).summary("component")
         >>> int(rows["branches"][0]), int(rows["ends"][0]), rows["unit"][0]
         (5, 4, 'px')

@@ -214,7 +214,6 @@ def _component_branches(
     rows = []
     strahler = _strahler(t)
     kinds = t.node_kind
-    node_xy = np.column_stack([t.x[t.node_point], t.y[t.node_point]])
     node_r = t.radius[t.node_point]
     paths: list[np.ndarray] = []
     angles: list[tuple[float, float]] = []

@@ -23,7 +23,8 @@ def touching_labels(seed: int = 3, size: int = 160, n: int = 9) -> np.ndarray:
     d = np.stack([np.hypot(yy - y, xx - x) for y, x in seeds])
     lab = (np.argmin(d, axis=0) + 1) * 700  # 16-bit values, far apart
     lab[np.min(d, axis=0) > 30] = 0
-    lab[:, size // 2 : size // 2 + 3][lab[:, size // 2 : size // 2 + 3] == lab[size // 2, size // 2]] = 0
+    cut = lab[:, size // 2 : size // 2 + 3]  # a view: one label cut in two pieces
+    cut[cut == lab[size // 2, size // 2]] = 0
     lab[blobs(5, size, 2) & (lab == 0)] = 65000  # a label of irregular shape
     return lab.astype(np.uint16)
 

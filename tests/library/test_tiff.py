@@ -116,7 +116,7 @@ def test_short_and_truncated_strips_are_refused():
     whole = tiff(np.zeros((100, 100), np.uint8))
     page = tifffile.TiffFile(io.BytesIO(whole)).pages[0]
     cut = whole[: page.dataoffsets[0] + 50]
-    with pytest.raises(InvalidImageError, match="truncated TIFF|cannot read TIFF|corrupt TIFF"):
+    with pytest.raises(InvalidImageError, match=r"truncated TIFF|cannot read TIFF|corrupt TIFF"):
         read_tiff(cut)
 
 

@@ -194,9 +194,9 @@ def read_input(
         An image array (``(H, W)``, or ``(H, W, C)`` with ``C`` in 1–4, 2 and 4 with
         alpha last), PNG bytes, a file's path (``.geojson`` and ``.json``: a GeoJSON
         polygon; anything else: a PNG or TIFF image, told by its first bytes), GeoJSON
-        as a mapping or as text, or any object with ``__geo_interface__`` (a shapely (Multi)Polygon). GeoJSON is a ``Polygon``,
-        ``MultiPolygon``, ``Feature`` or ``FeatureCollection``. An :class:`Input` is
-        returned as it is.
+        as a mapping or as text, or any object with ``__geo_interface__`` (a shapely
+        (Multi)Polygon). GeoJSON is a ``Polygon``, ``MultiPolygon``, ``Feature`` or
+        ``FeatureCollection``. An :class:`Input` is returned as it is.
     read : ReadOptions, optional
         Image input: which pixels are the shape. Default: the ``auto`` rule for a PNG,
         the non-zero pixels of an array (an array is a mask).

@@ -232,8 +232,7 @@ def read_tiff(data: bytes, *, max_pixels: int | None = None) -> np.ndarray:
             )
         if got < least[i]:
             raise InvalidImageError(
-                f"truncated TIFF: strip {i} holds {got} of the {least[i]} bytes its header "
-                "promises"
+                f"truncated TIFF: strip {i} holds {got} of the {least[i]} bytes its header promises"
             )
     try:
         values = page.asarray()

@@ -393,8 +393,7 @@ def graphml(result: PruneResult) -> str:
 
     def data(scope: str, values: dict[str, Any]) -> str:
         return "".join(
-            f'<data key="{scope}_{k}">{v if not isinstance(v, str) else quoteattr(v)[1:-1]}'
-            "</data>"
+            f'<data key="{scope}_{k}">{v if not isinstance(v, str) else quoteattr(v)[1:-1]}</data>'
             for k, v in values.items()
             if v is not None
         )

@@ -266,25 +266,16 @@ def clean_labels(labels: np.ndarray, fill_holes: int = 0, min_area: int = 0) -> 
             if around.size == 1 and around[0] != 0:
                 out[box][hole] = around[0]
     if min_area > 1:
+        from .input import label_boxes
+
         eight = np.ones((3, 3), bool)
-        values = np.unique(out)
-        boxes = ndimage.find_objects(_dense(out, values))
-        for v, box in zip(values[values != 0].tolist(), boxes, strict=True):
+        for v, box in label_boxes(out):
             own = out[box] == v
             lab, n = ndimage.label(own, structure=eight)
             sizes = np.bincount(lab.ravel(), minlength=n + 1)
             drop = own & (sizes < min_area)[lab]
             out[box][drop] = 0
     return out
-
-
-def _dense(labels: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """Labels renumbered 1..n in the order of ``values`` (sorted, 0 first if present),
-    as ``find_objects`` wants them (its work is the image, not the largest value)."""
-    dense = np.searchsorted(values, labels)
-    if values.size and values[0] != 0:
-        dense += 1
-    return dense.astype(np.int32 if values.size < 2**31 else np.int64)
 
 
 #: A grey level counts as a region of its own once it fills a 3 × 3 block this often.

@@ -435,7 +435,9 @@ class PruneResult:
         )
         from .summary import geojson_numbers
 
-        return geojson_numbers(self, collection)  # type: ignore[return-value]
+        return geojson_numbers(  # type: ignore[return-value]
+            self, collection, self.frame if frame is None else frame
+        )
 
     def to_networkx(self, frame: PixelFrame | None = None) -> Any:
         """The skeleton as a ``networkx.MultiGraph`` (needs the optional ``networkx``).
@@ -514,13 +516,17 @@ class PruneResult:
             at = np.column_stack([t.y[t.node_point], t.x[t.node_point]]).astype(int)
             for kind, code in (("endpoint", 0), ("junction", 1)):
                 marks[kind].append(at[t.node_kind == code])
-        text = None
-        if legend:
-            text = "   ".join(
-                (f"component {i}: " if len(self.components) > 1 else "")
+        text: list[str] | None = None
+        if legend:  # wrapped to the image's width by the renderer
+            text = [
+                (
+                    f"label {c.label}: "
+                    if c.label is not None
+                    else (f"component {i}: " if len(self.components) > 1 else "")
+                )
                 + f"RER {100 * c.rer:.2f} %, SS {c.ss:.3f}"
-                for i, c in enumerate(self.components[:4])
-            )
+                for i, c in enumerate(self.components)
+            ]
         return render_overlay(
             self.mask,
             rows,
@@ -530,6 +536,7 @@ class PruneResult:
             np.concatenate([np.zeros((0, 2), int), *marks["junction"]]),
             scale=scale,
             legend=text,
+            labels=self.input.labels,
         )
 
     def overlay_png(self, scale: int | None = None, legend: bool | None = None) -> bytes:

@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..io.frame import IDENTITY, PixelFrame
 from .table import BranchTable
 
 if TYPE_CHECKING:
@@ -95,12 +96,15 @@ _ENDPOINT, _JUNCTION, _LOOP = 0, 1, 2
 
 
 def unit_of(result: PruneResult) -> tuple[float, str]:
-    """Pixels per unit of the tables, and the unit's name: ``px`` (an image's pixels),
-    ``polygon`` (the polygon's units) or ``pixel_size`` (units of a given pixel size)."""
+    """The size of a pixel in the tables' unit, and the unit's name: ``px`` (an image's
+    pixels), ``polygon`` (the polygon's units), ``pixel_size`` (the units of a pixel size
+    given for an image) or ``frame`` (the units of an input's own frame)."""
     if result.raster is not None:
         return result.frame.pixel_size, "polygon"
     if result.input.pixel_size is not None:
         return result.input.pixel_size, "pixel_size"
+    if result.frame != IDENTITY:
+        return result.frame.pixel_size, "frame"
     return 1.0, "px"
 
 
@@ -287,9 +291,13 @@ def _component_branches(
     return rows
 
 
-def branch_rows(result: PruneResult) -> list[dict[str, Any]]:
-    """One row per branch of every component (:data:`BRANCH_COLUMNS`)."""
-    scale, unit = unit_of(result)
+def branch_rows(
+    result: PruneResult, scale: float | None = None, unit: str | None = None
+) -> list[dict[str, Any]]:
+    """One row per branch of every component (:data:`BRANCH_COLUMNS`), in the result's
+    unit (:func:`unit_of`) unless a pixel's size ``scale`` and its ``unit`` are given."""
+    if scale is None or unit is None:
+        scale, unit = unit_of(result)
     out: list[dict[str, Any]] = []
     for ci, c in enumerate(result.components):
         t = c.table
@@ -435,10 +443,13 @@ GEOJSON_NUMBERS = (
 )
 
 
-def geojson_numbers(result: PruneResult, collection: dict[str, Any]) -> dict[str, Any]:
+def geojson_numbers(
+    result: PruneResult, collection: dict[str, Any], frame: PixelFrame
+) -> dict[str, Any]:
     """The skeleton's GeoJSON with each line's branch-table numbers (and, for a label
-    image, every feature's ``label``) added to its properties."""
-    rows = {(r["component"], r["branch"]): r for r in branch_rows(result)}
+    image, every feature's ``label``) added to its properties, in the units of the
+    GeoJSON's ``frame``."""
+    rows = {(r["component"], r["branch"]): r for r in branch_rows(result, frame.pixel_size, "")}
     for feature in collection["features"]:
         props = feature["properties"]
         label = result.components[props["component"]].label

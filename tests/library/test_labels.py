@@ -131,3 +131,31 @@ def test_cleaning_label_images_label_by_label():
     assert [c.label for c in res.components] == [1, 2]
     assert res.components[0].area == 30 * 34
     assert res.input.labels[15, 15] == 1 and res.input.labels[20, 39] == 0
+
+
+def test_overlay_legend_fits_and_shades_each_label():
+    from PIL import ImageDraw, ImageFont
+
+    from skelprune.output.render import LEGEND_LINES, _wrap
+
+    items = [f"label {i}: RER 1.00 %, SS 1.000" for i in range(40)]
+    font = ImageFont.load_default(size=14)
+    draw = ImageDraw.Draw(__import__("PIL.Image").Image.new("RGB", (1, 1)))
+
+    def fits(text):
+        return draw.textlength(text, font=font) <= 300
+
+    lines = _wrap(items, fits)
+    assert len(lines) == LEGEND_LINES and all(fits(line) for line in lines)
+    shown = sum(line.count("label ") for line in lines)
+    assert lines[-1].endswith(f"… and {40 - shown} more")
+    lab = touching_labels(3)
+    res = skelprune.prune(lab, labels=True)
+    plain = res.render_overlay()
+    with_legend = res.render_overlay(legend=True)
+    assert with_legend.shape[1] == plain.shape[1] and with_legend.shape[0] > plain.shape[0]
+    # each label's reconstructed part in its shade: touching labels differ
+    a, b = (int(v) for v in np.unique(lab)[1:3])
+    colour_a = {tuple(p) for p in plain[(lab == a) & res.mask].reshape(-1, 3)}
+    colour_b = {tuple(p) for p in plain[(lab == b) & res.mask].reshape(-1, 3)}
+    assert colour_a != colour_b

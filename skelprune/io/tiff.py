@@ -7,7 +7,7 @@ horizontal predictor. Values are taken as stored, as ``tifffile`` reads them (a 
 image's set bits are 1, whatever its photometric interpretation; a palette image gives
 its indices).
 
-Before anything is decoded (docs/hostile-input.md):
+Before anything is decoded (docs/tables.md#tiff):
 
 - the file must hold exactly one image: a multi-page or 3-D TIFF is refused, naming its
   page count;

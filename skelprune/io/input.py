@@ -327,8 +327,10 @@ def _format(data: bytes) -> str:
     what = next((name for sig, name in known.items() if data.startswith(sig)), None)
     if what is None and data[4:8] == b"ftyp":
         what = "an HEIF/MP4 file"
+    if what is None:
+        what = "empty" if not data else "a format not recognised"
     raise InvalidImageError(
-        f"unsupported file: {what or 'not an image format skelprune reads'}; skelprune reads "
+        f"not a PNG or TIFF file: neither signature ({what}); skelprune reads "
         f"{' and '.join(IMAGE_FORMATS)} images and GeoJSON polygons (.geojson, .json)"
     )
 

@@ -19,8 +19,8 @@ Before anything is decoded (docs/tables.md#tiff):
   its share (a compression bomb) is refused as soon as it passes it, without holding more
   than that share (413).
 
-Codecs: Deflate uses the standard library's ``zlib``, PackBits a small compiled decoder
-of its own; LZW needs ``imagecodecs`` (imported for LZW files only).
+Codecs: Deflate uses the standard library's ``zlib``; LZW and PackBits need
+``imagecodecs`` (imported for those files only), its output bounded by the header.
 """
 
 from __future__ import annotations
@@ -29,7 +29,6 @@ import io
 import zlib
 from typing import Any
 
-import numba
 import numpy as np
 
 from ..errors import ImageTooLargeError, InvalidImageError
@@ -116,22 +115,6 @@ def _segments(page: Any) -> tuple[int, list[int], int]:
     return rows * row_bytes, least, strips * planes
 
 
-@numba.njit(cache=True)
-def _packbits_length(src: np.ndarray, limit: int) -> int:  # pragma: no cover - compiled
-    """Bytes a PackBits stream decodes to, counted up to ``limit + 1`` (then it stops)."""
-    i, n, out = 0, src.size, 0
-    while i < n and out <= limit:
-        h = src[i]
-        i += 1
-        if h < 128:  # h + 1 literal bytes
-            out += h + 1
-            i += h + 1
-        elif h > 128:  # the next byte 257 - h times
-            out += 257 - h
-            i += 1
-    return out
-
-
 def _decoded_length(codec: int, raw: bytes, limit: int) -> int:
     """Bytes a segment decodes to, counted up to ``limit + 1`` at most."""
     if codec == 1:
@@ -143,16 +126,21 @@ def _decoded_length(codec: int, raw: bytes, limit: int) -> int:
         except zlib.error:
             raise InvalidImageError("cannot decode TIFF: the Deflate data is corrupt") from None
         return got
-    if codec == 32773:
-        return int(_packbits_length(np.frombuffer(raw, np.uint8), limit))
     try:
         import imagecodecs
     except ImportError:  # pragma: no cover - a dependency; kept for a trimmed install
-        raise InvalidImageError("LZW TIFFs need imagecodecs: pip install imagecodecs") from None
+        raise InvalidImageError(
+            f"{COMPRESSIONS[codec]} TIFFs need imagecodecs: pip install imagecodecs"
+        ) from None
+    decode = imagecodecs.packbits_decode if codec == 32773 else imagecodecs.lzw_decode
     try:
-        return len(imagecodecs.lzw_decode(raw, out=limit + 1))
-    except Exception:
-        raise InvalidImageError("cannot decode TIFF: the LZW data is corrupt") from None
+        return len(decode(raw, out=limit + 1))  # never more than limit + 1 bytes
+    except Exception as exc:
+        if "OUTPUT_TOO_SMALL" in str(exc):  # the decoder stopped at limit + 1
+            return limit + 1
+        raise InvalidImageError(
+            f"cannot decode TIFF: the {COMPRESSIONS[codec]} data is corrupt"
+        ) from None
 
 
 def read_tiff(data: bytes, *, max_pixels: int | None = None) -> np.ndarray:

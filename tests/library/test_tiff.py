@@ -85,34 +85,45 @@ def test_size_is_checked_from_the_header_before_decoding():
         read_tiff(data, max_pixels=100_000)
 
 
-def deflate_bomb(width: int, height: int, real_rows: int) -> bytes:
-    """A TIFF whose header promises ``width × height`` bytes in one Deflate strip that
-    inflates to ``real_rows`` rows of it."""
-    good = tiff(np.zeros((height, width), np.uint8), compression="zlib", rowsperstrip=height)
+def forged(width: int, height: int, real_rows: int, compression: str = "zlib") -> bytes:
+    """A TIFF whose header promises ``width × height`` bytes in one strip that decodes to
+    ``real_rows`` rows of it (more: a compression bomb; fewer: a short strip)."""
+    import imagecodecs
+
+    encode = {
+        "zlib": lambda b: zlib.compress(b, 9),
+        "lzw": imagecodecs.lzw_encode,
+        "packbits": imagecodecs.packbits_encode,
+    }[compression]
+    good = tiff(np.zeros((height, width), np.uint8), compression=compression, rowsperstrip=height)
     page = tifffile.TiffFile(io.BytesIO(good)).pages[0]
     (offset,), (count,) = page.dataoffsets, page.databytecounts
-    body = zlib.compress(bytes(width * real_rows), 9)
+    body = encode(bytes(width * real_rows))
     out = bytearray(good[:offset]) + body + good[offset + count :]
-    # patch the strip's byte count (tag 279) in the IFD
-    tag = page.tags[279]
-    fmt = "<I" if tag.dtype == 4 else "<H"
-    struct.pack_into(fmt, out, tag.valueoffset, len(body))
-    if len(body) != count:  # a shorter body moves what followed: keep the file whole
-        pass
+    tag = page.tags[279]  # the strip's byte count, in the IFD (before the data)
+    struct.pack_into("<I" if tag.dtype == 4 else "<H", out, tag.valueoffset, len(body))
     return bytes(out)
 
 
-def test_compression_bomb_is_refused():
-    data = deflate_bomb(100, 100, real_rows=5000)  # 500 kB inflated for a 10 kB image
-    assert len(data) < 5000
+def deflate_bomb(width: int, height: int, real_rows: int) -> bytes:
+    return forged(width, height, real_rows, "zlib")
+
+
+@pytest.mark.parametrize("compression", ["zlib", "lzw", "packbits"])
+def test_compression_bomb_is_refused(compression):
+    data = forged(100, 100, 5000, compression)  # 500 kB decoded for a 10 kB image
+    assert len(data) < 12_000
     with pytest.raises(ImageTooLargeError, match="compression bomb"):
         read_tiff(data)
 
 
-def test_short_and_truncated_strips_are_refused():
-    data = deflate_bomb(100, 100, real_rows=40)
+@pytest.mark.parametrize("compression", ["zlib", "lzw", "packbits"])
+def test_short_strips_are_refused(compression):
     with pytest.raises(InvalidImageError, match="truncated TIFF: strip 0 holds 4000 of"):
-        read_tiff(data)
+        read_tiff(forged(100, 100, 40, compression))
+
+
+def test_truncated_files_are_refused():
     whole = tiff(np.zeros((100, 100), np.uint8))
     page = tifffile.TiffFile(io.BytesIO(whole)).pages[0]
     cut = whole[: page.dataoffsets[0] + 50]
@@ -138,3 +149,13 @@ def test_unsupported_files_are_named_with_the_formats_read(head, named):
     with pytest.raises(InvalidImageError, match=named) as err:
         skelprune.prune(head)
     assert "PNG and TIFF" in str(err.value) and "GeoJSON" in str(err.value)
+
+
+@pytest.mark.parametrize("compression", ["lzw", "packbits", "zlib"])
+def test_corrupt_compressed_data_is_a_clear_error(compression):
+    data = bytearray(forged(64, 64, 64, compression))
+    page = tifffile.TiffFile(io.BytesIO(bytes(data))).pages[0]
+    at = page.dataoffsets[0]
+    data[at : at + 8] = b"\xff\x00\xff\x00\xff\x00\xff\x00"  # the stream's start broken
+    with pytest.raises((InvalidImageError, ImageTooLargeError), match="TIFF"):
+        read_tiff(bytes(data))

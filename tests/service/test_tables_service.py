@@ -156,3 +156,29 @@ def test_hostile_tiffs_are_problems_never_500(client: TestClient) -> None:
         assert detail in resp.json()["detail"], name
     jpeg = client.post("/v1/prune", content=b"\xff\xd8\xff\xe0" + bytes(40), headers=head)
     assert jpeg.status_code == 400 and "PNG and TIFF" in jpeg.json()["detail"]
+
+
+def test_hostile_tiffs_against_the_real_server(real_server) -> None:
+    import httpx
+
+    from tests.library.test_tiff import forged
+
+    cases = [
+        (forged(200, 200, 20000, "lzw"), 413),  # 4 MB decoded for a 40 kB image
+        (forged(200, 200, 20000, "packbits"), 413),
+        (forged(200, 200, 50, "zlib"), 400),  # a short strip
+        (tiff(np.zeros((3, 40, 40), np.uint8), photometric="minisblack"), 400),
+    ]
+    with real_server(workers="1", max_pixels="100000") as (_, base):
+        with httpx.Client(base_url=base, timeout=60) as http:
+            for data, status in cases:
+                resp = http.post("/v1/prune", content=data, headers={"content-type": "image/tiff"})
+                assert resp.status_code == status, resp.text
+                assert resp.headers["content-type"] == "application/problem+json"
+            good = http.post(
+                "/v1/prune",
+                content=tiff(labels(), compression="packbits"),
+                headers={"content-type": "image/tiff", "accept": "text/csv"},
+                params={"labels": "true"},
+            )
+            assert good.status_code == 200 and good.text.startswith("component,label,branch")

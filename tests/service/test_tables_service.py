@@ -182,3 +182,26 @@ def test_hostile_tiffs_against_the_real_server(real_server) -> None:
                 params={"labels": "true"},
             )
             assert good.status_code == 200 and good.text.startswith("component,label,branch")
+
+
+def test_table_options_are_refused_where_they_do_not_apply(client: TestClient) -> None:
+    data = tiff(labels())
+    head = {"content-type": "image/tiff"}
+    for params, accept in (
+        ({"table": "component"}, "application/json"),
+        ({"table": "component"}, "application/graphml+xml"),
+        ({"pixel_size": 0.5}, "application/json"),
+        ({"pixel_size": 0.5}, "image/png"),
+    ):
+        resp = client.post(
+            "/v1/prune", content=data, params=params, headers={**head, "accept": accept}
+        )
+        assert resp.status_code == 422, (params, accept, resp.text)
+        assert next(iter(params)) in resp.json()["detail"]
+    bad = client.post(
+        "/v1/prune",
+        content=data,
+        params={"table": "node"},
+        headers={**head, "accept": "text/csv"},
+    )
+    assert bad.status_code == 422 and "table" in bad.text

@@ -169,19 +169,21 @@ def test_hostile_tiffs_against_the_real_server(real_server) -> None:
         (forged(200, 200, 50, "zlib"), 400),  # a short strip
         (tiff(np.zeros((3, 40, 40), np.uint8), photometric="minisblack"), 400),
     ]
-    with real_server(workers="1", max_pixels="100000") as (_, base):
-        with httpx.Client(base_url=base, timeout=60) as http:
-            for data, status in cases:
-                resp = http.post("/v1/prune", content=data, headers={"content-type": "image/tiff"})
-                assert resp.status_code == status, resp.text
-                assert resp.headers["content-type"] == "application/problem+json"
-            good = http.post(
-                "/v1/prune",
-                content=tiff(labels(), compression="packbits"),
-                headers={"content-type": "image/tiff", "accept": "text/csv"},
-                params={"labels": "true"},
-            )
-            assert good.status_code == 200 and good.text.startswith("component,label,branch")
+    with (
+        real_server(workers="1", max_pixels="100000") as (_, base),
+        httpx.Client(base_url=base, timeout=60) as http,
+    ):
+        for data, status in cases:
+            resp = http.post("/v1/prune", content=data, headers={"content-type": "image/tiff"})
+            assert resp.status_code == status, resp.text
+            assert resp.headers["content-type"] == "application/problem+json"
+        good = http.post(
+            "/v1/prune",
+            content=tiff(labels(), compression="packbits"),
+            headers={"content-type": "image/tiff", "accept": "text/csv"},
+            params={"labels": "true"},
+        )
+        assert good.status_code == 200 and good.text.startswith("component,label,branch")
 
 
 def test_table_options_are_refused_where_they_do_not_apply(client: TestClient) -> None:

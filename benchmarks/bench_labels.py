@@ -19,7 +19,7 @@ from scipy import ndimage
 from scipy.spatial import cKDTree
 
 import skelprune
-from skelprune.io.input import label_boxes
+from skelprune.io.foreground import label_boxes
 
 from .common import table
 

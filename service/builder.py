@@ -78,8 +78,8 @@ def _gather(
         )
     if not polygon and "pixel_size" in opts and output not in TABLE_OUTPUTS:
         raise InvalidOptionError(
-            "option pixel_size for an image sets the unit of the tables: it applies to "
-            "Accept: text/csv or application/graphml+xml"
+            "option(s) pixel_size only apply to polygon input, or to an image's tables "
+            "(Accept: text/csv or application/graphml+xml), whose unit it sets"
         )
     if not polygon:
         misplaced = [k for k in POLYGON_ONLY if k in opts]

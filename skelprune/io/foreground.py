@@ -38,6 +38,7 @@ __all__ = [
     "check_rule",
     "clean_labels",
     "clean_mask",
+    "label_boxes",
     "label_hint",
     "label_values",
     "select",
@@ -266,8 +267,6 @@ def clean_labels(labels: np.ndarray, fill_holes: int = 0, min_area: int = 0) -> 
             if around.size == 1 and around[0] != 0:
                 out[box][hole] = around[0]
     if min_area > 1:
-        from .input import label_boxes
-
         eight = np.ones((3, 3), bool)
         for v, box in label_boxes(out):
             own = out[box] == v
@@ -276,6 +275,34 @@ def clean_labels(labels: np.ndarray, fill_holes: int = 0, min_area: int = 0) -> 
             drop = own & (sizes < min_area)[lab]
             out[box][drop] = 0
     return out
+
+
+def label_boxes(labels: np.ndarray) -> list[tuple[int, tuple[slice, slice]]]:
+    """Every non-zero label of a label image with the slices of its bounding box, in
+    order of value: one pass over the image (a count per value where the values are
+    small, as 16-bit labels are; a sort otherwise).
+
+    >>> lab = np.zeros((3, 4), np.int64); lab[0, 1:3] = 5; lab[2, 0] = 2
+    >>> [(v, (b[0].start, b[1].start, b[0].stop, b[1].stop)) for v, b in label_boxes(lab)]
+    [(2, (2, 0, 3, 1)), (5, (0, 1, 1, 3))]
+    """
+    from scipy import ndimage
+
+    if labels.size == 0:
+        return []
+    top = int(labels.max())
+    if top < 1 << 24:  # a count per value: linear, no sort
+        present = np.flatnonzero(np.bincount(labels.ravel(), minlength=top + 1))
+        values = present[present != 0]
+        boxes = ndimage.find_objects(labels.astype(np.int32, copy=False))
+        return [(int(v), boxes[v - 1]) for v in values.tolist()]
+    values, dense = np.unique(labels, return_inverse=True)
+    dense = dense.reshape(labels.shape)
+    if values[0] != 0:
+        dense += 1
+        values = np.concatenate([[0], values])
+    boxes = ndimage.find_objects(dense.astype(np.int64, copy=False))
+    return [(int(v), boxes[i]) for i, v in enumerate(values[1:].tolist())]
 
 
 #: A grey level counts as a region of its own once it fills a 3 × 3 block this often.

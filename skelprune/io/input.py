@@ -32,7 +32,6 @@ __all__ = [
     "Input",
     "Kind",
     "check_image_size",
-    "label_boxes",
     "read_input",
 ]
 
@@ -114,6 +113,8 @@ class Input:
 
         if self.labels is None:
             return [(crop, origin, None) for crop, origin in components8(self.mask)]
+        from .foreground import label_boxes
+
         out = []
         for v, box in label_boxes(self.labels):
             top, left = box[0].start, box[1].start
@@ -130,34 +131,6 @@ class Input:
     def warnings(self) -> list[dict[str, Any]]:
         """What the raster of a polygon does not hold as it is (empty for an image)."""
         return [] if self.raster is None else [w.to_dict() for w in self.raster.warnings]
-
-
-def label_boxes(labels: np.ndarray) -> list[tuple[int, tuple[slice, slice]]]:
-    """Every non-zero label of a label image with the slices of its bounding box, in
-    order of value: one pass over the image (a count per value where the values are
-    small, as 16-bit labels are; a sort otherwise).
-
-    >>> lab = np.zeros((3, 4), np.int64); lab[0, 1:3] = 5; lab[2, 0] = 2
-    >>> [(v, (b[0].start, b[1].start, b[0].stop, b[1].stop)) for v, b in label_boxes(lab)]
-    [(2, (2, 0, 3, 1)), (5, (0, 1, 1, 3))]
-    """
-    from scipy import ndimage
-
-    if labels.size == 0:
-        return []
-    top = int(labels.max())
-    if top < 1 << 24:  # a count per value: linear, no sort
-        present = np.flatnonzero(np.bincount(labels.ravel(), minlength=top + 1))
-        values = present[present != 0]
-        boxes = ndimage.find_objects(labels.astype(np.int32, copy=False))
-        return [(int(v), boxes[v - 1]) for v in values.tolist()]
-    values, dense = np.unique(labels, return_inverse=True)
-    dense = dense.reshape(labels.shape)
-    if values[0] != 0:
-        dense += 1
-        values = np.concatenate([[0], values])
-    boxes = ndimage.find_objects(dense.astype(np.int64, copy=False))
-    return [(int(v), boxes[i]) for i, v in enumerate(values[1:].tolist())]
 
 
 def _guess(source: Any) -> tuple[Kind, Any]:
@@ -330,7 +303,8 @@ def _format(data: bytes) -> str:
     if what is None:
         what = "empty" if not data else "a format not recognised"
     raise InvalidImageError(
-        f"not a PNG or TIFF file: neither signature ({what}); skelprune reads "
+        f"not a PNG or TIFF file: neither the PNG signature nor the TIFF one ({what}); "
+        "skelprune reads "
         f"{' and '.join(IMAGE_FORMATS)} images and GeoJSON polygons (.geojson, .json)"
     )
 

@@ -459,10 +459,11 @@ class PruneResult:
         labels = [c.label for c in self.components]
         return to_networkx([c.table.framed(frame) for c in self.components], labels)
 
-    def summary(self, level: str = "branch") -> Any:
+    def summary(self, level: str | None = None) -> Any:
         """The table people measure (docs/tables.md): one row per branch (``level=
-        "branch"``) or per component (``"component"``), in the result's unit (pixels, the
-        polygon's units or a given ``pixel_size``; the ``unit`` column says which). A
+        "branch"``) or per component (``"component"``; None: as the result's output
+        option ``table`` says), in the result's unit (pixels, the polygon's units or a
+        given ``pixel_size``; the ``unit`` column says which). A
         pandas DataFrame when pandas is installed, else a list of row dicts.
 
         Examples
@@ -475,13 +476,13 @@ class PruneResult:
         """
         from .summary import table
 
-        return table(self, level)
+        return table(self, self.output.table if level is None else level)
 
-    def to_csv(self, level: str = "branch") -> str:
+    def to_csv(self, level: str | None = None) -> str:
         """:meth:`summary` as CSV text (empty cells for null; no pandas needed)."""
         from .summary import table_csv
 
-        return table_csv(self, level)
+        return table_csv(self, self.output.table if level is None else level)
 
     def to_graphml(self) -> str:
         """The skeleton as GraphML text: nodes with their position, radius, kind and

@@ -28,15 +28,15 @@ from __future__ import annotations
 import csv
 import io
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from ..io.frame import IDENTITY, PixelFrame
 from .table import BranchTable
 
-if TYPE_CHECKING:
-    from .document import PruneResult
+#: A :class:`~skelprune.output.document.PruneResult` (which imports this module).
+PruneResult = Any
 
 __all__ = [
     "BRANCH_COLUMNS",

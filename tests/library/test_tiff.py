@@ -142,7 +142,10 @@ def test_garbage_after_the_signature_is_a_clear_error():
         (b"\xff\xd8\xff\xe0" + bytes(20), "JPEG"),
         (b"SQLite format 3\x00" + bytes(20), "GeoPackage"),
         (b"\x00\x00\x27\x0a" + bytes(96), "Shapefile"),
-        (b"hello", "not a PNG or TIFF file: neither signature .a format not recognised"),
+        (
+            b"hello",
+            "not a PNG or TIFF file: neither the PNG signature nor the TIFF one .a format not",
+        ),
     ],
 )
 def test_unsupported_files_are_named_with_the_formats_read(head, named):

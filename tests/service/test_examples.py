@@ -18,10 +18,12 @@ CLIENT = REPO / "examples" / "client.py"
 
 
 def test_the_client_runs_against_the_real_server(real_server, tmp_path) -> None:
+    where = tmp_path / "cwd"
+    where.mkdir()
     with real_server(workers="1") as (_, base):
         run = subprocess.run(
             [sys.executable, str(CLIENT), base],
-            cwd=tmp_path,
+            cwd=where,
             capture_output=True,
             text=True,
             timeout=120,
@@ -32,7 +34,7 @@ def test_the_client_runs_against_the_real_server(real_server, tmp_path) -> None:
     assert lines[1].startswith("shape.geojson: RER ")
     written = lines[2].split(" written ")[0]
     assert Path(written).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert list(tmp_path.iterdir()) == []  # nothing written where it runs
+    assert list(where.iterdir()) == []  # nothing written where it runs
     # an overlay path given: written there
     with real_server(workers="1") as (_, base):
         run = subprocess.run(

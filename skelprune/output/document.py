@@ -30,7 +30,7 @@ from ..pruning.bayesian import objective as target
 from ..pruning.margin import Margins
 from ..pruning.tips import Trim
 from ..skeleton import Skeleton
-from .render import auto_scale, encode_png, render_overlay
+from .render import auto_scale, encode_png, result_overlay
 from .schema import ComponentDoc, SequenceDoc
 from .table import BranchTable, branch_table, frame_distances
 from .views import branch_dicts, node_dicts, sequence_dict, to_networkx
@@ -510,35 +510,7 @@ class PruneResult:
         >>> skelprune.prune(m).render_overlay().shape
         (20, 40, 3)
         """
-        rows, cols, r2 = self.skeleton_points()
-        marks: dict[str, list[np.ndarray]] = {"endpoint": [], "junction": []}
-        for comp in self.components:
-            t = comp.table
-            at = np.column_stack([t.y[t.node_point], t.x[t.node_point]]).astype(int)
-            for kind, code in (("endpoint", 0), ("junction", 1)):
-                marks[kind].append(at[t.node_kind == code])
-        text: list[str] | None = None
-        if legend:  # wrapped to the image's width by the renderer
-            text = [
-                (
-                    f"label {c.label}: "
-                    if c.label is not None
-                    else (f"component {i}: " if len(self.components) > 1 else "")
-                )
-                + f"RER {100 * c.rer:.2f} %, SS {c.ss:.3f}"
-                for i, c in enumerate(self.components)
-            ]
-        return render_overlay(
-            self.mask,
-            rows,
-            cols,
-            r2,
-            np.concatenate([np.zeros((0, 2), int), *marks["endpoint"]]),
-            np.concatenate([np.zeros((0, 2), int), *marks["junction"]]),
-            scale=scale,
-            legend=text,
-            labels=self.input.labels,
-        )
+        return result_overlay(self, scale, legend)
 
     def overlay_png(self, scale: int | None = None, legend: bool | None = None) -> bytes:
         """The overlay as PNG bytes; ``scale`` and ``legend`` None: as the result's

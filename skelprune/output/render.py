@@ -10,7 +10,7 @@ import numpy as np
 
 from ..grid.reconstruction import reconstruction
 
-__all__ = ["COLOURS", "auto_scale", "encode_png", "render_overlay"]
+__all__ = ["COLOURS", "auto_scale", "encode_png", "render_overlay", "result_overlay"]
 
 #: The default overlay makes the longer side at least this many pixels ...
 READABLE_SIDE = 512
@@ -196,6 +196,42 @@ def render_overlay(
         for r, c in np.zeros((0, 2), int) if nodes is None else nodes:
             _mark(img, int(r), int(c), COLOURS[kind], scale, radius)
     return img if legend is None else _legend(img, legend, labels is not None)
+
+
+def result_overlay(result: Any, scale: int = 1, legend: bool = False) -> np.ndarray:
+    """The overlay of a :class:`~skelprune.output.document.PruneResult`: its skeleton,
+    nodes, and (``legend``) each component's RER and SS, named by its label in a label
+    image (whose labels each get a shade)."""
+    rows, cols, r2 = result.skeleton_points()
+    marks: dict[str, list[np.ndarray]] = {"endpoint": [], "junction": []}
+    for comp in result.components:
+        t = comp.table
+        at = np.column_stack([t.y[t.node_point], t.x[t.node_point]]).astype(int)
+        for kind, code in (("endpoint", 0), ("junction", 1)):
+            marks[kind].append(at[t.node_kind == code])
+    text: list[str] | None = None
+    if legend:  # wrapped to the image's width by the renderer
+        several = len(result.components) > 1
+        text = [
+            (
+                f"label {c.label}: "
+                if c.label is not None
+                else (f"component {i}: " if several else "")
+            )
+            + f"RER {100 * c.rer:.2f} %, SS {c.ss:.3f}"
+            for i, c in enumerate(result.components)
+        ]
+    return render_overlay(
+        result.mask,
+        rows,
+        cols,
+        r2,
+        np.concatenate([np.zeros((0, 2), int), *marks["endpoint"]]),
+        np.concatenate([np.zeros((0, 2), int), *marks["junction"]]),
+        scale=scale,
+        legend=text,
+        labels=result.input.labels,
+    )
 
 
 def encode_png(rgb: np.ndarray) -> bytes:

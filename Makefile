@@ -17,7 +17,8 @@ $(VENV)/.installed-%: pyproject.toml
 	@touch $@
 
 comma := ,
-SERVE := $(VENV)/.installed-service
+# `make run` adds the graph extra: the README's first example calls to_networkx()
+SERVE := $(VENV)/.installed-service+graph
 TESTS := $(VENV)/.installed-service+test
 BENCH := $(VENV)/.installed-service+test+bench
 # numba's cache is keyed on each source file's time stamp: compile again when one changes

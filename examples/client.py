@@ -2,15 +2,17 @@
 
 Run it from the repository, with the service running (``make run``):
 
-    python examples/client.py [http://127.0.0.1:8000]
+    python examples/client.py [http://127.0.0.1:8000 [OVERLAY.png]]
 
 It prunes ``examples/shape.png`` and ``examples/shape.geojson``, prints each answer's
-numbers and writes the overlay of the PNG to ``overlay.png``.
+numbers and writes the overlay of the PNG to ``OVERLAY.png`` (default: a file in the
+system's temporary folder, so that running it leaves the repository as it was).
 """
 
 from __future__ import annotations
 
 import sys
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -49,7 +51,8 @@ def answer(resp: httpx.Response) -> httpx.Response:
     return resp
 
 
-def main(base: str = "http://127.0.0.1:8000") -> None:
+def main(base: str = "http://127.0.0.1:8000", overlay: str | None = None) -> None:
+    out = Path(overlay) if overlay else Path(tempfile.gettempdir()) / "skelprune-overlay.png"
     with httpx.Client(base_url=base, timeout=60) as client:
         doc = prune_png(client, HERE / "shape.png", beta=9, curve="false")
         comp = doc["components"][0]
@@ -61,12 +64,12 @@ def main(base: str = "http://127.0.0.1:8000") -> None:
         print(f"shape.geojson: RER {comp['rer']:.4f}, skeleton length "
               f"{comp['skeleton']['length']:.1f} (polygon units)")
         png, rer = overlay_png(client, HERE / "shape.png")
-        Path("overlay.png").write_bytes(png)
-        print(f"overlay.png written ({len(png)} bytes, RER {rer:.4f})")
+        out.write_bytes(png)
+        print(f"{out} written ({len(png)} bytes, RER {rer:.4f})")
 
 
 if __name__ == "__main__":
     try:
-        main(*sys.argv[1:2])
+        main(*sys.argv[1:3])
     except httpx.TransportError as exc:  # no service there: say so in one line
         sys.exit(f"error: no answer from the service ({exc}); start it with `make run`")

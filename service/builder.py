@@ -32,6 +32,9 @@ JSON_ONLY = ("curve", "overlay", "sequence")
 OVERLAY_ONLY = ("overlay_scale", "overlay_legend")
 #: Options of the GeoJSON answer only.
 GEOJSON_ONLY = ("simplify", "cut_ends")
+#: Options of the tables' answers only (Accept: text/csv; pixel_size too, for an image).
+TABLE_ONLY = ("table",)
+TABLE_OUTPUTS = ("csv", "graphml")
 
 
 def _gather(
@@ -68,6 +71,16 @@ def _gather(
                 f"option(s) {', '.join(misplaced)} only apply to the overlay image "
                 "(Accept: image/png, or overlay=true)"
             )
+    if any(k in opts for k in TABLE_ONLY) and output != "csv":
+        raise InvalidOptionError(
+            f"option(s) {', '.join(k for k in TABLE_ONLY if k in opts)} only apply to the "
+            "tables' answer (Accept: text/csv)"
+        )
+    if not polygon and "pixel_size" in opts and output not in TABLE_OUTPUTS:
+        raise InvalidOptionError(
+            "option(s) pixel_size only apply to polygon input, or to an image's tables "
+            "(Accept: text/csv or application/graphml+xml), whose unit it sets"
+        )
     if not polygon:
         misplaced = [k for k in POLYGON_ONLY if k in opts]
         if misplaced:

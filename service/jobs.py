@@ -32,12 +32,14 @@ __all__ = [
     "warmup",
 ]
 
-Output = Literal["json", "png", "geojson"]
+Output = Literal["json", "png", "geojson", "csv", "graphml"]
 
 MEDIA_TYPES: dict[str, str] = {
     "json": "application/json",
     "png": "image/png",
     "geojson": "application/geo+json",
+    "csv": "text/csv",
+    "graphml": "application/graphml+xml",
 }
 
 
@@ -213,6 +215,10 @@ def _run_job(job: Job) -> JobResult:
             headers["X-Skelprune-Warnings"] = str(len(res.warnings))
     elif job.output == "geojson":
         body = dumps(res.to_geojson())
+    elif job.output == "csv":  # the tables (docs/tables.md)
+        body = res.to_csv(job.shown.table).encode()
+    elif job.output == "graphml":
+        body = res.to_graphml().encode()
     else:
         body = dumps(res.to_dict())
     return JobResult(

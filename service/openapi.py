@@ -32,7 +32,8 @@ Compute the pruned skeleton of a shape.
 
 **Input** (by `Content-Type`):
 - `image/png`: the PNG itself as the body;
-- `multipart/form-data`: the PNG in the field `file`;
+- `image/tiff`: a single-image TIFF as the body (docs/tables.md#tiff);
+- `multipart/form-data`: the PNG or TIFF in the field `file`;
 - `application/json` (or `application/geo+json`): a GeoJSON `Polygon`, `MultiPolygon`,
   `Feature` or `FeatureCollection` (holes allowed), or an object
   `{"geojson": <GeoJSON>, <options>}`. The polygon is rasterised (default: a pixel size
@@ -45,7 +46,9 @@ Compute the pruned skeleton of a shape.
 (`PruneDocument` below: per component its RER, SS, λ and the skeleton graph, nodes with
 radii and branches as paths), `image/png` the overlay image (the numbers in the
 `X-Skelprune-*` headers), `application/geo+json` the skeleton as GeoJSON (the numbers in
-its properties).
+its properties), `text/csv` the branch table (`table=component`: the component table;
+docs/tables.md), `application/graphml+xml` the skeleton as GraphML. `labels=true` reads
+an integer image as a label image, each value its own shape.
 
 Options go in the query string, or in the body (multipart fields beside `file`; the
 JSON envelope), never both; an option where it does not apply is refused (422).
@@ -62,7 +65,7 @@ Prune several shapes in one request; the answer is NDJSON (`{NDJSON}`), one line
 shape in input order: `{{"index": i, "result": <document>}}` or
 `{{"index": i, "problem": <problem details>}}`. One shape's failure never fails the others.
 
-**Input**: `multipart/form-data` with the PNGs in repeated fields `file` (options as other
+**Input**: `multipart/form-data` with the PNGs or TIFFs in repeated fields `file` (options as other
 fields or in the query), or `application/json`: a list of GeoJSON objects (`Polygon`,
 `MultiPolygon`, `Feature`, `FeatureCollection`; options in the query). At most
 {BATCH_MAX_ITEMS} shapes; the body limit is the one of `POST /v1/prune`. The options

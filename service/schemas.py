@@ -63,7 +63,8 @@ FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 
 # --------------------------------------------------------------------- input: options
 #: Options that only apply to polygon (JSON) input.
-POLYGON_ONLY = tuple(f.name for f in dataclass_fields(RasterOptions))
+# (pixel_size also applies to images: the unit of the tables)
+POLYGON_ONLY = tuple(f.name for f in dataclass_fields(RasterOptions) if f.name != "pixel_size")
 
 
 def _option_models() -> tuple[type[BaseModel], dict[str, Any]]:

@@ -239,6 +239,8 @@ def prune_input(
     result = PruneResult(
         input=shape, options=applied, output=OutputOptions() if output is None else output
     )
-    for crop, origin in components(shape.mask):
-        result.components.append(prune_component(crop, origin, applied))
+    for crop, origin, label in shape.components():
+        component = prune_component(crop, origin, applied)
+        component.label = label  # None unless a label image
+        result.components.append(component)
     return result

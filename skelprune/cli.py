@@ -75,7 +75,7 @@ def _main(
 
 
 #: What a folder is searched for (any case).
-FOLDER_SUFFIXES = (".png", ".geojson")
+FOLDER_SUFFIXES = (".png", ".geojson", ".tif", ".tiff")
 
 
 def _prune(
@@ -186,8 +186,8 @@ def prune_command(
         list[Path],
         typer.Argument(
             metavar="FILE",
-            help="PNG masks or GeoJSON polygons (.geojson, .json), or folders "
-            "of them (*.png, *.geojson, any case).",
+            help="PNG or TIFF images, GeoJSON polygons (.geojson, .json), or folders "
+            "of them (*.png, *.tif, *.tiff, *.geojson, any case).",
         ),
     ],
     beta: BetaOption = PruneOptions.beta,
@@ -198,6 +198,15 @@ def prune_command(
     choice: ChoiceOption = Choice(PruneOptions.choice),
     trim: TrimOption = PruneOptions.trim,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
+    labels: Annotated[bool, typer.Option(help=HELP["labels"])] = ReadOptions.labels,
+    fill_holes: Annotated[int, typer.Option(help=HELP["fill_holes"])] = ReadOptions.fill_holes,
+    min_area: Annotated[int, typer.Option(help=HELP["min_area"])] = ReadOptions.min_area,
+    csv: Annotated[
+        Path | None,
+        typer.Option(
+            help="Write the branch table (docs/tables.md) here as CSV (one input file only)."
+        ),
+    ] = None,
     overlay: Annotated[
         Path | None, typer.Option(help="Write the overlay PNG here (one input file only).")
     ] = None,
@@ -207,7 +216,7 @@ def prune_command(
     ] = OutputOptions.overlay_legend,
     curve: Annotated[bool, typer.Option(help=HELP["curve"])] = OutputOptions.curve,
     sequence: Annotated[bool, typer.Option(help=HELP["sequence"])] = OutputOptions.sequence,
-    pixel_size: Annotated[float | None, typer.Option(help=_geojson_only("pixel_size"))] = None,
+    pixel_size: Annotated[float | None, typer.Option(help=HELP["pixel_size"])] = None,
     longest_side: Annotated[int | None, typer.Option(help=_geojson_only("longest_side"))] = None,
     pixels_per_width: Annotated[
         float, typer.Option(help=_geojson_only("pixels_per_width"))
@@ -233,15 +242,20 @@ def prune_command(
     """Prune the skeleton of each shape and print the result as JSON."""
     # checked once, before any file is read; the JSON document holds no overlay image
     options, read, raster, output = _options_or_exit(
-        {**locals(), "overlay": False}, PruneOptions, ReadOptions, RasterOptions, OutputOptions
+        {**locals(), "overlay": False, "csv": None},
+        PruneOptions,
+        ReadOptions,
+        RasterOptions,
+        OutputOptions,
     )
     if workers < 0:
         raise _usage(f"--workers must be >= 0 (0: one a CPU core), got {workers}")
-    if overlay is not None and not overlay.parent.is_dir():
-        raise _usage(f"--overlay: folder {str(overlay.parent)!r} does not exist")
+    for flag, out in (("--overlay", overlay), ("--csv", csv)):
+        if out is not None and not out.parent.is_dir():
+            raise _usage(f"{flag}: folder {str(out.parent)!r} does not exist")
     inputs = _expand(files)
     if not inputs:
-        raise _usage("no PNG or GeoJSON file given")
+        raise _usage("no PNG, TIFF or GeoJSON file given")
     if len(inputs) == 1 and not files[0].is_dir():
         try:
             res, doc = _prune(str(inputs[0]), options, read, raster, output, geojson)
@@ -250,17 +264,22 @@ def prune_command(
             raise typer.Exit(1) from None
         for warning in res.warnings:  # also in the document; here for the reader
             typer.echo(f"warning: {inputs[0]}: {warning['message']}", err=True)
-        if overlay is not None:
+        for flag, out, what in (
+            ("--overlay", overlay, res.overlay_png),
+            ("--csv", csv, lambda: res.to_csv().encode()),
+        ):
+            if out is None:
+                continue
             try:
-                overlay.write_bytes(res.overlay_png())
+                out.write_bytes(what())
             except OSError as exc:
-                typer.echo(f"error: --overlay {overlay}: {exc.strerror or exc}", err=True)
+                typer.echo(f"error: {flag} {out}: {exc.strerror or exc}", err=True)
                 raise typer.Exit(1) from None
         json.dump(doc, sys.stdout)
         sys.stdout.write("\n")
         return
-    if overlay is not None:
-        raise _usage("--overlay takes one input file")
+    if overlay is not None or csv is not None:
+        raise _usage(f"{'--overlay' if overlay is not None else '--csv'} takes one input file")
     from concurrent.futures import ProcessPoolExecutor
 
     from tqdm import tqdm

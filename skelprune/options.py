@@ -33,7 +33,9 @@ __all__ = [
     "GROUPS",
     "LONGEST_SIDE_RANGE",
     "MAX_BETA",
+    "MAX_CLEAN_AREA",
     "METHODS",
+    "TABLES",
     "OutputOptions",
     "PruneOptions",
     "RasterOptions",
@@ -60,8 +62,12 @@ DEFAULT_DCE_THRESHOLD = 0.01
 #: The foreground rule of an array given without one: an array is a mask, its non-zero
 #: pixels the shape (an image file's default is ``auto``, :class:`ReadOptions`).
 ARRAY_FOREGROUND = "nonzero"
+#: The tables of :meth:`PruneResult.summary` (docs/tables.md).
+TABLES = ("branch", "component")
 #: How the answer is chosen from the sequence (:mod:`skelprune.pruning.floor`).
 CHOICES = ("argmin", "noise-floor")
+#: The largest area (pixels) ``fill_holes`` and ``min_area`` take: a 2¹⁶ × 2¹⁶ image.
+MAX_CLEAN_AREA = 1 << 32
 #: Pixels across the longer side of a polygon's bounding box at the least (a polygon's
 #: narrow parts may ask for more) ...
 DEFAULT_LONGEST_SIDE = 512
@@ -175,6 +181,25 @@ class ReadOptions:
         "or zero.",
         _choice(FOREGROUND_RULES),
         FOREGROUND_RULES,
+    )
+    # label images and cleaning (docs/graph.md#label-images, #cleaning)
+    labels: bool = _option(
+        False,
+        "Label image: every distinct non-zero value of an integer image is its own shape, "
+        "pruned on its own even where two labels touch; each component carries its label.",
+        _flag,
+    )
+    fill_holes: int = _option(
+        0,
+        "Fill the shape's holes of fewer pixels than this, a whole number from 0 to "
+        f"{MAX_CLEAN_AREA} (default 0: every hole kept).",
+        _integer(0, MAX_CLEAN_AREA),
+    )
+    min_area: int = _option(
+        0,
+        "Drop the components of fewer pixels than this, a whole number from 0 to "
+        f"{MAX_CLEAN_AREA} (default 0: every component kept).",
+        _integer(0, MAX_CLEAN_AREA),
     )
 
     def __post_init__(self) -> None:
@@ -311,6 +336,12 @@ class OutputOptions:
         "in a fork to its two corners (the JSON document keeps the fork).",
         _flag,
     )
+    table: str = _option(
+        "branch",
+        "CSV answer: the table, one row per branch (branch) or per component (component).",
+        _choice(TABLES),
+        TABLES,
+    )
 
     def __post_init__(self) -> None:
         _check_fields(self)
@@ -334,7 +365,8 @@ class RasterOptions:
     pixel_size: float | None = _option(
         None,
         "Raster pixel size in the polygon's units, > 0 (default: fitted to the polygon, "
-        "see pixels_per_width).",
+        "see pixels_per_width). For an image: the side of a pixel in your units, which "
+        "the tables (summary, CSV) measure in (default: pixels).",
         _number(0, strict=True),
     )
     longest_side: int | None = _option(
@@ -439,8 +471,9 @@ def option_fields(*groups: type) -> list[tuple[str, Any, str, tuple[str, ...] | 
     """``(name, default, help, choices)`` of every option of the given classes, in order:
     what the CLI and the service describe their options from.
 
-    >>> [name for name, *_ in option_fields(OutputOptions)]
-    ['curve', 'overlay', 'sequence', 'overlay_scale', 'overlay_legend', 'simplify', 'cut_ends']
+    >>> [name for name, *_ in option_fields(OutputOptions)]  # doctest: +NORMALIZE_WHITESPACE
+    ['curve', 'overlay', 'sequence', 'overlay_scale', 'overlay_legend', 'simplify',
+     'cut_ends', 'table']
     """
     return [
         (f.name, f.default, f.metadata["help"], f.metadata["choices"])

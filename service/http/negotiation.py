@@ -12,6 +12,8 @@ PRODUCES: dict[str, Output] = {
     "application/json": "json",
     "image/png": "png",
     "application/geo+json": "geojson",
+    "text/csv": "csv",
+    "application/graphml+xml": "graphml",
 }
 #: The batch's answer: one JSON document a line.
 NDJSON = "application/x-ndjson"

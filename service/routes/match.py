@@ -24,7 +24,7 @@ from service.match_job import MatchJob, run_match_job
 from service.pool import WorkerPool
 from service.settings import Settings
 from skelprune.errors import InvalidOptionError
-from skelprune.io.png import check_png_size
+from skelprune.io.input import check_image_size
 
 __all__ = ["match_function", "router"]
 
@@ -68,7 +68,7 @@ async def match(
             )
         pngs = form.uploads(("a", "b"), "a PNG")
         for png in pngs:
-            check_png_size(png, settings.max_pixels)
+            check_image_size(png, settings.max_pixels)
     elif ctype in JSON_TYPES:
         shapes = await validate_json(
             parse_pair,

@@ -36,7 +36,7 @@ from service.jobs import Job, run_job
 from service.pool import PoolError, WorkerPool
 from service.settings import Settings
 from skelprune.errors import InvalidPolygonError, SkelpruneError
-from skelprune.io.png import check_png_size
+from skelprune.io.input import check_image_size
 
 __all__ = ["job_function", "router"]
 
@@ -73,15 +73,15 @@ async def prune(
     ctype = content_type(request)
     refuse_encoding(request)
     body = await request.body()  # size-limited by BodyLimitMiddleware
-    if ctype in ("image/png", "multipart/form-data"):
+    if ctype in ("image/png", "image/tiff", "multipart/form-data"):
         envelope = None
-        if ctype == "image/png":
+        if ctype in ("image/png", "image/tiff"):
             png = body
         else:
             form = await read_form(request, max_files=1)
             (png,) = form.uploads(("file",), "the PNG")
             envelope = form.options(files="file")
-        check_png_size(png, settings.max_pixels)  # refused before it is queued
+        check_image_size(png, settings.max_pixels)  # refused before it is queued
         geojson = None
     elif ctype in JSON_TYPES:
         envelope, geojson = await validate_json(
@@ -93,7 +93,8 @@ async def prune(
     else:
         shown = ctype or "none"
         raise UnsupportedMediaTypeError(
-            f"Content-Type {shown!r} is not supported; send image/png, multipart/form-data "
+            f"Content-Type {shown!r} is not supported; send image/png, image/tiff, "
+            "multipart/form-data "
             "(field 'file') or application/json (GeoJSON)"
         )
     build = job_builder(query, envelope, settings, polygon=geojson is not None, output=output)
@@ -121,7 +122,7 @@ def _batch_item(
     or its problem line."""
     try:
         if isinstance(item, bytes):
-            check_png_size(item, settings.max_pixels)
+            check_image_size(item, settings.max_pixels)
             return build.job(png=item)
         counts = item.counts
         check_polygon(

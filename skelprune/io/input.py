@@ -11,13 +11,13 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from ..errors import InvalidImageError, InvalidPolygonError
+from ..errors import ImageTooLargeError, InvalidImageError, InvalidPolygonError
 from ..options import ARRAY_FOREGROUND, RasterOptions, ReadOptions
 from .foreground import POLYGON_FOREGROUND, Foreground
 from .frame import IDENTITY, PixelFrame
@@ -25,12 +25,22 @@ from .frame import IDENTITY, PixelFrame
 if TYPE_CHECKING:
     from .polygon import PolygonRaster
 
-__all__ = ["GEOJSON_SUFFIXES", "MASK_FOREGROUND", "Input", "Kind", "read_input"]
+__all__ = [
+    "GEOJSON_SUFFIXES",
+    "IMAGE_FORMATS",
+    "MASK_FOREGROUND",
+    "Input",
+    "Kind",
+    "check_image_size",
+    "read_input",
+]
 
 #: What an input is: an image (PNG or array) or a GeoJSON polygon.
 Kind = Literal["image", "geojson"]
 #: File name endings read as GeoJSON polygons (any case); any other file is read as a PNG.
 GEOJSON_SUFFIXES = (".geojson", ".json")
+#: The image formats read (by their signature, whatever the file's name).
+IMAGE_FORMATS = ("PNG", "TIFF")
 #: What a mask given as it is takes as the shape: its non-zero pixels.
 MASK_FOREGROUND = Foreground(ARRAY_FOREGROUND, "nonzero")
 
@@ -52,6 +62,15 @@ class Input:
     raster : PolygonRaster or None
         For a polygon: the polygon, the raster options that made the mask and what the
         raster does not hold as it is (``warnings``).
+    labels : (H, W) int64 array or None
+        For a label image (``labels=True``): every pixel's label, 0 the background;
+        ``mask`` is ``labels != 0``.
+    hint : str or None
+        What the reader noticed and the caller may want to change (an image that looks
+        like a label image read without ``labels``).
+    pixel_size : float or None
+        For an image: the side of a pixel in the caller's units, which the tables
+        measure in (None: pixels).
 
     Examples
     --------
@@ -65,12 +84,44 @@ class Input:
     frame: PixelFrame = IDENTITY
     foreground: Foreground = MASK_FOREGROUND
     raster: PolygonRaster | None = None
+    labels: np.ndarray | None = None
+    hint: str | None = None
+    pixel_size: float | None = None
 
     def __post_init__(self) -> None:
         mask = np.asarray(self.mask)
         if mask.ndim != 2:
             raise InvalidImageError(f"a mask must be 2-D, got shape {mask.shape}")
         object.__setattr__(self, "mask", np.ascontiguousarray(mask, dtype=bool))
+
+    def components(self) -> list[tuple[np.ndarray, tuple[int, int], int | None]]:
+        """Every 8-connected component as a padded crop, its origin in the image and its
+        label (None unless a label image).
+
+        A label image's components are each label's pieces, found inside the label's
+        bounding box, so that the work follows the objects' sizes; pixels of another
+        label are background to it. Order: by label, then as :func:`components8` finds
+        them.
+
+        Examples
+        --------
+        >>> lab = np.zeros((4, 6), np.int64); lab[1:3, 0:3] = 7; lab[1:3, 3:6] = 2
+        >>> [(c.shape, o, v) for c, o, v in Input(lab != 0, labels=lab).components()]
+        [((4, 5), (0, 2), 2), ((4, 5), (0, -1), 7)]
+        """
+        from ..grid import components8
+
+        if self.labels is None:
+            return [(crop, origin, None) for crop, origin in components8(self.mask)]
+        from .foreground import label_boxes
+
+        out = []
+        for v, box in label_boxes(self.labels):
+            top, left = box[0].start, box[1].start
+            own = self.labels[box] == v
+            for crop, (r, c) in components8(own):
+                out.append((crop, (r + top, c + left), v))
+        return out
 
     @property
     def kind(self) -> Kind:
@@ -135,10 +186,10 @@ def read_input(
     source : array, bytes, str, os.PathLike, GeoJSON mapping, shapely geometry or Input
         An image array (``(H, W)``, or ``(H, W, C)`` with ``C`` in 1–4, 2 and 4 with
         alpha last), PNG bytes, a file's path (``.geojson`` and ``.json``: a GeoJSON
-        polygon; anything else: a PNG), GeoJSON as a mapping or as text, or any object
-        with ``__geo_interface__`` (a shapely (Multi)Polygon). GeoJSON is a ``Polygon``,
-        ``MultiPolygon``, ``Feature`` or ``FeatureCollection``. An :class:`Input` is
-        returned as it is.
+        polygon; anything else: a PNG or TIFF image, told by its first bytes), GeoJSON
+        as a mapping or as text, or any object with ``__geo_interface__`` (a shapely
+        (Multi)Polygon). GeoJSON is a ``Polygon``, ``MultiPolygon``, ``Feature`` or
+        ``FeatureCollection``. An :class:`Input` is returned as it is.
     read : ReadOptions, optional
         Image input: which pixels are the shape. Default: the ``auto`` rule for a PNG,
         the non-zero pixels of an array (an array is a mask).
@@ -192,10 +243,128 @@ def read_input(
         raise ValueError(f"kind must be 'image' or 'geojson', got {kind!r}")
     if not isinstance(source, data):
         # never open a file by a name that came as data
-        raise InvalidImageError("image input must be PNG bytes or an array, not a file name")
-    from .png import read_shape
-
+        raise InvalidImageError(
+            "image input must be PNG or TIFF bytes or an array, not a file name"
+        )
     if read is None:
         read = ReadOptions(ARRAY_FOREGROUND) if isinstance(source, np.ndarray) else ReadOptions()
-    mask, taken = read_shape(source, foreground=read.foreground, max_pixels=max_pixels)
-    return Input(mask, IDENTITY, taken)
+    values, alpha = _image_values(source, max_pixels)
+    pixel_size = None if raster is None else raster.pixel_size
+    return image_input(values, alpha, read, pixel_size)
+
+
+def image_input(
+    values: np.ndarray,
+    alpha: np.ndarray | None,
+    read: ReadOptions,
+    pixel_size: float | None = None,
+) -> Input:
+    """The :class:`Input` of an image's values: its shape by the foreground rule (or its
+    labels), cleaned as ``read`` says."""
+    from .foreground import clean_labels, clean_mask, label_hint, label_values, select
+
+    fill, least = read.fill_holes, read.min_area
+    if read.labels:
+        labels = label_values(values, alpha)
+        if fill or least:
+            labels = clean_labels(labels, fill, least)
+        taken = Foreground(read.foreground, "labels", fill_holes=fill, min_area=least)
+        return Input(labels != 0, IDENTITY, taken, labels=labels, pixel_size=pixel_size)
+    mask, taken = select(values, read.foreground, alpha)
+    if fill or least:
+        mask = clean_mask(mask, fill, least)
+        taken = replace(taken, fill_holes=fill, min_area=least)
+    hint = label_hint(values, alpha)
+    return Input(mask, IDENTITY, taken, hint=hint, pixel_size=pixel_size)
+
+
+def _format(data: bytes) -> str:
+    """The image format of a file's first bytes, or an error naming what is read."""
+    from .png import PNG_SIGNATURE
+    from .tiff import is_tiff
+
+    if data[:8] == PNG_SIGNATURE:
+        return "PNG"
+    if is_tiff(data):
+        return "TIFF"
+    known = {
+        b"\xff\xd8\xff": "a JPEG image",
+        b"GIF8": "a GIF image",
+        b"BM": "a BMP image",
+        b"SQLite format 3": "an SQLite file (a GeoPackage?)",
+        b"\x00\x00\x27\x0a": "a Shapefile",
+        b"%PDF": "a PDF",
+        b"PK\x03\x04": "a ZIP archive",
+        b"\x93NUMPY": "a NumPy .npy file",
+    }
+    what = next((name for sig, name in known.items() if data.startswith(sig)), None)
+    if what is None and data[4:8] == b"ftyp":
+        what = "an HEIF/MP4 file"
+    if what is None:
+        what = "empty" if not data else "a format not recognised"
+    raise InvalidImageError(
+        f"not a PNG or TIFF file: neither the PNG signature nor the TIFF one ({what}); "
+        "skelprune reads "
+        f"{' and '.join(IMAGE_FORMATS)} images and GeoJSON polygons (.geojson, .json)"
+    )
+
+
+def check_image_size(data: bytes, max_pixels: int | None) -> tuple[int, int]:
+    """A PNG's or TIFF's ``(width, height)`` from its header; refuses more than
+    ``max_pixels`` pixels, and a file of another format, before anything is decoded."""
+    data = bytes(data)
+    if _format(data[:64]) == "PNG":
+        from .png import check_png_size
+
+        return check_png_size(data, max_pixels)
+    from .tiff import tiff_size
+
+    width, height = tiff_size(data)
+    if max_pixels is not None and width * height > max_pixels:
+        raise ImageTooLargeError(
+            f"image has {width * height} pixels ({width}×{height}), the limit is {max_pixels}"
+        )
+    return width, height
+
+
+def _image_values(source: Any, max_pixels: int | None) -> tuple[np.ndarray, np.ndarray | None]:
+    """An image's values and its alpha (where it uses transparency), every format."""
+    from . import png
+
+    if isinstance(source, np.ndarray):
+        values, alpha = png._array_values(source)
+        if max_pixels is not None and values.shape[0] * values.shape[1] > max_pixels:
+            raise ImageTooLargeError(
+                f"image has {values.shape[0] * values.shape[1]} pixels "
+                f"({values.shape[1]}×{values.shape[0]}), the limit is {max_pixels}"
+            )
+        return values, alpha
+    if isinstance(source, Path):
+        try:
+            data = source.read_bytes()
+        except OSError as exc:
+            raise InvalidImageError(f"cannot read {os.fspath(source)!r}: {exc.strerror}") from None
+    else:
+        data = bytes(source)
+    if _format(data) == "TIFF":
+        from .tiff import read_tiff
+
+        return read_tiff(data, max_pixels=max_pixels), None
+    return _png_values(data, max_pixels)
+
+
+def _png_values(data: bytes, max_pixels: int | None) -> tuple[np.ndarray, np.ndarray | None]:
+    """A PNG's values and alpha, after every check :func:`png.read_shape` makes."""
+    from . import png
+
+    width, height, depth, colour = png._ihdr(data)
+    png.check_png_size(data, max_pixels)
+    png._check_chunks(data)
+    png._check_image_data(data, width, height, depth, colour)
+    im = png._decode(data)
+    if im.size != (width, height):  # never decode something other than what was checked
+        raise InvalidImageError(
+            f"corrupt PNG: decoded size {im.size[0]}×{im.size[1]} differs from the "
+            f"IHDR size {width}×{height}"
+        )
+    return png._image_values(im, depth)

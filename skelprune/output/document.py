@@ -30,7 +30,7 @@ from ..pruning.bayesian import objective as target
 from ..pruning.margin import Margins
 from ..pruning.tips import Trim
 from ..skeleton import Skeleton
-from .render import auto_scale, encode_png, render_overlay
+from .render import auto_scale, encode_png, result_overlay
 from .schema import ComponentDoc, SequenceDoc
 from .table import BranchTable, branch_table, frame_distances
 from .views import branch_dicts, node_dicts, sequence_dict, to_networkx
@@ -69,6 +69,8 @@ class ComponentResult:
     ma_rer: float
     margins: Margins = field(default_factory=Margins)
     trim: Trim | None = None
+    #: The component's label in a label image (None otherwise).
+    label: int | None = None
 
     # the answer's parts, as the reporting below reads them
     @property
@@ -160,7 +162,8 @@ class ComponentResult:
         ma = self.axis_summary
         seq = self.sequence
         chosen = self.chosen_point()
-        doc: ComponentDoc = {
+        doc: ComponentDoc = {  # type: ignore[typeddict-item]
+            **({} if self.label is None else {"label": self.label}),
             "area": self.area,
             "alpha": None if self.alpha is None else float(self.alpha),
             "rer": chosen[1],
@@ -353,6 +356,8 @@ class PruneResult:
         if self.raster is not None:
             doc["raster"] = self.raster.to_dict()
             doc["warnings"] = self.warnings
+        if self.input.hint is not None:
+            doc["hint"] = self.input.hint
         if overlay:
             doc["overlay_png"] = base64.b64encode(self.overlay_png()).decode("ascii")
         return doc
@@ -418,7 +423,7 @@ class PruneResult:
             "simplify": simplify,
             "cut_ends": cut_ends,
         }
-        return skeleton_geojson(  # type: ignore[return-value]
+        collection = skeleton_geojson(
             [c.table for c in self.components],
             summaries,
             self.mask,
@@ -427,6 +432,11 @@ class PruneResult:
             simplify,
             cut_ends,
             self.raster,
+        )
+        from .summary import geojson_numbers
+
+        return geojson_numbers(  # type: ignore[return-value]
+            self, collection, self.frame if frame is None else frame
         )
 
     def to_networkx(self, frame: PixelFrame | None = None) -> Any:
@@ -446,7 +456,48 @@ class PruneResult:
         (6, 5, [1, 1, 1, 1, 3, 3])
         """
         frame = self.frame if frame is None else frame
-        return to_networkx([c.table.framed(frame) for c in self.components])
+        labels = [c.label for c in self.components]
+        return to_networkx([c.table.framed(frame) for c in self.components], labels)
+
+    def summary(self, level: str | None = None) -> Any:
+        """The table people measure (docs/tables.md): one row per branch (``level=
+        "branch"``) or per component (``"component"``; None: as the result's output
+        option ``table`` says), in the result's unit (pixels, the polygon's units or a
+        given ``pixel_size``; the ``unit`` column says which). A
+        pandas DataFrame when pandas is installed, else a list of row dicts.
+
+        Examples
+        --------
+        >>> import skelprune
+        >>> m = np.zeros((40, 60), bool); m[5:35, 5:55] = True
+        >>> rows = skelprune.prune(m).summary("component")
+        >>> int(rows["branches"][0]), int(rows["ends"][0]), rows["unit"][0]
+        (5, 4, 'px')
+        """
+        from .summary import table
+
+        return table(self, self.output.table if level is None else level)
+
+    def to_csv(self, level: str | None = None) -> str:
+        """:meth:`summary` as CSV text (empty cells for null; no pandas needed)."""
+        from .summary import table_csv
+
+        return table_csv(self, self.output.table if level is None else level)
+
+    def to_graphml(self) -> str:
+        """The skeleton as GraphML text: nodes with their position, radius, kind and
+        label; one edge per branch with the branch table's numbers."""
+        from .summary import graphml
+
+        return graphml(self)
+
+    def skeleton_mask(self) -> np.ndarray:
+        """The pruned skeleton as an image of the input's size: boolean, or the labels
+        on the skeleton's pixels for a label image. ``skan.Skeleton(result.skeleton_mask())``
+        hands it to skan."""
+        from .summary import skeleton_mask
+
+        return skeleton_mask(self)
 
     def render_overlay(self, scale: int = 1, legend: bool = False) -> np.ndarray:
         """RGB overlay (:func:`~skelprune.output.render.render_overlay`), ``scale`` times
@@ -459,30 +510,7 @@ class PruneResult:
         >>> skelprune.prune(m).render_overlay().shape
         (20, 40, 3)
         """
-        rows, cols, r2 = self.skeleton_points()
-        marks: dict[str, list[np.ndarray]] = {"endpoint": [], "junction": []}
-        for comp in self.components:
-            t = comp.table
-            at = np.column_stack([t.y[t.node_point], t.x[t.node_point]]).astype(int)
-            for kind, code in (("endpoint", 0), ("junction", 1)):
-                marks[kind].append(at[t.node_kind == code])
-        text = None
-        if legend:
-            text = "   ".join(
-                (f"component {i}: " if len(self.components) > 1 else "")
-                + f"RER {100 * c.rer:.2f} %, SS {c.ss:.3f}"
-                for i, c in enumerate(self.components[:4])
-            )
-        return render_overlay(
-            self.mask,
-            rows,
-            cols,
-            r2,
-            np.concatenate([np.zeros((0, 2), int), *marks["endpoint"]]),
-            np.concatenate([np.zeros((0, 2), int), *marks["junction"]]),
-            scale=scale,
-            legend=text,
-        )
+        return result_overlay(self, scale, legend)
 
     def overlay_png(self, scale: int | None = None, legend: bool | None = None) -> bytes:
         """The overlay as PNG bytes; ``scale`` and ``legend`` None: as the result's

@@ -4,12 +4,13 @@ the pruned skeleton, its endpoints and junctions."""
 from __future__ import annotations
 
 import io
+from typing import Any
 
 import numpy as np
 
 from ..grid.reconstruction import reconstruction
 
-__all__ = ["COLOURS", "auto_scale", "encode_png", "render_overlay"]
+__all__ = ["COLOURS", "auto_scale", "encode_png", "render_overlay", "result_overlay"]
 
 #: The default overlay makes the longer side at least this many pixels ...
 READABLE_SIDE = 512
@@ -28,6 +29,19 @@ COLOURS = {
     "endpoint": (30, 90, 230),
     "junction": (230, 150, 0),
 }
+#: A label image's shapes, each label in one of these shades (the key's "reconstructed").
+LABEL_SHADES = (
+    (150, 210, 150),
+    (150, 190, 230),
+    (230, 200, 140),
+    (200, 160, 220),
+    (140, 215, 205),
+    (235, 170, 170),
+    (195, 215, 130),
+    (180, 180, 180),
+)
+#: The legend's text takes at most this many lines; what does not fit is counted.
+LEGEND_LINES = 4
 
 
 def auto_scale(shape: tuple[int, ...]) -> int:
@@ -55,8 +69,30 @@ def _mark(
     img[r0:r1, c0:c1][disc] = colour
 
 
-def _legend(img: np.ndarray, text: str) -> np.ndarray:
-    """The image with a white strip below holding ``text`` (and the colour key)."""
+def _wrap(items: list[str], fits: Any) -> list[str]:
+    """``items`` joined into lines that ``fits``, at most :data:`LEGEND_LINES`; the last
+    says how many items did not fit."""
+    lines: list[str] = []
+    for i, item in enumerate(items):
+        if lines and fits(lines[-1] + "   " + item):
+            lines[-1] += "   " + item
+        elif len(lines) < LEGEND_LINES:
+            lines.append(item)
+        else:
+            rest = len(items) - i
+            more = f"   … and {rest} more"
+            while not fits(lines[-1] + more) and "   " in lines[-1]:
+                lines[-1] = lines[-1].rsplit("   ", 1)[0]
+                rest += 1
+                more = f"   … and {rest} more"
+            lines[-1] += more
+            break
+    return lines
+
+
+def _legend(img: np.ndarray, text: str | list[str], shaded: bool = False) -> np.ndarray:
+    """The image with a white strip below holding ``text`` (and the colour key); a list
+    of items is wrapped to the image's width."""
     from PIL import Image, ImageDraw, ImageFont
 
     width = img.shape[1]
@@ -68,16 +104,27 @@ def _legend(img: np.ndarray, text: str) -> np.ndarray:
         ("endpoint", "endpoint"),
         ("junction", "junction"),
     ]
-    strip = Image.new("RGB", (width, 2 * size + 3 * size // 2), COLOURS["background"])
-    draw = ImageDraw.Draw(strip)
     font = ImageFont.load_default(size=size)
+    measure = ImageDraw.Draw(Image.new("RGB", (1, 1)))
+    if isinstance(text, str):
+        lines = [text]
+    else:
+        lines = _wrap(text, lambda t: measure.textlength(t, font=font) <= width - size)
+    height = 2 * size + 3 * size // 2 + (len(lines) - 1) * (size + size // 3)
+    strip = Image.new("RGB", (width, height), COLOURS["background"])
+    draw = ImageDraw.Draw(strip)
     x, y = size // 2, size // 3
     for kind, label in keys:
-        draw.rectangle([x, y + size // 5, x + size * 3 // 4, y + size], fill=COLOURS[kind])
+        if shaded and kind == "shape":
+            label = "a shade per label"
+        fill = COLOURS[kind]
+        draw.rectangle([x, y + size // 5, x + size * 3 // 4, y + size], fill=fill)
         x += size
         draw.text((x, y), label, fill=(0, 0, 0), font=font)
         x += int(draw.textlength(label, font=font)) + size
-    draw.text((size // 2, y + size + size // 2), text, fill=(0, 0, 0), font=font)
+    for i, line in enumerate(lines):
+        at = y + size + size // 2 + i * (size + size // 3)
+        draw.text((size // 2, at), line, fill=(0, 0, 0), font=font)
     return np.concatenate([img, np.asarray(strip)], axis=0)
 
 
@@ -89,7 +136,8 @@ def render_overlay(
     endpoints: np.ndarray | None = None,
     junctions: np.ndarray | None = None,
     scale: int = 1,
-    legend: str | None = None,
+    legend: str | list[str] | None = None,
+    labels: np.ndarray | None = None,
 ) -> np.ndarray:
     """RGB overlay of a skeleton on its shape, ``scale`` times the mask's size.
 
@@ -105,8 +153,12 @@ def render_overlay(
     scale : int
         Each input pixel becomes ``scale`` × ``scale`` pixels (nearest neighbour: the
         mask stays crisp, the skeleton's lines are ``scale`` pixels wide).
-    legend : str, optional
-        Text for a strip below the image, with the colour key (e.g. RER and SS).
+    legend : str or list of str, optional
+        Text for a strip below the image, with the colour key (e.g. RER and SS); a list's
+        items are wrapped to the image's width, on at most :data:`LEGEND_LINES` lines.
+    labels : (H, W) int array, optional
+        A label image: each label's reconstructed part in its own shade
+        (:data:`LABEL_SHADES`).
 
     Examples
     --------
@@ -120,6 +172,12 @@ def render_overlay(
     img = np.empty((*mask.shape, 3), np.uint8)
     img[:] = COLOURS["background"]
     img[mask & covered] = COLOURS["shape"]
+    if labels is not None:
+        shades = np.asarray(LABEL_SHADES, np.uint8)
+        lit = mask & covered
+        # labels in order of value take the shades in turn
+        rank = np.unique(labels[lit], return_inverse=True)[1]
+        img[lit] = shades[rank.ravel() % len(shades)]
     img[mask & ~covered] = COLOURS["error"]
     side = max(mask.shape) * scale
     # lines and markers grow with the picture: visible on a large image, too
@@ -137,7 +195,43 @@ def render_overlay(
     for kind, nodes in (("endpoint", endpoints), ("junction", junctions)):
         for r, c in np.zeros((0, 2), int) if nodes is None else nodes:
             _mark(img, int(r), int(c), COLOURS[kind], scale, radius)
-    return img if legend is None else _legend(img, legend)
+    return img if legend is None else _legend(img, legend, labels is not None)
+
+
+def result_overlay(result: Any, scale: int = 1, legend: bool = False) -> np.ndarray:
+    """The overlay of a :class:`~skelprune.output.document.PruneResult`: its skeleton,
+    nodes, and (``legend``) each component's RER and SS, named by its label in a label
+    image (whose labels each get a shade)."""
+    rows, cols, r2 = result.skeleton_points()
+    marks: dict[str, list[np.ndarray]] = {"endpoint": [], "junction": []}
+    for comp in result.components:
+        t = comp.table
+        at = np.column_stack([t.y[t.node_point], t.x[t.node_point]]).astype(int)
+        for kind, code in (("endpoint", 0), ("junction", 1)):
+            marks[kind].append(at[t.node_kind == code])
+    text: list[str] | None = None
+    if legend:  # wrapped to the image's width by the renderer
+        several = len(result.components) > 1
+        text = [
+            (
+                f"label {c.label}: "
+                if c.label is not None
+                else (f"component {i}: " if several else "")
+            )
+            + f"RER {100 * c.rer:.2f} %, SS {c.ss:.3f}"
+            for i, c in enumerate(result.components)
+        ]
+    return render_overlay(
+        result.mask,
+        rows,
+        cols,
+        r2,
+        np.concatenate([np.zeros((0, 2), int), *marks["endpoint"]]),
+        np.concatenate([np.zeros((0, 2), int), *marks["junction"]]),
+        scale=scale,
+        legend=text,
+        labels=result.input.labels,
+    )
 
 
 def encode_png(rgb: np.ndarray) -> bytes:

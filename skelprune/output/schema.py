@@ -225,6 +225,9 @@ class SequenceDoc(TypedDict):
 
 
 class ComponentDoc(TypedDict):
+    label: NotRequired[
+        Annotated[int, Doc("The component's label (label images only, labels=true).")]
+    ]
     area: Annotated[int, Doc("Λ(D) in pixels of the raster.")]
     alpha: float | None
     rer: float
@@ -245,15 +248,22 @@ class ForegroundTakenDoc(TypedDict):
         Doc("The rule asked for; null for polygon input."),
     ]
     shape: Annotated[
-        Literal["nonzero", "zero", "light", "dark", "opaque", "polygon"],
+        Literal["nonzero", "zero", "light", "dark", "opaque", "polygon", "labels"],
         Doc(
             "Pixels taken: non-zero / zero ones, grey values above (`light`) or at "
-            "or below (`dark`) `threshold`, alpha above `threshold` (`opaque`), or the polygon."
+            "or below (`dark`) `threshold`, alpha above `threshold` (`opaque`), the polygon, "
+            "or every non-zero value its own shape (`labels`, with labels=true)."
         ),
     ]
     threshold: Annotated[float | None, Doc("The mid-range split, for light/dark/opaque.")]
     border: Annotated[
         float | None, Doc("Share of the image border on the background side (auto, grey values).")
+    ]
+    fill_holes: NotRequired[
+        Annotated[int, Doc("Holes of fewer pixels than this were filled (only when given).")]
+    ]
+    min_area: NotRequired[
+        Annotated[int, Doc("Components of fewer pixels than this were dropped (only when given).")]
     ]
 
 
@@ -337,6 +347,15 @@ class PruneDocument(TypedDict):
         ]
     ]
     overlay_png: NotRequired[Annotated[str, Doc("Base64 PNG; only with overlay=true.")]]
+    hint: NotRequired[
+        Annotated[
+            str,
+            Doc(
+                "What the reader noticed and an option would change: an image read by the "
+                "foreground rule that looks like a label image (then labels=true)."
+            ),
+        ]
+    ]
 
 
 # ------------------------------------------------------------------------- the GeoJSON
@@ -362,6 +381,24 @@ class BranchPropertiesDoc(TypedDict):
     removed_at: int | None
     rer: Annotated[float, Doc("RER of the feature's component.")]
     ss: Annotated[float, Doc("SS of the feature's component.")]
+    # the branch table's numbers (docs/tables.md), in the result's unit
+    label: NotRequired[Annotated[int, Doc("The component's label (label images only).")]]
+    branch_kind: Annotated[
+        Literal["end-end", "end-junction", "junction-junction", "loop"],
+        Doc("The branch's kind by its nodes (the table's `kind`)."),
+    ]
+    chord: float
+    tortuosity: Annotated[float | None, Doc("Smoothed length / chord; null for a loop.")]
+    width_mean: float
+    width_median: float
+    width_min: float
+    width_max: float
+    width_std: float
+    angle_source: Annotated[float | None, Doc("Degrees, leaving the source node.")]
+    angle_target: Annotated[float | None, Doc("Degrees, leaving the target node.")]
+    junction_angle_source: float | None
+    junction_angle_target: float | None
+    strahler: Annotated[int | None, Doc("Horton–Strahler order (a tree's branches only).")]
 
 
 class NodePropertiesDoc(TypedDict):
@@ -371,6 +408,7 @@ class NodePropertiesDoc(TypedDict):
     radius: float
     rer: Annotated[float, Doc("RER of the feature's component.")]
     ss: Annotated[float, Doc("SS of the feature's component.")]
+    label: NotRequired[Annotated[int, Doc("The component's label (label images only).")]]
 
 
 class BranchFeatureDoc(TypedDict):

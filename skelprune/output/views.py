@@ -132,17 +132,20 @@ def sequence_dict(seq: PruningSequence, answer: Skeleton, frame: PixelFrame) -> 
     }
 
 
-def to_networkx(tables: list[BranchTable]) -> Any:
+def to_networkx(tables: list[BranchTable], labels: list[int | None] | None = None) -> Any:
     """The components' skeletons as one ``networkx.MultiGraph`` (see
-    :meth:`skelprune.output.document.PruneResult.to_networkx`)."""
+    :meth:`skelprune.output.document.PruneResult.to_networkx`); a label image's nodes and
+    edges also carry their component's ``label``."""
     try:
         import networkx as nx
     except ImportError:  # an optional dependency: say how to get it
         raise ImportError("to_networkx needs networkx: pip install 'skelprune[graph]'") from None
     g = nx.MultiGraph()
     for ci, t in enumerate(tables):
+        label = None if labels is None else labels[ci]
+        tag = {} if label is None else {"label": label}
         for nd in node_dicts(t):
-            g.add_node((ci, nd.pop("id")), component=ci, **nd)
+            g.add_node((ci, nd.pop("id")), component=ci, **tag, **nd)
         lines = [ln.tolist() for ln in t.lines()]
         for br, line in zip(branch_dicts(t, margins=False), lines, strict=True):
             g.add_edge(
@@ -150,6 +153,7 @@ def to_networkx(tables: list[BranchTable]) -> Any:
                 (ci, br["target"]),
                 key=br["id"],
                 component=ci,
+                **tag,
                 length=br["length"],
                 points=br["points"],
                 off_path=br["off_path"],

@@ -73,7 +73,8 @@ def test_unknown_option_is_a_usage_error() -> None:
 
 
 def test_make_run_installs_only_the_serving_extras() -> None:
-    """``make run`` sets up with the service extra alone; ``make test`` adds the test one."""
+    """``make run`` sets up with the service extra and the graph one (the README's first
+    example calls ``to_networkx()``) alone; ``make test`` adds the test one."""
 
     def installs(target: str) -> list[str]:
         """The extras each editable pip install of ``make -n TARGET`` asks for."""
@@ -87,7 +88,7 @@ def test_make_run_installs_only_the_serving_extras() -> None:
         ).stdout
         return re.findall(r"pip install [^|]*?-e '\.\[([a-z,]+)\]'", out)
 
-    assert installs("run") == ["service"]
+    assert installs("run") == ["service,graph"]
     test = installs("test")  # (and the service extra alone, which the kernels' stamp needs)
     assert "service,test" in test
     assert not [extras for extras in test if "bench" in extras]

@@ -74,7 +74,7 @@ def test_usage_errors_are_one_line_before_any_file_is_read(tmp_path):
     one_line_usage_error(cli("prune", folder, "--beta", "-1"), "beta must be")
     one_line_usage_error(cli("prune", png, "--beta", "-1"), "beta must be")
     one_line_usage_error(cli("prune", png, "--longest-side", "4"), "longest_side")
-    one_line_usage_error(cli("prune", str(tmp_path)), "no PNG or GeoJSON file")
+    one_line_usage_error(cli("prune", str(tmp_path)), "no PNG, TIFF or GeoJSON file")
 
 
 def test_version_and_clean_help():

@@ -162,6 +162,9 @@ CHANGES: dict[str, tuple[dict[str, Any], Any]] = {
     "trim": ({"trim": False}, lambda r: _doc(r)["trim"]),
     # ReadOptions: the rule asked for
     "foreground": ({"foreground": "zero"}, lambda r: _doc(r)["foreground"]["rule"]),
+    "labels": ({"labels": True}, lambda r: _doc(r)["foreground"]["shape"]),
+    "fill_holes": ({"fill_holes": 4}, lambda r: _doc(r)["foreground"].get("fill_holes")),
+    "min_area": ({"min_area": 4}, lambda r: _doc(r)["foreground"].get("min_area")),
     # RasterOptions: in the document's raster part
     "pixel_size": ({"pixel_size": 5.0}, lambda r: _doc(r)["raster"]["pixel_size"]),
     "longest_side": ({"longest_side": 40}, lambda r: _doc(r)["raster"]["longest_side"]),
@@ -182,6 +185,7 @@ CHANGES: dict[str, tuple[dict[str, Any], Any]] = {
     ),
     "simplify": ({"simplify": 0.0}, lambda r: r.to_geojson()["properties"]["simplify"]),
     "cut_ends": ({"cut_ends": True}, lambda r: r.to_geojson()["properties"]["cut_ends"]),
+    "table": ({"table": "component"}, lambda r: r.to_csv().splitlines()[0]),
 }
 
 

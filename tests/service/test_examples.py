@@ -6,6 +6,7 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -17,10 +18,12 @@ CLIENT = REPO / "examples" / "client.py"
 
 
 def test_the_client_runs_against_the_real_server(real_server, tmp_path) -> None:
+    where = tmp_path / "cwd"
+    where.mkdir()
     with real_server(workers="1") as (_, base):
         run = subprocess.run(
             [sys.executable, str(CLIENT), base],
-            cwd=tmp_path,
+            cwd=where,
             capture_output=True,
             text=True,
             timeout=120,
@@ -29,7 +32,19 @@ def test_the_client_runs_against_the_real_server(real_server, tmp_path) -> None:
     lines = run.stdout.splitlines()
     assert lines[0].startswith("shape.png: RER ") and "endpoints" in lines[0]
     assert lines[1].startswith("shape.geojson: RER ")
-    assert (tmp_path / "overlay.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    written = lines[2].split(" written ")[0]
+    assert Path(written).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert list(where.iterdir()) == []  # nothing written where it runs
+    # an overlay path given: written there
+    with real_server(workers="1") as (_, base):
+        run = subprocess.run(
+            [sys.executable, str(CLIENT), base, str(tmp_path / "mine.png")],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+    assert run.returncode == 0, run.stderr
+    assert (tmp_path / "mine.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_the_readme_uses_the_client_verbatim() -> None:

@@ -36,6 +36,7 @@ from ..errors import SkelpruneError
 __all__ = [
     "RasterWarning",
     "check_topology",
+    "covered_xy",
     "fitted_pixel_size",
     "narrowest_width",
 ]
@@ -114,13 +115,55 @@ def narrowest_width(geom: MultiPolygon, quantile: float = WIDTH_QUANTILE) -> flo
     mid = (pts[:, None, :] + pts[nb]) / 2
     inside = np.zeros_like(across)
     i, j = np.nonzero(across)
-    shapely.prepare(geom)
-    inside[i, j] = shapely.contains_xy(geom, mid[i, j, 0], mid[i, j, 1])
+    inside[i, j] = covered_xy(geom, mid[i, j, 0], mid[i, j, 1], strict=True)
     width = np.where(across & inside, dist, np.inf).min(axis=1)
     width = width[np.isfinite(width)]
     if width.size == 0:  # every neighbour on the same side: wider than the samples see
         return geo
     return min(float(np.quantile(width, quantile)), geo)
+
+
+def covered_xy(geom: MultiPolygon, xs: np.ndarray, ys: np.ndarray, strict: bool = False) -> Any:
+    """Which points lie in a polygon (``strict``: in its interior; else also on its
+    boundary), as ``shapely.intersects_xy`` / ``contains_xy`` answer, in about linear time
+    in the parts and points: the points are binned on a grid of about one cell a part, and
+    each part tests only the points of the cells its box covers.
+
+    >>> from shapely.geometry import box
+    >>> geom = MultiPolygon([box(0, 0, 1, 1), box(2, 0, 3, 1)])
+    >>> covered_xy(geom, np.array([0.5, 1.5, 3.0]), np.array([0.5, 0.5, 0.5])).tolist()
+    [True, False, True]
+    """
+    test = shapely.contains_xy if strict else shapely.intersects_xy
+    parts = list(geom.geoms)
+    if len(parts) <= 1 or len(xs) == 0:
+        shapely.prepare(geom)
+        return test(geom, xs, ys)
+    minx, miny, maxx, maxy = geom.bounds
+    n = math.ceil(math.sqrt(len(parts))) + 1  # cells along each side
+    cw = max(maxx - minx, 1e-300) / n
+    ch = max(maxy - miny, 1e-300) / n
+    cx = np.clip(((xs - minx) / cw).astype(np.int64), 0, n - 1)
+    cy = np.clip(((ys - miny) / ch).astype(np.int64), 0, n - 1)
+    key = cy * n + cx
+    order = np.argsort(key, kind="stable")
+    key = key[order]
+    out = np.zeros(len(xs), dtype=bool)
+    bounds = shapely.bounds(parts)
+    ix0 = np.clip(((bounds[:, 0] - minx) / cw).astype(np.int64), 0, n - 1)
+    ix1 = np.clip(((bounds[:, 2] - minx) / cw).astype(np.int64), 0, n - 1)
+    iy0 = np.clip(((bounds[:, 1] - miny) / ch).astype(np.int64), 0, n - 1)
+    iy1 = np.clip(((bounds[:, 3] - miny) / ch).astype(np.int64), 0, n - 1)
+    for p, part in enumerate(parts):
+        rows = np.arange(iy0[p], iy1[p] + 1) * n
+        lo = np.searchsorted(key, rows + ix0[p], "left")
+        hi = np.searchsorted(key, rows + ix1[p], "right")
+        if not (hi > lo).any():
+            continue
+        ids = order[np.concatenate([np.arange(a, b) for a, b in zip(lo, hi, strict=True)])]
+        shapely.prepare(part)
+        out[ids] |= test(part, xs[ids], ys[ids])
+    return out
 
 
 def budget_pixel_size(geom: MultiPolygon, budget: int, margin: int) -> float:
@@ -152,7 +195,7 @@ def fitted_pixel_size(
 class RasterWarning:
     """A part of the polygon that the raster does not hold as it is."""
 
-    kind: str  # "vanished" | "split" | "merged" | "holes"
+    kind: str  # "vanished" | "split" | "merged" | "holes" | "skipped" | "point"
     message: str
     part: int | None = None  # index of the polygon part, where one is meant
     pixel_size: float | None = None  # a pixel size that holds it (None: not found)

@@ -302,7 +302,7 @@ class RasterInfoDoc(TypedDict):
 class RasterWarningItemDoc(TypedDict):
     """A part of the polygon that the raster does not hold as it is."""
 
-    kind: Literal["vanished", "split", "merged", "holes"]
+    kind: Literal["vanished", "split", "merged", "holes", "skipped"]
     message: str
     part: Annotated[int | None, Doc("The polygon part meant, if one is.")]
     pixel_size: Annotated[

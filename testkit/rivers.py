@@ -75,3 +75,20 @@ def river(
     if not isinstance(poly, Polygon):  # never expected: the banks do not cross
         poly = max(shapely.get_parts(poly), key=lambda g: g.area)
     return River(poly, LineString(pts), width_min, width_max)
+
+
+def on_earth(shape: Any, lon0: float, lat0: float) -> Any:
+    """A shape in metres placed on the Earth: longitude/latitude (WGS 84) of the points
+    whose local azimuthal equidistant coordinates about ``(lon0, lat0)`` are the shape's,
+    so that it keeps its ground size and shape there (the ``geo`` extra's pyproj).
+
+    >>> from shapely.geometry import box
+    >>> g = on_earth(box(0, 0, 1000, 1000), 10.0, 70.0)
+    >>> round(g.bounds[2] - g.bounds[0], 4), round(g.bounds[3] - g.bounds[1], 4)  # degrees
+    (0.0262, 0.009)
+    """
+    import pyproj
+
+    local = pyproj.CRS.from_proj4(f"+proj=aeqd +lat_0={lat0} +lon_0={lon0} +datum=WGS84 +units=m")
+    back = pyproj.Transformer.from_crs(local, "EPSG:4326", always_xy=True)
+    return shapely.transform(shape, lambda xy: np.column_stack(back.transform(*xy.T)))

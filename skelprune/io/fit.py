@@ -222,17 +222,20 @@ def _holes(mask: np.ndarray) -> int:
 
 def holding_size(
     part: Polygon, size: float, margin: int, rasterize: Any, max_pixels: int = SEARCH_PIXELS
-) -> float | None:
+) -> tuple[float | None, float | None]:
     """The first of ``size/2, size/4, …`` at which a part alone is one raster component
-    with its holes (None: none within ``max_pixels``)."""
+    with its holes (None: none whose raster of the part is within ``max_pixels``), and
+    the smallest size tried (None: none was)."""
     minx, miny, maxx, maxy = part.bounds
+    tried = None
     for k in range(1, 11):
         s = size / 2**k
         if ((maxx - minx) / s + 2 * margin) * ((maxy - miny) / s + 2 * margin) > max_pixels:
-            return None
+            return None, tried
+        tried = s
         if _part_holds(part, s, margin, rasterize):
-            return s
-    return None
+            return s, tried
+    return None, tried
 
 
 def check_topology(
@@ -262,11 +265,13 @@ def check_topology(
         part = parts[i]
         count = int(comps_of[i])
         where = f"part #{i} of {len(parts)}" if len(parts) > 1 else "the polygon"
-        fix = holding_size(part, size, margin, rasterize)
+        fix, tried = holding_size(part, size, margin, rasterize)
         advice = (
             f"; a pixel_size of {fix:.4g} or less holds it"
             if fix is not None
-            else "; no pixel size within the limits holds it"
+            else f"; none of the sizes tried down to {tried:.4g} holds it"
+            if tried is not None
+            else "; a finer raster of it is beyond the search's limit"
         )
         if count == 0:
             msg = f"{where} is smaller than the pixel ({size:.4g}) and left no pixel{advice}"

@@ -27,6 +27,7 @@ import numpy as np
 from shapely.geometry import MultiPolygon
 
 from skelprune.errors import EmptyMaskError, ImageTooLargeError, InvalidPolygonError, shown
+from skelprune.io.crs import LocalProjection, local_projection
 from skelprune.io.fit import (
     RasterWarning,
     budget_pixel_size,
@@ -63,6 +64,9 @@ class PolygonRaster:
     ``fitted`` tells whether the pixel size came from the polygon (no ``pixel_size`` or
     ``longest_side`` given); ``warnings`` lists the parts the raster does not hold as they
     are (:func:`skelprune.io.fit.check_topology`); ``options`` are the options that made it.
+    ``crs``: the coordinates' CRS, where one is known; ``projection``: for geographic
+    coordinates, the local projection the polygon (``geometry``, in metres) and the frame
+    are in (:mod:`skelprune.io.crs`).
     """
 
     geometry: MultiPolygon
@@ -71,6 +75,8 @@ class PolygonRaster:
     fitted: bool
     warnings: list[RasterWarning] = field(default_factory=list)
     options: RasterOptions = field(default_factory=RasterOptions)
+    crs: str | None = None
+    projection: LocalProjection | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """What the document says of the raster (``raster``): its size and every raster
@@ -85,6 +91,8 @@ class PolygonRaster:
             "pixels_per_width": self.options.pixels_per_width,
             "pixel_budget": self.options.pixel_budget,
             "repair": self.options.repair,
+            **({} if self.crs is None else {"crs": self.crs}),
+            **({} if self.projection is None else {"projection": self.projection.proj}),
         }
 
 
@@ -290,9 +298,18 @@ def read_polygon(
     :func:`parse_geojson` then :func:`polygon_raster`.
 
     The one way a polygon becomes a raster for pruning (:func:`skelprune.io.read_input`).
+    A polygon in a geographic CRS (``options.crs``, else the GeoJSON's ``crs`` member) is
+    rasterised in its local equidistant projection (:mod:`skelprune.io.crs`).
     """
     options = RasterOptions() if options is None else options
     parsed = parse_polygon(obj, max_vertices=max_vertices, repair=options.repair)
-    raster = polygon_raster(parsed.geometry, options, max_pixels=max_pixels)
+    crs = options.crs or parsed.crs
+    geom, projection = parsed.geometry, None
+    if crs is not None:
+        projection = local_projection(geom, crs)
+        if projection is not None:
+            geom = projection.forward(geom)
+    raster = polygon_raster(geom, options, max_pixels=max_pixels)
     raster.warnings[:0] = parsed.warnings
+    raster.crs, raster.projection = crs, projection
     return raster

@@ -68,8 +68,9 @@ def feature_lines(
     "width"}`` in the polygon's CRS (lengths and widths in metres for a geographic CRS),
     and the warnings.
 
-    Every part gets a row: its lines, or, for a part too small for a line, its centre as
-    a Point (the centre of its largest inscribed circle) with a warning.
+    Every part gets a row: its lines, or, for a part too small for a line (none, or
+    lines shorter than the diameter of its largest inscribed circle: a blob), that
+    circle's centre as a Point, with a warning.
 
     Examples
     --------
@@ -97,31 +98,33 @@ def feature_lines(
     lines = [ln for ln in lines if ln.length >= pixel]  # a pixel's dot is no line
     parts = list(ground.geoms)
     tree = shapely.STRtree(parts)
-    rows = []
-    has_line = set()
+    by_part: dict[int, list[Any]] = {}
     for ln in lines:
         geom_line = LineString(ln.xy)
         mid = geom_line.interpolate(0.5, normalized=True)
         hit = tree.query(mid, predicate="intersects")
         part = int(hit[0]) if len(hit) else int(tree.query_nearest(mid)[0])
-        has_line.add(part)
-        rows.append({"geometry": geom_line, "part": part, "kind": "line", **_numbers(ln)})
+        by_part.setdefault(part, []).append((geom_line, ln))
+    rows = []
     for i, part in enumerate(parts):
-        if i in has_line:
-            continue
         centre, radius = _centre(part)
+        found = by_part.get(i, [])
+        # a part whose lines are shorter than its inscribed circle is a blob: a point
+        if found and sum(ln.length for _, ln in found) >= 2 * radius:
+            rows += [{"geometry": g, "part": i, "kind": "line", **_numbers(ln)} for g, ln in found]
+            continue
         rows.append(
             {"geometry": centre, "part": i, "kind": "point", "length": 0.0, "width": 2 * radius}
         )
-        warnings.append(
-            f"part #{i} is too small for a line at this pixel size: its centre, a Point"
-        )
+        if len(parts) > 1 or not found:
+            warnings.append(
+                f"part #{i} is too small for a line at pixel size {pixel:.4g}: its centre, a Point"
+            )
     if projection is not None:
         for row in rows:
             row["geometry"] = shapely.transform(
                 row["geometry"], lambda xy: np.column_stack(projection.back(*xy.T))
             )
-    rows.sort(key=lambda r: (r["part"], r["kind"] != "line"))
     return rows, warnings
 
 

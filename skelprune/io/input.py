@@ -22,6 +22,9 @@ from ..options import ARRAY_FOREGROUND, RasterOptions, ReadOptions
 from .foreground import POLYGON_FOREGROUND, Foreground
 from .frame import IDENTITY, PixelFrame
 
+#: File name endings read as GeoTIFF masks (any case; rasterio, the geo extra).
+GEOTIFF_SUFFIXES = (".tif", ".tiff")
+
 if TYPE_CHECKING:
     from .polygon import PolygonRaster
 
@@ -65,6 +68,7 @@ class Input:
     frame: PixelFrame = IDENTITY
     foreground: Foreground = MASK_FOREGROUND
     raster: PolygonRaster | None = None
+    crs: str | None = None  # a GeoTIFF's CRS (a polygon's is its raster's)
 
     def __post_init__(self) -> None:
         mask = np.asarray(self.mask)
@@ -99,6 +103,8 @@ def _guess(source: Any) -> tuple[Kind, Any]:
                 raise InvalidPolygonError(
                     f"cannot read {os.fspath(source)!r}: {exc.strerror}"
                 ) from None
+        if path.name.lower().endswith(GEOTIFF_SUFFIXES):
+            return "image", path  # the GeoTIFF reader opens it
         return "image", path  # the PNG reader opens it
     return "image", np.asarray(source)  # an array-like (nested lists)
 
@@ -135,8 +141,10 @@ def read_input(
     source : array, bytes, str, os.PathLike, GeoJSON mapping, shapely geometry or Input
         An image array (``(H, W)``, or ``(H, W, C)`` with ``C`` in 1–4, 2 and 4 with
         alpha last), PNG bytes, a file's path (``.geojson`` and ``.json``: a GeoJSON
-        polygon; anything else: a PNG), GeoJSON as a mapping or as text, or any object
-        with ``__geo_interface__`` (a shapely (Multi)Polygon). GeoJSON is a ``Polygon``,
+        polygon; ``.tif`` and ``.tiff``: a GeoTIFF mask, its non-zero pixels, mapped to
+        its CRS's coordinates: :mod:`.geotiff`; anything else: a PNG), GeoJSON as a
+        mapping or as text, or any object with ``__geo_interface__`` (a shapely
+        (Multi)Polygon). GeoJSON is a ``Polygon``,
         ``MultiPolygon``, ``Feature`` or ``FeatureCollection``. An :class:`Input` is
         returned as it is.
     read : ReadOptions, optional
@@ -193,6 +201,11 @@ def read_input(
     if not isinstance(source, data):
         # never open a file by a name that came as data
         raise InvalidImageError("image input must be PNG bytes or an array, not a file name")
+    if isinstance(source, Path) and source.name.lower().endswith(GEOTIFF_SUFFIXES):
+        from .geotiff import GEOTIFF_FOREGROUND, read_geotiff
+
+        mask, frame, crs = read_geotiff(source, max_pixels=max_pixels)
+        return Input(mask, frame, GEOTIFF_FOREGROUND, crs=crs)
     from .png import read_shape
 
     if read is None:

@@ -427,6 +427,7 @@ class PruneResult:
             simplify,
             cut_ends,
             self.raster,
+            crs=self.input.crs,
         )
 
     def to_networkx(self, frame: PixelFrame | None = None) -> Any:

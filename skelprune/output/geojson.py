@@ -42,11 +42,14 @@ def skeleton_geojson(
     simplify: float = 0.5,
     cut_ends: bool = False,
     raster: PolygonRaster | None = None,
+    crs: str | None = None,
 ) -> SkeletonGeoJSON:
     """Branches as LineStrings and nodes as Points, in ``frame``'s coordinates (the
     parameters and properties as :meth:`~skelprune.output.document.PruneResult.to_geojson`
     describes them): one table and one summary per component, the mask they came from,
-    the collection's ``properties`` but its ``components``, and a polygon's raster."""
+    the collection's ``properties`` but its ``components``, a polygon's raster, and the
+    CRS of the frame's coordinates where one is known (a GeoTIFF's; a polygon's raster
+    has its own)."""
     polygon = None if raster is None or simplify <= 0 else raster_polygon(raster)
     projection = None if raster is None else raster.projection
     index = None if polygon is None else boundary_index(polygon)
@@ -121,9 +124,10 @@ def skeleton_geojson(
     if raster is not None:
         properties["warnings"] = [w.to_dict() for w in raster.warnings]
     out: Any = {"type": "FeatureCollection", "properties": properties, "features": features}
-    if raster is not None and raster.crs is not None:
-        properties["crs"] = raster.crs
-        out["crs"] = {"type": "name", "properties": {"name": raster.crs}}
+    crs = raster.crs if raster is not None and raster.crs is not None else crs
+    if crs is not None:
+        properties["crs"] = crs
+        out["crs"] = {"type": "name", "properties": {"name": crs}}
     return out
 
 

@@ -5,16 +5,20 @@ ragged or staircase outline (a polygon traced from raster pixels) that is a shor
 to many corners, which a map does not want. From the skeleton's branches (in a planar
 CRS, lengths and radii in its units):
 
-1. **Short ends go.** An end branch (one end free, the other at a junction) shorter than
-   :data:`END_FACTOR` times the junction's radius runs into a corner, not into a part of
-   the shape: it is dropped, and again on what is left, until none is.
-2. **Chains become lines.** Branches meeting at a node of degree two are joined: one line
+1. **Chains become lines.** Branches meeting at a node of degree two are joined: one line
    from junction (or end) to junction (or end).
-3. **Simplified by the local width.** Douglas–Peucker where each vertex may move by
+2. **Short ends go.** An end line (one end free, the other at a junction) shorter than
+   :data:`END_FACTOR` times the junction's radius runs into a corner or a bump of the
+   outline, not into a part of the shape: it is dropped, the lines joined again, and
+   again, until none is.
+3. **Ends run straight to the boundary.** A free end's last stretch, as far as the tip
+   lies in the inscribed disk of a vertex before it, bends into a corner: it is cut, and
+   the line runs on in its own direction to the boundary.
+4. **Simplified by the local width.** Douglas–Peucker where each vertex may move by
    ``share`` of its own half-width (the skeleton's radius there): a wide lake's line
    keeps few vertices, a narrow inlet's its detail. A line that leaves the polygon is
    simplified again at half the share (three times at most, then kept).
-4. ``main_path``: one line per connected network, its longest path (for labels).
+5. ``main_path``: one line per connected network, its longest path (for labels).
 """
 
 from __future__ import annotations
@@ -35,7 +39,7 @@ __all__ = ["END_FACTOR", "SHARE", "CartoLine", "cartographic_lines"]
 #: An end branch shorter than this many junction radii is a corner's, not a part's.
 END_FACTOR = 2.0
 #: Share of the local half-width a simplified line may move by.
-SHARE = 0.5
+SHARE = 0.25
 #: Halvings of the share tried for a line that leaves the polygon.
 RETRIES = 3
 
@@ -90,33 +94,44 @@ def _degrees(branches: list[dict[str, Any]]) -> dict[tuple[int, int], int]:
     return degree
 
 
+def _length(xy: np.ndarray) -> float:
+    return float(np.hypot(*np.diff(xy, axis=0).T).sum()) if len(xy) > 1 else 0.0
+
+
 def _drop_short_ends(
-    branches: list[dict[str, Any]], radius: dict[tuple[int, int], float], factor: float
-) -> tuple[list[dict[str, Any]], set[tuple[int, int]]]:
-    """Branches without the short ends, and the junctions that lost some (where a line
-    now ends short of the boundary)."""
-    cut: set[tuple[int, int]] = set()
+    lines: list[dict[str, Any]], radius: dict[tuple[int, int], float], factor: float
+) -> list[dict[str, Any]]:
+    """Lines (chains) without the short ends, joined again after each round, so that a
+    tree of small branches into a bump goes branch by branch."""
     while True:
-        degree = _degrees(branches)
+        degree = _degrees(lines)
         short: dict[tuple[int, int], list[int]] = {}
-        for i, b in enumerate(branches):
-            a, c = b["ends"]
+        for i, ln in enumerate(lines):
+            a, c = ln["ends"]
             if a == c:
                 continue
             free = [n for n in (a, c) if degree[n] == 1]
             joint = [n for n in (a, c) if degree[n] >= 3]
-            if len(free) == 1 and len(joint) == 1 and b["length"] < factor * radius[joint[0]]:
+            if len(free) == 1 and len(joint) == 1 and _length(ln["xy"]) < factor * radius[joint[0]]:
                 short.setdefault(joint[0], []).append(i)
         drop: set[int] = set()
         for node, ids in short.items():
             if len(ids) >= degree[node]:  # a star of short ends: its two longest stay
-                ids = sorted(ids, key=lambda i: branches[i]["length"])[:-2]
-            if ids:
-                drop.update(ids)
-                cut.add(node)
+                ids = sorted(ids, key=lambda i: _length(lines[i]["xy"]))[:-2]
+            drop.update(ids)
         if not drop:
-            return branches, cut
-        branches = [b for i, b in enumerate(branches) if i not in drop]
+            return lines
+        lines = _chains([ln for i, ln in enumerate(lines) if i not in drop])
+
+
+def _trim_tip(xy: np.ndarray, radii: np.ndarray) -> int:
+    """How many vertices of a free end (at ``xy[0]``) run into a corner: those up to the
+    innermost vertex whose inscribed disk still holds the tip (along the line)."""
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
+    inside = np.flatnonzero(arc <= radii)
+    if len(inside) == 0 or inside[-1] == 0 or inside[-1] >= len(xy) - 1:
+        return 0
+    return int(inside[-1])
 
 
 def _extend(xy: np.ndarray, radius: float, polygon: Any, at_start: bool) -> np.ndarray:
@@ -270,28 +285,29 @@ def cartographic_lines(
     (1, [2])
     """
     branches, radius = _branches(geo)
-    branches, cut = _drop_short_ends(branches, radius, end_factor)
-    lines = _chains(branches)
-    degree = _degrees(branches)
+    shapely.prepare(polygon)
+    boundary = polygon.boundary
+    for b in branches:  # exact radii: the distance to the polygon's boundary
+        b["radii"] = shapely.distance(boundary, shapely.points(b["xy"]))
+    lines = _drop_short_ends(_chains(branches), radius, end_factor)
+    degree = _degrees(lines)
     for ln in lines:
         for k, node in enumerate(ln["ends"]):
-            if node in cut and degree.get(node) == 1:
-                before = len(ln["xy"])
-                ln["xy"] = _extend(ln["xy"], radius[node], polygon, at_start=k == 0)
-                if len(ln["xy"]) > before:  # the tip's radius: its neighbour's
-                    r = ln["radii"][:1] if k == 0 else ln["radii"][-1:]
-                    ln["radii"] = (
-                        np.concatenate([r, ln["radii"]])
-                        if k == 0
-                        else np.concatenate([ln["radii"], r])
-                    )
+            if degree.get(node) != 1 or ln["ends"][0] == ln["ends"][1]:
+                continue
+            xy, radii = (ln["xy"], ln["radii"]) if k == 0 else (ln["xy"][::-1], ln["radii"][::-1])
+            cut = _trim_tip(xy, radii)
+            xy, radii = xy[cut:], radii[cut:]
+            longer = _extend(xy, float(radii[0]), polygon, at_start=True)
+            if len(longer) > len(xy):
+                xy, radii = longer, np.concatenate([radii[:1], radii])
+            ln["xy"], ln["radii"] = (xy, radii) if k == 0 else (xy[::-1], radii[::-1])
     if main_path and lines:
         nets = _networks(lines)
         lines = [
             _longest_path([ln for ln, n in zip(lines, nets, strict=True) if n == net])
             for net in dict.fromkeys(nets)
         ]
-    shapely.prepare(polygon)
     out = []
     nets = _networks(lines)
     for ln, net in zip(lines, nets, strict=True):

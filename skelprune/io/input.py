@@ -86,10 +86,33 @@ class Input:
         return [] if self.raster is None else [w.to_dict() for w in self.raster.warnings]
 
 
+def _table(source: Any) -> Mapping[str, Any]:
+    """A GeoDataFrame or GeoSeries of one feature as GeoJSON with its CRS; a table of
+    several is refused: each feature is its own shape (one raster would merge them)."""
+    if len(source) != 1:
+        raise InvalidPolygonError(
+            f"a table of {len(source)} features: each is its own shape; prune them one by "
+            "one, or all with skelprune.geo.centerlines(table)"
+        )
+    obj = dict(source.__geo_interface__)
+    crs = source.crs
+    if crs is not None:
+        epsg = crs.to_epsg()
+        name = f"EPSG:{epsg}" if epsg else crs.to_wkt()
+        obj["crs"] = {"type": "name", "properties": {"name": name}}
+    return obj
+
+
 def _guess(source: Any) -> tuple[Kind, Any]:
     """The kind of an input given without one, and the input as its reader takes it."""
     if isinstance(source, np.ndarray | bytes | bytearray | memoryview):
         return "image", source
+    if (
+        hasattr(source, "__geo_interface__")
+        and hasattr(source, "crs")
+        and hasattr(source, "geometry")
+    ):  # a GeoDataFrame or GeoSeries
+        return "geojson", _table(source)
     if isinstance(source, Mapping) or hasattr(source, "__geo_interface__"):
         return "geojson", source
     if isinstance(source, str) and source.lstrip().startswith("{"):

@@ -72,7 +72,7 @@ def test_crs_member_of_the_geojson_is_read() -> None:
     line = max(branches, key=lambda f: f["properties"]["length"])
     assert 2000 < line["properties"]["length"] < 3000  # metres: the long side less its ends
     lon, lat = np.array(line["geometry"]["coordinates"]).T
-    assert np.all((24.9 < lon) & (lon < 25.1) & (59.9 < lat) & (lat < 60.1))
+    assert np.all((lon > 24.9) & (lon < 25.1) & (lat > 59.9) & (lat < 60.1))
 
 
 def test_projected_crs_is_used_as_it_is() -> None:

@@ -182,3 +182,13 @@ def test_geotiff_mask_gives_lines_in_its_crs_and_map_coordinates(tmp_path: Path)
         [*CLI, "prune", str(path), "--geojson"], capture_output=True, text=True, timeout=120
     )
     assert run.returncode == 0 and '"EPSG:32633"' in run.stdout
+
+
+def test_prune_takes_a_one_feature_table_with_its_crs_and_refuses_a_merge() -> None:
+    reach = box(0, 0, 3000, 800)
+    lonlat = gpd.GeoDataFrame(geometry=[on_earth(reach, 10.0, 60.0)], crs="EPSG:4326")
+    raster = skelprune.prune(lonlat).to_dict()["raster"]
+    assert raster["crs"] == "EPSG:4326" and 2 < raster["pixel_size"] < 20  # metres
+    two = gpd.GeoDataFrame(geometry=[reach, box(2500, 0, 5500, 600)], crs="EPSG:32633")
+    with pytest.raises(skelprune.InvalidPolygonError, match="each is its own shape"):
+        skelprune.prune(two)

@@ -91,7 +91,37 @@ def polygons() -> list[tuple[str, MultiPolygon]]:
     return [(name, _multi(g)) for name, g in out]
 
 
+def many_parts() -> None:
+    """Parse, fit and rasterise MultiPolygons of many unit squares (the raster and its
+    topology check included): about linear in the parts."""
+    from skelprune.io.polygon import read_polygon
+
+    rows = []
+    for n in (5_000, 20_000, 80_000):
+        side = int(n**0.5) + 1
+        squares = [
+            [
+                [
+                    [2 * i, 2 * j],
+                    [2 * i + 1, 2 * j],
+                    [2 * i + 1, 2 * j + 1],
+                    [2 * i, 2 * j + 1],
+                    [2 * i, 2 * j],
+                ]
+            ]
+            for i, j in (divmod(k, side) for k in range(n))
+        ]
+        obj = {"type": "MultiPolygon", "coordinates": squares}
+        t = time.perf_counter()
+        raster = read_polygon(obj)
+        secs = time.perf_counter() - t
+        rows.append([n, f"{len(json.dumps(obj)) / 1e6:.1f}", raster.mask.size, f"{secs:.1f}"])
+        print(" | ".join(str(c) for c in rows[-1]), flush=True)
+    print(table(["squares", "MB of GeoJSON", "raster pixels", "s"], rows))
+
+
 def main() -> None:
+    many_parts()
     rows = []
     for name, geom in polygons():
         for tool, fn in TOOLS.items():

@@ -85,26 +85,28 @@ def narrowest_width(geom: MultiPolygon, quantile: float = WIDTH_QUANTILE) -> flo
     20
     """
     geo = geometric_width(geom)
-    rings = [r for part in geom.geoms for r in (part.exterior, *part.interiors)]
-    total = sum(r.length for r in rings)
+    rings = np.array([r for part in geom.geoms for r in (part.exterior, *part.interiors)])
+    lengths = shapely.length(rings).tolist()
+    total = sum(lengths)
     step = max(geo / 8, total / SAMPLES)
-    xy, ring_id, arc, ring_len = [], [], [], []
-    for k, ring in enumerate(rings):
-        dense = shapely.segmentize(ring, step)
-        c = shapely.get_coordinates(dense)[:-1]
-        if len(c) < 3:
-            continue
-        s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(c, axis=0).T))])
-        xy.append(c)
-        ring_id.append(np.full(len(c), k))
-        arc.append(s)
-        ring_len.append(np.full(len(c), ring.length))
-    if not xy:
+    # every ring at once: resampled, its closing position dropped
+    coords, which = shapely.get_coordinates(shapely.segmentize(rings, step), return_index=True)
+    counts = np.bincount(which, minlength=len(rings))
+    last = np.cumsum(counts) - 1
+    open_ = np.ones(len(coords), bool)
+    open_[last[counts > 0]] = False
+    coords, which = coords[open_], which[open_]
+    counts = np.maximum(counts - 1, 0)
+    kept = counts >= 3
+    if not kept.any():
         return geo
-    pts = np.concatenate(xy)
-    rid = np.concatenate(ring_id)
-    s = np.concatenate(arc)
-    length = np.concatenate(ring_len)
+    take = kept[which]
+    pts, rid = coords[take], which[take]
+    pieces = np.split(pts, np.cumsum(counts[kept])[:-1])
+    s = np.concatenate(
+        [np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(c, axis=0).T))]) for c in pieces]
+    )
+    length = np.asarray(lengths)[rid]
     tree = cKDTree(pts)
     dist, nb = tree.query(pts, k=min(NEIGHBOURS, len(pts)))
     same = rid[nb] == rid[:, None]
@@ -154,15 +156,21 @@ def covered_xy(geom: MultiPolygon, xs: np.ndarray, ys: np.ndarray, strict: bool 
     ix1 = np.clip(((bounds[:, 2] - minx) / cw).astype(np.int64), 0, n - 1)
     iy0 = np.clip(((bounds[:, 1] - miny) / ch).astype(np.int64), 0, n - 1)
     iy1 = np.clip(((bounds[:, 3] - miny) / ch).astype(np.int64), 0, n - 1)
-    for p, part in enumerate(parts):
-        rows = np.arange(iy0[p], iy1[p] + 1) * n
-        lo = np.searchsorted(key, rows + ix0[p], "left")
-        hi = np.searchsorted(key, rows + ix1[p], "right")
-        if not (hi > lo).any():
-            continue
-        ids = order[np.concatenate([np.arange(a, b) for a, b in zip(lo, hi, strict=True)])]
-        shapely.prepare(part)
-        out[ids] |= test(part, xs[ids], ys[ids])
+    # every (part, row of cells) pair at once: the points of its cells' run in the sort
+    spans = iy1 - iy0 + 1
+    part_of = np.repeat(np.arange(len(parts)), spans)
+    row = (np.arange(spans.sum()) - np.repeat(np.cumsum(spans) - spans, spans)) + iy0[part_of]
+    lo = np.searchsorted(key, row * n + ix0[part_of], "left")
+    hi = np.searchsorted(key, row * n + ix1[part_of], "right")
+    runs = hi - lo
+    pair_part = np.repeat(part_of, runs)
+    pair_point = order[
+        np.arange(runs.sum()) - np.repeat(np.cumsum(runs) - runs, runs) + np.repeat(lo, runs)
+    ]
+    geoms = np.array(parts, dtype=object)
+    shapely.prepare(geoms)
+    hit = test(geoms[pair_part], xs[pair_point], ys[pair_point])
+    out[pair_point[hit]] = True
     return out
 
 

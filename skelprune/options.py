@@ -147,19 +147,12 @@ def _flag(name: str, value: Any) -> bool:
     return value
 
 
-#: Longest CRS name accepted (an EPSG code, a URN, WKT fits in it).
-MAX_CRS_LENGTH = 4096
-
-
 def _crs_name(name: str, value: Any) -> str:
-    if not isinstance(value, str) or not 0 < len(value) <= MAX_CRS_LENGTH:
-        raise InvalidOptionError(
-            f"{name} must be a CRS name (e.g. EPSG:4326), at most {MAX_CRS_LENGTH} "
-            f"characters, got {shown(value)}"
-        )
+    if not isinstance(value, str):
+        raise InvalidOptionError(f"{name} must be a CRS name (e.g. EPSG:4326), got {shown(value)}")
     from .io.crs import is_geographic
 
-    is_geographic(value)  # pyproj knows it, or the error says so
+    is_geographic(value)  # an authority code pyproj knows, or the error says which not
     return value
 
 
@@ -381,11 +374,12 @@ class RasterOptions:
     )
     crs: str | None = _option(
         None,
-        "The coordinates' CRS, any name pyproj reads (EPSG:4326, OGC:CRS84 for RFC 7946 "
-        "GeoJSON, EPSG:32633, …; default: the GeoJSON's crs member, else the coordinates "
-        "are planar and used as they are). Longitude/latitude is pruned in a local "
-        "equidistant projection: pixel_size, lengths and radii in metres, lines back in "
-        "longitude/latitude. Needs the geo extra (pyproj).",
+        "The coordinates' CRS, an authority code pyproj knows or its URN (EPSG:4326, "
+        "OGC:CRS84 for RFC 7946 GeoJSON, EPSG:32633, urn:ogc:def:crs:EPSG::32633; "
+        "default: the GeoJSON's crs member, else the coordinates are planar and used as "
+        "they are). Longitude/latitude is pruned in a local equidistant projection: "
+        "pixel_size, lengths and radii in metres, lines back in longitude/latitude. Needs "
+        "the geo extra (pyproj).",
         _crs_name,
     )
 

@@ -14,6 +14,7 @@ pyproj is the ``geo`` extra; it is imported only when a CRS is given.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from typing import Any
 
@@ -22,7 +23,15 @@ import shapely
 
 from ..errors import InvalidOptionError, InvalidPolygonError
 
-__all__ = ["MAX_RADIUS", "LocalProjection", "local_projection"]
+__all__ = ["CRS_NAME", "MAX_RADIUS", "LocalProjection", "check_crs_name", "local_projection"]
+
+#: The CRS names accepted: an authority and a code (``EPSG:4326``, ``OGC:CRS84``,
+#: ``ESRI:102003``) or its OGC URN (``urn:ogc:def:crs:EPSG::32633``). Nothing else reaches
+#: pyproj: a PROJ string or a file name could make PROJ open files.
+CRS_NAME = re.compile(
+    r"(?:[A-Z][A-Z0-9_]{0,31}:[A-Za-z0-9_.]{1,64}"
+    r"|urn:ogc:def:crs:[A-Z][A-Z0-9_]{0,31}:[0-9.]{0,16}:[A-Za-z0-9_.]{1,64})"
+)
 
 #: Farthest a polygon may reach from the local projection's centre, in metres. The
 #: azimuthal equidistant projection keeps distances from the centre; across, its scale
@@ -40,7 +49,26 @@ def _pyproj() -> Any:
     return pyproj
 
 
+def check_crs_name(name: str, what: str = "crs") -> str:
+    """The name, if it is an authority code or its URN (:data:`CRS_NAME`).
+
+    >>> check_crs_name("urn:ogc:def:crs:OGC:1.3:CRS84")
+    'urn:ogc:def:crs:OGC:1.3:CRS84'
+    >>> check_crs_name("/etc/passwd")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    skelprune.errors.InvalidOptionError: crs: '/etc/passwd' is not a CRS name such as ...
+    """
+    if not CRS_NAME.fullmatch(name):
+        raise InvalidOptionError(
+            f"{what}: {name[:80]!r} is not a CRS name such as EPSG:4326, OGC:CRS84 or "
+            "urn:ogc:def:crs:EPSG::32633"
+        )
+    return name
+
+
 def _crs(name: str) -> Any:
+    check_crs_name(name)
     pyproj = _pyproj()
     try:
         return pyproj.CRS.from_user_input(name)

@@ -18,7 +18,9 @@ from ..errors import InvalidImageError
 from ..options import ARRAY_FOREGROUND
 from .foreground import Foreground
 from .frame import PixelFrame
-from .input import GEOTIFF_SUFFIXES
+
+#: File name endings read as GeoTIFF masks (any case).
+GEOTIFF_SUFFIXES = (".tif", ".tiff")
 
 __all__ = ["GEOTIFF_SUFFIXES", "read_geotiff"]
 

@@ -21,9 +21,7 @@ from ..errors import InvalidImageError, InvalidPolygonError
 from ..options import ARRAY_FOREGROUND, RasterOptions, ReadOptions
 from .foreground import POLYGON_FOREGROUND, Foreground
 from .frame import IDENTITY, PixelFrame
-
-#: File name endings read as GeoTIFF masks (any case; rasterio, the geo extra).
-GEOTIFF_SUFFIXES = (".tif", ".tiff")
+from .geotiff import GEOTIFF_FOREGROUND, GEOTIFF_SUFFIXES
 
 if TYPE_CHECKING:
     from .polygon import PolygonRaster
@@ -98,7 +96,7 @@ def _table(source: Any) -> Mapping[str, Any]:
     crs = source.crs
     if crs is not None:
         epsg = crs.to_epsg()
-        name = f"EPSG:{epsg}" if epsg else crs.to_wkt()
+        name = f"EPSG:{epsg}" if epsg else ":".join(crs.to_authority() or ("?", "?"))
         obj["crs"] = {"type": "name", "properties": {"name": name}}
     return obj
 
@@ -225,7 +223,7 @@ def read_input(
         # never open a file by a name that came as data
         raise InvalidImageError("image input must be PNG bytes or an array, not a file name")
     if isinstance(source, Path) and source.name.lower().endswith(GEOTIFF_SUFFIXES):
-        from .geotiff import GEOTIFF_FOREGROUND, read_geotiff
+        from .geotiff import read_geotiff
 
         mask, frame, crs = read_geotiff(source, max_pixels=max_pixels)
         return Input(mask, frame, GEOTIFF_FOREGROUND, crs=crs)

@@ -34,6 +34,7 @@ from scipy.sparse.csgraph import connected_components
 from shapely.geometry import GeometryCollection, MultiPolygon, Polygon
 
 from ..errors import InvalidPolygonError, shown
+from .crs import CRS_NAME
 from .fit import RasterWarning
 
 __all__ = ["MAX_COORDINATE", "ParsedPolygon", "geojson_crs", "parse_geojson", "parse_polygon"]
@@ -67,10 +68,10 @@ def geojson_crs(obj: Mapping[str, Any]) -> str | None:
     if crs is None:
         return None
     name = crs.get("properties", {}).get("name") if isinstance(crs, Mapping) else None
-    if not isinstance(name, str) or not name:
+    if not isinstance(name, str) or not CRS_NAME.fullmatch(name):
         raise InvalidPolygonError(
-            '$.crs: expected {"type": "name", "properties": {"name": "EPSG:…"}}, got '
-            f"{shown(crs)}"
+            '$.crs: expected {"type": "name", "properties": {"name": "EPSG:…"}} (an '
+            f"authority code or its URN), got {shown(crs)}"
         )
     return name
 

@@ -91,7 +91,7 @@ class PolygonRaster:
             "pixels_per_width": self.options.pixels_per_width,
             "pixel_budget": self.options.pixel_budget,
             "repair": self.options.repair,
-            **({} if self.crs is None else {"crs": self.crs}),
+            "crs": self.crs,
             **({} if self.projection is None else {"projection": self.projection.proj}),
         }
 

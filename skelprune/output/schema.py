@@ -297,7 +297,7 @@ class RasterInfoDoc(TypedDict):
     pixels_per_width: Annotated[float, Doc("The option (used when fitted).")]
     pixel_budget: Annotated[int, Doc("The option (used when fitted).")]
     repair: Annotated[bool, Doc("Whether invalid geometry was to be repaired.")]
-    crs: NotRequired[Annotated[str, Doc("The coordinates' CRS, where one was given.")]]
+    crs: Annotated[str | None, Doc("The coordinates' CRS (null: none given, planar).")]
     projection: NotRequired[
         Annotated[
             str,

@@ -109,3 +109,11 @@ def test_standard_geojson_members_and_null_geometries() -> None:
     # every geometry null: a clear error
     with pytest.raises(InvalidPolygonError, match="null"):
         parse_polygon({"type": "FeatureCollection", "features": [_feature(None)]})
+
+
+def test_a_crs_member_is_a_name_never_a_path_or_proj_string() -> None:
+    square = box(0, 0, 40, 40).__geo_interface__
+    for name in ("/etc/passwd", "+proj=longlat +init=x", "../epsg", "epsg:4326 "):
+        doc = {**square, "crs": {"type": "name", "properties": {"name": name}}}
+        with pytest.raises(InvalidPolygonError, match="authority code"):
+            parse_polygon(doc)

@@ -34,6 +34,7 @@ from pydantic import (
     Tag,
     TypeAdapter,
     create_model,
+    model_validator,
 )
 
 from skelprune.options import GROUPS, RasterOptions, ReadOptions
@@ -85,7 +86,13 @@ def _option_models() -> tuple[type[BaseModel], dict[str, Any]]:
                 Literal[choices]
                 if choices
                 else (
-                    bool if kind is bool else int if int in (kind, *get_args(kind)) else FiniteFloat
+                    bool
+                    if kind is bool
+                    else int
+                    if int in (kind, *get_args(kind))
+                    else str
+                    if str in (kind, *get_args(kind))
+                    else FiniteFloat
                 )
             )
             default = f.default if f.default is not None else "none" if choices else None
@@ -127,24 +134,44 @@ def query_parameters(model: type[BaseModel]) -> list[dict[str, Any]]:
 
 
 # ---------------------------------------------------------------- input: GeoJSON
+#: GeoJSON objects may carry foreign members (RFC 7946 §6.1: ``crs``, ``name``, …, as GDAL
+#: and geopandas write them): kept, and passed on to the library, which reads ``crs``.
+GEOJSON = ConfigDict(strict=True, extra="allow")
+#: Option names, refused as foreign members: an option there would be ignored silently
+#: (but ``crs``, which is the GeoJSON's own member too).
+_OPTION_NAMES = frozenset(f.name for group in GROUPS for f in dataclass_fields(group)) - {"crs"}
+
+
+class _GeoJSONObject(BaseModel):
+    model_config = GEOJSON
+
+    @model_validator(mode="after")
+    def _no_options(self) -> Any:
+        misplaced = sorted(_OPTION_NAMES & set(self.model_extra or ()))
+        if misplaced:
+            raise ValueError(
+                f"{', '.join(misplaced)}: an option inside the GeoJSON object; options go in "
+                'the query, or beside it: {"geojson": ..., "beta": ...}'
+            )
+        return self
+
+
 Position = Annotated[list[FiniteFloat], Field(min_length=2, max_length=3)]
 LinearRing = Annotated[list[Position], Field(min_length=4)]
 BBox = Annotated[list[FiniteFloat], Field(min_length=4, max_length=6)]
 
 
-class PolygonGeometry(BaseModel):
+class PolygonGeometry(_GeoJSONObject):
     """GeoJSON Polygon: exterior ring first, then holes; rings closed."""
 
-    model_config = STRICT
     type: Literal["Polygon"]
     coordinates: Annotated[list[LinearRing], Field(min_length=1)]
     bbox: BBox | None = None
 
 
-class MultiPolygonGeometry(BaseModel):
+class MultiPolygonGeometry(_GeoJSONObject):
     """GeoJSON MultiPolygon."""
 
-    model_config = STRICT
     type: Literal["MultiPolygon"]
     coordinates: Annotated[
         list[Annotated[list[LinearRing], Field(min_length=1)]], Field(min_length=1)
@@ -155,21 +182,20 @@ class MultiPolygonGeometry(BaseModel):
 Geometry = Annotated[PolygonGeometry | MultiPolygonGeometry, Field(discriminator="type")]
 
 
-class Feature(BaseModel):
-    """GeoJSON Feature holding a Polygon or MultiPolygon."""
+class Feature(_GeoJSONObject):
+    """GeoJSON Feature holding a Polygon or MultiPolygon, or none (``geometry: null``: the
+    feature is skipped, with a warning)."""
 
-    model_config = STRICT
     type: Literal["Feature"]
-    geometry: Geometry
+    geometry: Geometry | None
     properties: dict[str, Any] | None = None
-    id: str | int | None = None
+    id: str | int | FiniteFloat | None = None
     bbox: BBox | None = None
 
 
-class FeatureCollection(BaseModel):
+class FeatureCollection(_GeoJSONObject):
     """GeoJSON FeatureCollection; the union of its polygons is the shape."""
 
-    model_config = STRICT
     type: Literal["FeatureCollection"]
     features: Annotated[list[Feature], Field(min_length=1)]
     bbox: BBox | None = None

@@ -26,6 +26,7 @@ import typer
 import typer.core
 from typer.exceptions import TyperException
 
+from .cli_geo import register as register_geo
 from .errors import SkelpruneError
 from .options import (
     CHOICES,
@@ -225,6 +226,7 @@ def prune_command(
         int, typer.Option(help=_geojson_only("pixel_budget"))
     ] = RasterOptions.pixel_budget,
     repair: Annotated[bool, typer.Option(help=_geojson_only("repair"))] = RasterOptions.repair,
+    crs: Annotated[str | None, typer.Option(help=_geojson_only("crs"))] = None,
     geojson: Annotated[
         bool,
         typer.Option(
@@ -426,6 +428,10 @@ def version() -> None:
     from . import __version__
 
     typer.echo(__version__)
+
+
+# skelprune centerlines IN OUT: files of polygon features (the geo extra)
+register_geo(app)
 
 
 def main() -> None:  # console-script entry point

@@ -153,6 +153,15 @@ def _flag(name: str, value: Any) -> bool:
     return value
 
 
+def _crs_name(name: str, value: Any) -> str:
+    if not isinstance(value, str):
+        raise InvalidOptionError(f"{name} must be a CRS name (e.g. EPSG:4326), got {shown(value)}")
+    from .io.crs import is_geographic
+
+    is_geographic(value)  # an authority code pyproj knows, or the error says which not
+    return value
+
+
 def _check_fields(options: Any) -> None:
     """Check (and normalise) every field of a frozen options object in place; a field
     whose default is None may be left unset. Every refused field is named in the error
@@ -355,7 +364,7 @@ class RasterOptions:
     --------
     >>> RasterOptions(pixel_size=0.5)  # doctest: +NORMALIZE_WHITESPACE
     RasterOptions(pixel_size=0.5, longest_side=None, pixels_per_width=3.0,
-                  pixel_budget=4194304, repair=True)
+                  pixel_budget=4194304, repair=True, crs=None)
     >>> RasterOptions(pixel_size=0.5, longest_side=100)
     Traceback (most recent call last):
     ...
@@ -394,6 +403,16 @@ class RasterOptions:
         True,
         "Repair self-intersections with shapely's make_valid (true) or refuse them.",
         _flag,
+    )
+    crs: str | None = _option(
+        None,
+        "The coordinates' CRS, an authority code pyproj knows or its URN (EPSG:4326, "
+        "OGC:CRS84 for RFC 7946 GeoJSON, EPSG:32633, urn:ogc:def:crs:EPSG::32633; "
+        "default: the GeoJSON's crs member, else the coordinates are planar and used as "
+        "they are). Longitude/latitude is pruned in a local equidistant projection: "
+        "pixel_size, lengths and radii in metres, lines back in longitude/latitude. Needs "
+        "the geo extra (pyproj).",
+        _crs_name,
     )
 
     def __post_init__(self) -> None:

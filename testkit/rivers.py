@@ -75,3 +75,86 @@ def river(
     if not isinstance(poly, Polygon):  # never expected: the banks do not cross
         poly = max(shapely.get_parts(poly), key=lambda g: g.area)
     return River(poly, LineString(pts), width_min, width_max)
+
+
+def on_earth(shape: Any, lon0: float, lat0: float) -> Any:
+    """A shape in metres placed on the Earth: longitude/latitude (WGS 84) of the points
+    whose local azimuthal equidistant coordinates about ``(lon0, lat0)`` are the shape's,
+    so that it keeps its ground size and shape there (the ``geo`` extra's pyproj).
+
+    >>> from shapely.geometry import box
+    >>> g = on_earth(box(0, 0, 1000, 1000), 10.0, 70.0)
+    >>> round(g.bounds[2] - g.bounds[0], 4), round(g.bounds[3] - g.bounds[1], 4)  # degrees
+    (0.0262, 0.009)
+    """
+    import pyproj
+
+    local = pyproj.CRS.from_proj4(f"+proj=aeqd +lat_0={lat0} +lon_0={lon0} +datum=WGS84 +units=m")
+    back = pyproj.Transformer.from_crs(local, "EPSG:4326", always_xy=True)
+    return shapely.transform(shape, lambda xy: np.column_stack(back.transform(*xy.T)))
+
+
+def ragged_ring(
+    radius: float,
+    roughness: float,
+    rng: np.random.Generator,
+    centre: tuple[float, float] = (0.0, 0.0),
+    stretch: float = 1.0,
+    n: int = 2000,
+) -> np.ndarray:
+    """A closed ragged outline: a circle whose radius carries noise at every scale
+    (harmonics 2–300, amplitudes falling as ``k^-1.6``, as natural shores do), stretched
+    ``stretch`` times along x."""
+    theta = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    k = np.arange(2, 301)
+    amp = rng.standard_normal(len(k)) * k**-1.6
+    amp *= roughness / np.sqrt((amp**2).sum() / 2)
+    phase = rng.uniform(0, 2 * np.pi, len(k))
+    r = radius * (1 + (amp[:, None] * np.sin(k[:, None] * theta + phase[:, None])).sum(0))
+    r = np.maximum(r, 0.25 * radius)
+    x = centre[0] + stretch * r * np.cos(theta)
+    y = centre[1] + r * np.sin(theta)
+    return np.column_stack([x, y])
+
+
+def lake(
+    radius: float = 1000.0,
+    roughness: float = 0.15,
+    islands: int = 0,
+    islets: int = 0,
+    stretch: float = 1.0,
+    seed: int = 0,
+) -> Any:
+    """A ragged lake (or, stretched, a bay or a coastal strip): ``islands`` ragged holes
+    inside, ``islets`` small separate parts off its shore (a MultiPolygon then).
+
+    >>> g = lake(islands=2, islets=3, seed=1)
+    >>> g.is_valid, g.geom_type, len(g.geoms), len(g.geoms[0].interiors)
+    (True, 'MultiPolygon', 4, 2)
+    """
+    rng = np.random.default_rng(seed)
+    shore = Polygon(ragged_ring(radius, roughness, rng, stretch=stretch))
+    shore = max(shapely.get_parts(shapely.make_valid(shore)), key=lambda g: g.area)
+    holes: list[Polygon] = []
+    tries = 0
+    while len(holes) < islands and tries < 200:
+        tries += 1
+        r = radius * rng.uniform(0.05, 0.15)
+        c = (rng.uniform(-0.6, 0.6) * radius * stretch, rng.uniform(-0.6, 0.6) * radius)
+        isle = Polygon(ragged_ring(r, roughness, rng, centre=c, n=400)).buffer(0)
+        inner = shore.buffer(-0.08 * radius)
+        if inner.contains(isle) and all(isle.distance(h) > 0.08 * radius for h in holes):
+            holes.append(isle)
+    body = shore.difference(shapely.union_all(holes)) if holes else shore
+    parts = [body]
+    tries = 0
+    while len(parts) - 1 < islets and tries < 200:
+        tries += 1
+        a = rng.uniform(0, 2 * np.pi)
+        r = radius * rng.uniform(0.02, 0.06)
+        d = radius * stretch * 1.35 + r * 3
+        c = (d * np.cos(a), radius * 1.35 * np.sin(a))
+        islet = Polygon(ragged_ring(r, roughness / 2, rng, centre=c, n=200)).buffer(0)
+        if all(islet.distance(p) > r for p in parts):
+            parts.append(islet)
+    return shapely.MultiPolygon(parts) if len(parts) > 1 else body

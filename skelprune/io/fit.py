@@ -36,6 +36,7 @@ from ..errors import SkelpruneError
 __all__ = [
     "RasterWarning",
     "check_topology",
+    "covered_xy",
     "fitted_pixel_size",
     "narrowest_width",
 ]
@@ -84,26 +85,28 @@ def narrowest_width(geom: MultiPolygon, quantile: float = WIDTH_QUANTILE) -> flo
     20
     """
     geo = geometric_width(geom)
-    rings = [r for part in geom.geoms for r in (part.exterior, *part.interiors)]
-    total = sum(r.length for r in rings)
+    rings = np.array([r for part in geom.geoms for r in (part.exterior, *part.interiors)])
+    lengths = shapely.length(rings).tolist()
+    total = sum(lengths)
     step = max(geo / 8, total / SAMPLES)
-    xy, ring_id, arc, ring_len = [], [], [], []
-    for k, ring in enumerate(rings):
-        dense = shapely.segmentize(ring, step)
-        c = shapely.get_coordinates(dense)[:-1]
-        if len(c) < 3:
-            continue
-        s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(c, axis=0).T))])
-        xy.append(c)
-        ring_id.append(np.full(len(c), k))
-        arc.append(s)
-        ring_len.append(np.full(len(c), ring.length))
-    if not xy:
+    # every ring at once: resampled, its closing position dropped
+    coords, which = shapely.get_coordinates(shapely.segmentize(rings, step), return_index=True)
+    counts = np.bincount(which, minlength=len(rings))
+    last = np.cumsum(counts) - 1
+    open_ = np.ones(len(coords), bool)
+    open_[last[counts > 0]] = False
+    coords, which = coords[open_], which[open_]
+    counts = np.maximum(counts - 1, 0)
+    kept = counts >= 3
+    if not kept.any():
         return geo
-    pts = np.concatenate(xy)
-    rid = np.concatenate(ring_id)
-    s = np.concatenate(arc)
-    length = np.concatenate(ring_len)
+    take = kept[which]
+    pts, rid = coords[take], which[take]
+    pieces = np.split(pts, np.cumsum(counts[kept])[:-1])
+    s = np.concatenate(
+        [np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(c, axis=0).T))]) for c in pieces]
+    )
+    length = np.asarray(lengths)[rid]
     tree = cKDTree(pts)
     dist, nb = tree.query(pts, k=min(NEIGHBOURS, len(pts)))
     same = rid[nb] == rid[:, None]
@@ -114,13 +117,61 @@ def narrowest_width(geom: MultiPolygon, quantile: float = WIDTH_QUANTILE) -> flo
     mid = (pts[:, None, :] + pts[nb]) / 2
     inside = np.zeros_like(across)
     i, j = np.nonzero(across)
-    shapely.prepare(geom)
-    inside[i, j] = shapely.contains_xy(geom, mid[i, j, 0], mid[i, j, 1])
+    inside[i, j] = covered_xy(geom, mid[i, j, 0], mid[i, j, 1], strict=True)
     width = np.where(across & inside, dist, np.inf).min(axis=1)
     width = width[np.isfinite(width)]
     if width.size == 0:  # every neighbour on the same side: wider than the samples see
         return geo
     return min(float(np.quantile(width, quantile)), geo)
+
+
+def covered_xy(geom: MultiPolygon, xs: np.ndarray, ys: np.ndarray, strict: bool = False) -> Any:
+    """Which points lie in a polygon (``strict``: in its interior; else also on its
+    boundary), as ``shapely.intersects_xy`` / ``contains_xy`` answer, in about linear time
+    in the parts and points: the points are binned on a grid of about one cell a part, and
+    each part tests only the points of the cells its box covers.
+
+    >>> from shapely.geometry import box
+    >>> geom = MultiPolygon([box(0, 0, 1, 1), box(2, 0, 3, 1)])
+    >>> covered_xy(geom, np.array([0.5, 1.5, 3.0]), np.array([0.5, 0.5, 0.5])).tolist()
+    [True, False, True]
+    """
+    test = shapely.contains_xy if strict else shapely.intersects_xy
+    parts = list(geom.geoms)
+    if len(parts) <= 1 or len(xs) == 0:
+        shapely.prepare(geom)
+        return test(geom, xs, ys)
+    minx, miny, maxx, maxy = geom.bounds
+    n = math.ceil(math.sqrt(len(parts))) + 1  # cells along each side
+    cw = max(maxx - minx, 1e-300) / n
+    ch = max(maxy - miny, 1e-300) / n
+    cx = np.clip(((xs - minx) / cw).astype(np.int64), 0, n - 1)
+    cy = np.clip(((ys - miny) / ch).astype(np.int64), 0, n - 1)
+    key = cy * n + cx
+    order = np.argsort(key, kind="stable")
+    key = key[order]
+    out = np.zeros(len(xs), dtype=bool)
+    bounds = shapely.bounds(parts)
+    ix0 = np.clip(((bounds[:, 0] - minx) / cw).astype(np.int64), 0, n - 1)
+    ix1 = np.clip(((bounds[:, 2] - minx) / cw).astype(np.int64), 0, n - 1)
+    iy0 = np.clip(((bounds[:, 1] - miny) / ch).astype(np.int64), 0, n - 1)
+    iy1 = np.clip(((bounds[:, 3] - miny) / ch).astype(np.int64), 0, n - 1)
+    # every (part, row of cells) pair at once: the points of its cells' run in the sort
+    spans = iy1 - iy0 + 1
+    part_of = np.repeat(np.arange(len(parts)), spans)
+    row = (np.arange(spans.sum()) - np.repeat(np.cumsum(spans) - spans, spans)) + iy0[part_of]
+    lo = np.searchsorted(key, row * n + ix0[part_of], "left")
+    hi = np.searchsorted(key, row * n + ix1[part_of], "right")
+    runs = hi - lo
+    pair_part = np.repeat(part_of, runs)
+    pair_point = order[
+        np.arange(runs.sum()) - np.repeat(np.cumsum(runs) - runs, runs) + np.repeat(lo, runs)
+    ]
+    geoms = np.array(parts, dtype=object)
+    shapely.prepare(geoms)
+    hit = test(geoms[pair_part], xs[pair_point], ys[pair_point])
+    out[pair_point[hit]] = True
+    return out
 
 
 def budget_pixel_size(geom: MultiPolygon, budget: int, margin: int) -> float:
@@ -152,7 +203,7 @@ def fitted_pixel_size(
 class RasterWarning:
     """A part of the polygon that the raster does not hold as it is."""
 
-    kind: str  # "vanished" | "split" | "merged" | "holes"
+    kind: str  # "vanished" | "split" | "merged" | "holes" | "skipped" | "point"
     message: str
     part: int | None = None  # index of the polygon part, where one is meant
     pixel_size: float | None = None  # a pixel size that holds it (None: not found)
@@ -179,17 +230,20 @@ def _holes(mask: np.ndarray) -> int:
 
 def holding_size(
     part: Polygon, size: float, margin: int, rasterize: Any, max_pixels: int = SEARCH_PIXELS
-) -> float | None:
+) -> tuple[float | None, float | None]:
     """The first of ``size/2, size/4, …`` at which a part alone is one raster component
-    with its holes (None: none within ``max_pixels``)."""
+    with its holes (None: none whose raster of the part is within ``max_pixels``), and
+    the smallest size tried (None: none was)."""
     minx, miny, maxx, maxy = part.bounds
+    tried = None
     for k in range(1, 11):
         s = size / 2**k
         if ((maxx - minx) / s + 2 * margin) * ((maxy - miny) / s + 2 * margin) > max_pixels:
-            return None
+            return None, tried
+        tried = s
         if _part_holds(part, s, margin, rasterize):
-            return s
-    return None
+            return s, tried
+    return None, tried
 
 
 def check_topology(
@@ -219,11 +273,13 @@ def check_topology(
         part = parts[i]
         count = int(comps_of[i])
         where = f"part #{i} of {len(parts)}" if len(parts) > 1 else "the polygon"
-        fix = holding_size(part, size, margin, rasterize)
+        fix, tried = holding_size(part, size, margin, rasterize)
         advice = (
             f"; a pixel_size of {fix:.4g} or less holds it"
             if fix is not None
-            else "; no pixel size within the limits holds it"
+            else f"; none of the sizes tried down to {tried:.4g} holds it"
+            if tried is not None
+            else "; a finer raster of it is beyond the search's limit"
         )
         if count == 0:
             msg = f"{where} is smaller than the pixel ({size:.4g}) and left no pixel{advice}"

@@ -21,6 +21,8 @@ from ..errors import ImageTooLargeError, InvalidImageError, InvalidPolygonError
 from ..options import ARRAY_FOREGROUND, RasterOptions, ReadOptions
 from .foreground import POLYGON_FOREGROUND, Foreground
 from .frame import IDENTITY, PixelFrame
+from .geotiff import GEOTIFF_FOREGROUND, GEOTIFF_SUFFIXES
+from .tiff import is_georeferenced
 
 if TYPE_CHECKING:
     from .polygon import PolygonRaster
@@ -87,6 +89,7 @@ class Input:
     labels: np.ndarray | None = None
     hint: str | None = None
     pixel_size: float | None = None
+    crs: str | None = None  # a GeoTIFF's CRS (a polygon's is its raster's)
 
     def __post_init__(self) -> None:
         mask = np.asarray(self.mask)
@@ -133,10 +136,33 @@ class Input:
         return [] if self.raster is None else [w.to_dict() for w in self.raster.warnings]
 
 
+def _table(source: Any) -> Mapping[str, Any]:
+    """A GeoDataFrame or GeoSeries of one feature as GeoJSON with its CRS; a table of
+    several is refused: each feature is its own shape (one raster would merge them)."""
+    if len(source) != 1:
+        raise InvalidPolygonError(
+            f"a table of {len(source)} features: each is its own shape; prune them one by "
+            "one, or all with skelprune.geo.centerlines(table)"
+        )
+    obj = dict(source.__geo_interface__)
+    crs = source.crs
+    if crs is not None:
+        epsg = crs.to_epsg()
+        name = f"EPSG:{epsg}" if epsg else ":".join(crs.to_authority() or ("?", "?"))
+        obj["crs"] = {"type": "name", "properties": {"name": name}}
+    return obj
+
+
 def _guess(source: Any) -> tuple[Kind, Any]:
     """The kind of an input given without one, and the input as its reader takes it."""
     if isinstance(source, np.ndarray | bytes | bytearray | memoryview):
         return "image", source
+    if (
+        hasattr(source, "__geo_interface__")
+        and hasattr(source, "crs")
+        and hasattr(source, "geometry")
+    ):  # a GeoDataFrame or GeoSeries
+        return "geojson", _table(source)
     if isinstance(source, Mapping) or hasattr(source, "__geo_interface__"):
         return "geojson", source
     if isinstance(source, str) and source.lstrip().startswith("{"):
@@ -150,7 +176,7 @@ def _guess(source: Any) -> tuple[Kind, Any]:
                 raise InvalidPolygonError(
                     f"cannot read {os.fspath(source)!r}: {exc.strerror}"
                 ) from None
-        return "image", path  # the PNG reader opens it
+        return "image", path  # the image (or, when georeferenced, the GeoTIFF) reader opens it
     return "image", np.asarray(source)  # an array-like (nested lists)
 
 
@@ -186,7 +212,9 @@ def read_input(
     source : array, bytes, str, os.PathLike, GeoJSON mapping, shapely geometry or Input
         An image array (``(H, W)``, or ``(H, W, C)`` with ``C`` in 1–4, 2 and 4 with
         alpha last), PNG bytes, a file's path (``.geojson`` and ``.json``: a GeoJSON
-        polygon; anything else: a PNG or TIFF image, told by its first bytes), GeoJSON
+        polygon; a georeferenced TIFF (``.tif``, ``.tiff``): a GeoTIFF mask, its non-zero
+        pixels mapped to its CRS's coordinates: :mod:`.geotiff`; anything else: a PNG or
+        TIFF image, told by its first bytes), GeoJSON
         as a mapping or as text, or any object with ``__geo_interface__`` (a shapely
         (Multi)Polygon). GeoJSON is a ``Polygon``, ``MultiPolygon``, ``Feature`` or
         ``FeatureCollection``. An :class:`Input` is returned as it is.
@@ -246,6 +274,15 @@ def read_input(
         raise InvalidImageError(
             "image input must be PNG or TIFF bytes or an array, not a file name"
         )
+    if (
+        isinstance(source, Path)
+        and source.name.lower().endswith(GEOTIFF_SUFFIXES)
+        and is_georeferenced(source)
+    ):
+        from .geotiff import read_geotiff
+
+        mask, frame, crs = read_geotiff(source, max_pixels=max_pixels)
+        return Input(mask, frame, GEOTIFF_FOREGROUND, crs=crs)
     if read is None:
         read = ReadOptions(ARRAY_FOREGROUND) if isinstance(source, np.ndarray) else ReadOptions()
     values, alpha = _image_values(source, max_pixels)

@@ -1,17 +1,8 @@
 """GeoJSON polygons to a raster mask and the frame that maps pixels back.
 
-Accepted input: a ``Polygon`` or ``MultiPolygon`` geometry, a ``Feature`` holding one,
-or a ``FeatureCollection`` of such features (their union is one shape). Holes allowed.
-
-Validation, with the reason in the error:
-
-- every coordinate a finite number, positions of 2 or 3 numbers (a third, the altitude,
-  is ignored);
-- every ring closed (first position equal to the last) with at least 4 positions;
-- at most ``max_vertices`` positions in all;
-- self-intersecting or otherwise invalid geometry is **repaired** with shapely's
-  ``make_valid`` by default (a bow-tie becomes two triangles); ``repair=False`` refuses
-  it instead, with shapely's reason.
+Parsing and validation: :mod:`skelprune.io.parse` (a ``Polygon`` or ``MultiPolygon``,
+a ``Feature`` holding one, or a ``FeatureCollection`` of them; invalid geometry repaired or
+refused).
 
 Rasterisation: the pixel size is fitted to the polygon (:mod:`skelprune.io.fit`: a few
 pixels across its narrowest part, at least 512 pixels along the bounding box's longer
@@ -27,23 +18,25 @@ World y grows upwards, so row 0 is the top of the bounding box and the returned
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 import cv2
 import numpy as np
-import shapely
-from shapely.geometry import GeometryCollection, MultiPolygon, Polygon
+from shapely.geometry import MultiPolygon
 
 from skelprune.errors import EmptyMaskError, ImageTooLargeError, InvalidPolygonError, shown
+from skelprune.io.crs import LocalProjection, local_projection
 from skelprune.io.fit import (
     RasterWarning,
     budget_pixel_size,
     check_topology,
+    covered_xy,
     fitted_pixel_size,
 )
 from skelprune.io.frame import PixelFrame
+from skelprune.io.parse import parse_geojson, parse_polygon
 from skelprune.options import DEFAULT_LONGEST_SIDE, RasterOptions, options_value
 
 __all__ = [
@@ -62,190 +55,6 @@ DEFAULT_MARGIN = 2
 REFITS = 2
 _SHIFT = 8  # fractional bits for cv2.fillPoly: sub-pixel vertex positions
 _MAX_SIDE = 1 << 20  # keeps fixed-point vertex coordinates inside int32
-#: Largest coordinate magnitude accepted: its square (an area) is still a finite float.
-MAX_COORDINATE = 1e150
-
-
-def _geometries(obj: Any, where: str) -> Iterator[tuple[str, Mapping[str, Any]]]:
-    if not isinstance(obj, Mapping):
-        raise InvalidPolygonError(f"{where}: expected a GeoJSON object, got {type(obj).__name__}")
-    kind = obj.get("type")
-    if kind in ("Polygon", "MultiPolygon"):
-        yield where, obj
-    elif kind == "Feature":
-        geometry = obj.get("geometry")
-        if geometry is None:
-            raise InvalidPolygonError(f"{where}: Feature has no geometry")
-        yield from _geometries(geometry, f"{where}.geometry")
-    elif kind == "FeatureCollection":
-        features = obj.get("features")
-        if not isinstance(features, list) or not features:
-            raise InvalidPolygonError(f"{where}: FeatureCollection has no features")
-        for i, feature in enumerate(features):
-            if not isinstance(feature, Mapping) or feature.get("type") != "Feature":
-                raise InvalidPolygonError(f"{where}.features[{i}]: not a Feature")
-            yield from _geometries(feature, f"{where}.features[{i}]")
-    else:
-        raise InvalidPolygonError(
-            f"{where}: type {shown(kind)} is not Polygon, MultiPolygon, Feature or "
-            "FeatureCollection"
-        )
-
-
-def _finite(v: int | float) -> bool:
-    """True for a number that converts to a finite float (a huge int overflows)."""
-    try:
-        return math.isfinite(v)
-    except OverflowError:
-        return False
-
-
-def _areas(geom: Any) -> list[Polygon]:
-    """The non-empty polygons of any geometry (collections flattened)."""
-    return [g for g in shapely.get_parts(geom) if isinstance(g, Polygon) and not g.is_empty] + [
-        p
-        for g in shapely.get_parts(geom)
-        if isinstance(g, MultiPolygon | GeometryCollection)
-        for p in _areas(g)
-    ]
-
-
-def _bounds(geom: Any) -> tuple[float, float, float, float]:
-    return tuple(shapely.bounds(geom))  # type: ignore[return-value]
-
-
-def _ring(ring: Any, where: str) -> np.ndarray:
-    if not isinstance(ring, list | tuple):
-        raise InvalidPolygonError(f"{where}: a ring must be an array of positions")
-    if len(ring) < 4:
-        raise InvalidPolygonError(
-            f"{where}: a ring needs at least 4 positions (closed triangle), got {len(ring)}"
-        )
-    out = np.empty((len(ring), 2), dtype=np.float64)
-    for i, pos in enumerate(ring):
-        if not isinstance(pos, list | tuple) or not 2 <= len(pos) <= 3:
-            raise InvalidPolygonError(f"{where}[{i}]: a position must be [x, y] or [x, y, z]")
-        for v in pos:
-            if isinstance(v, bool) or not isinstance(v, int | float) or not _finite(v):
-                raise InvalidPolygonError(
-                    f"{where}[{i}]: coordinate {shown(v)} is not a finite number"
-                )
-        out[i] = pos[0], pos[1]
-    if not np.array_equal(out[0], out[-1]):
-        raise InvalidPolygonError(
-            f"{where}: ring is not closed, first position {out[0].tolist()} "
-            f"differs from last {out[-1].tolist()}"
-        )
-    return out
-
-
-def _count(coords: Any, multi: bool) -> int:
-    """Positions in a (Multi)Polygon's coordinates; malformed parts count as 0 here."""
-    if not isinstance(coords, list | tuple):
-        return 0
-    polys = coords if multi else [coords]
-    return sum(
-        len(r)
-        for p in polys
-        if isinstance(p, list | tuple)
-        for r in p
-        if isinstance(r, list | tuple)
-    )
-
-
-def _polygons(coords: Any, where: str, multi: bool) -> Iterator[tuple[str, list[np.ndarray]]]:
-    if not isinstance(coords, list | tuple) or not coords:
-        raise InvalidPolygonError(f"{where}: coordinates must be a non-empty array")
-    if multi:
-        for i, poly in enumerate(coords):
-            yield from _polygons(poly, f"{where}[{i}]", False)
-    else:
-        yield where, [_ring(r, f"{where}[{j}]") for j, r in enumerate(coords)]
-
-
-def parse_geojson(
-    obj: Mapping[str, Any], *, max_vertices: int | None = None, repair: bool = True
-) -> MultiPolygon:
-    """Validate a GeoJSON polygon object and return it as one valid shapely geometry.
-
-    Parameters
-    ----------
-    obj : Mapping
-        ``Polygon``, ``MultiPolygon``, ``Feature`` or ``FeatureCollection``.
-    max_vertices : int, optional
-        Refuse inputs with more positions than this, all rings together.
-    repair : bool
-        Repair invalid geometry (self-intersections, overlapping parts) with
-        ``shapely.make_valid``; if False, refuse it.
-
-    Returns
-    -------
-    shapely.geometry.MultiPolygon
-        The union of all polygons, valid, with non-zero area.
-
-    Raises
-    ------
-    InvalidPolygonError
-        With the reason and the JSON location of the offending part.
-    """
-    geometries = list(_geometries(obj, "$"))
-    if max_vertices is not None:
-        # Counted before any position is looked at, so a huge input is refused cheaply.
-        n_vertices = sum(
-            _count(g.get("coordinates"), g["type"] == "MultiPolygon") for _, g in geometries
-        )
-        if n_vertices > max_vertices:
-            raise InvalidPolygonError(
-                f"too many vertices: {n_vertices} positions, more than {max_vertices} allowed"
-            )
-    parts: list[tuple[str, Polygon]] = []
-    for where, geometry in geometries:
-        multi = geometry["type"] == "MultiPolygon"
-        for pwhere, rings in _polygons(geometry.get("coordinates"), f"{where}.coordinates", multi):
-            if max(float(np.abs(r).max()) for r in rings) > MAX_COORDINATE:
-                # Beyond it GEOS overflows on areas, and lengths in the answer would not
-                # be finite (JSON cannot write them).
-                raise InvalidPolygonError(
-                    "coordinates span too large a range to rasterise: every coordinate must "
-                    f"lie within ±{MAX_COORDINATE:.0e}"
-                )
-            poly = Polygon(rings[0], rings[1:])
-            if not poly.is_valid and not repair:
-                reason = shapely.is_valid_reason(poly)
-                raise InvalidPolygonError(f"{pwhere}: invalid polygon: {reason}")
-            parts.append((pwhere, poly))
-    areas: list[Polygon] = []
-    for pwhere, poly in parts:
-        try:
-            fixed = shapely.make_valid(poly)
-        except shapely.errors.GEOSException:
-            # The default ("linework") repair fails on some degenerate rings (e.g. an
-            # exterior collapsed to a point); the "structure" one treats rings as areas.
-            try:
-                fixed = shapely.make_valid(poly, method="structure", keep_collapsed=False)
-            except shapely.errors.GEOSException as exc:
-                raise InvalidPolygonError(f"{pwhere}: cannot repair the polygon: {exc}") from None
-        # make_valid may also yield lines and points (zero-area slivers), and GEOS refuses
-        # to union mixed dimensions: keep only the areas.
-        areas += _areas(fixed)
-    try:
-        geom = shapely.union_all(areas)
-    except shapely.errors.GEOSException:
-        # Nearly coincident edges can defeat the floating-point overlay; the snap-rounding
-        # one on a grid far below a pixel is robust.
-        extent = max((max(b[2] - b[0], b[3] - b[1]) for b in map(_bounds, areas)), default=0.0)
-        try:
-            geom = shapely.union_all(areas, grid_size=extent * 1e-9 or None)
-        except shapely.errors.GEOSException as exc:
-            raise InvalidPolygonError(f"cannot combine the polygons: {exc}") from None
-    if not geom.is_valid and not repair:  # e.g. two valid polygons overlapping
-        raise InvalidPolygonError(f"invalid geometry: {shapely.is_valid_reason(geom)}")
-    # make_valid may also yield lines and points (zero-area slivers); only areas are shapes.
-    polys = [g for g in shapely.get_parts(geom) if isinstance(g, Polygon) and not g.is_empty]
-    result = MultiPolygon(polys) if polys else MultiPolygon()
-    if result.is_empty or result.area <= 0:
-        raise InvalidPolygonError("polygon has zero area")
-    return result
 
 
 @dataclass
@@ -255,6 +64,9 @@ class PolygonRaster:
     ``fitted`` tells whether the pixel size came from the polygon (no ``pixel_size`` or
     ``longest_side`` given); ``warnings`` lists the parts the raster does not hold as they
     are (:func:`skelprune.io.fit.check_topology`); ``options`` are the options that made it.
+    ``crs``: the coordinates' CRS, where one is known; ``projection``: for geographic
+    coordinates, the local projection the polygon (``geometry``, in metres) and the frame
+    are in (:mod:`skelprune.io.crs`).
     """
 
     geometry: MultiPolygon
@@ -263,6 +75,8 @@ class PolygonRaster:
     fitted: bool
     warnings: list[RasterWarning] = field(default_factory=list)
     options: RasterOptions = field(default_factory=RasterOptions)
+    crs: str | None = None
+    projection: LocalProjection | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """What the document says of the raster (``raster``): its size and every raster
@@ -277,6 +91,8 @@ class PolygonRaster:
             "pixels_per_width": self.options.pixels_per_width,
             "pixel_budget": self.options.pixel_budget,
             "repair": self.options.repair,
+            "crs": self.crs,
+            **({} if self.projection is None else {"projection": self.projection.proj}),
         }
 
 
@@ -435,10 +251,9 @@ def _fill(
     # boundary. Only the thin band is tested, so this costs little.
     band = cv2.dilate(band, np.ones((3, 3), np.uint8))
     rows, cols = np.nonzero(band)
-    shapely.prepare(geom)
     xs = frame.x0 + cols * pixel_size
     ys = frame.y0 - rows * pixel_size
-    canvas[rows, cols] = shapely.intersects_xy(geom, xs, ys)
+    canvas[rows, cols] = covered_xy(geom, xs, ys)
     if not canvas.any():
         raise EmptyMaskError(
             f"the polygon covers no pixel centre at a pixel size of {pixel_size:.3g}: it is "
@@ -483,7 +298,18 @@ def read_polygon(
     :func:`parse_geojson` then :func:`polygon_raster`.
 
     The one way a polygon becomes a raster for pruning (:func:`skelprune.io.read_input`).
+    A polygon in a geographic CRS (``options.crs``, else the GeoJSON's ``crs`` member) is
+    rasterised in its local equidistant projection (:mod:`skelprune.io.crs`).
     """
     options = RasterOptions() if options is None else options
-    geom = parse_geojson(obj, max_vertices=max_vertices, repair=options.repair)
-    return polygon_raster(geom, options, max_pixels=max_pixels)
+    parsed = parse_polygon(obj, max_vertices=max_vertices, repair=options.repair)
+    crs = options.crs or parsed.crs
+    geom, projection = parsed.geometry, None
+    if crs is not None:
+        projection = local_projection(geom, crs)
+        if projection is not None:
+            geom = projection.forward(geom)
+    raster = polygon_raster(geom, options, max_pixels=max_pixels)
+    raster.warnings[:0] = parsed.warnings
+    raster.crs, raster.projection = crs, projection
+    return raster

@@ -26,6 +26,7 @@ Codecs: Deflate uses the standard library's ``zlib``; LZW and PackBits need
 from __future__ import annotations
 
 import io
+import os
 import zlib
 from typing import Any
 
@@ -33,7 +34,7 @@ import numpy as np
 
 from ..errors import ImageTooLargeError, InvalidImageError
 
-__all__ = ["COMPRESSIONS", "is_tiff", "read_tiff", "tiff_size"]
+__all__ = ["COMPRESSIONS", "is_georeferenced", "is_tiff", "read_tiff", "tiff_size"]
 
 #: TIFF compression codes read, and their names.
 COMPRESSIONS = {1: "none", 5: "LZW", 8: "Deflate", 32946: "Deflate", 32773: "PackBits"}
@@ -48,6 +49,36 @@ MAX_DECODED_BYTES_PER_PIXEL = 16
 def is_tiff(data: bytes) -> bool:
     """Whether ``data`` starts with a TIFF (or BigTIFF) signature."""
     return bytes(data[:4]) in _SIGNATURES
+
+
+#: The GeoTIFF tags that place an image on a map (pixel scale, tie points, a
+#: transformation matrix, the geo keys): a TIFF with any of them is read as a GeoTIFF.
+GEO_TAGS = (33550, 33922, 34264, 34735)
+
+
+def is_georeferenced(path: os.PathLike[str] | str) -> bool:
+    """Whether the TIFF file at ``path`` carries a georeference (its first page's header
+    only; a file that is not a readable TIFF is not).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, tifffile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "plain.tif"
+    >>> tifffile.imwrite(path, np.zeros((4, 4), np.uint8))
+    >>> is_georeferenced(path)
+    False
+    """
+    import tifffile
+
+    try:
+        with open(path, "rb") as f:
+            if not is_tiff(f.read(4)):
+                return False
+        with tifffile.TiffFile(path) as tif:
+            tags = tif.pages[0].tags
+            return any(code in tags for code in GEO_TAGS)
+    except Exception:  # a broken header: the image reader names what is wrong
+        return False
 
 
 def _page(data: bytes) -> Any:

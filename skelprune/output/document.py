@@ -432,6 +432,7 @@ class PruneResult:
             simplify,
             cut_ends,
             self.raster,
+            crs=self.input.crs,
         )
         from .summary import geojson_numbers
 

@@ -13,6 +13,7 @@ from .lines import boundary_index, cut_end_forks, map_lines, mask_distance, rece
 from .table import frame_distances, frame_points
 
 if TYPE_CHECKING:
+    from ..io.crs import LocalProjection
     from ..io.polygon import PolygonRaster
     from .schema import ComponentSummaryDoc, SkeletonGeoJSON
     from .table import BranchTable
@@ -41,12 +42,16 @@ def skeleton_geojson(
     simplify: float = 0.5,
     cut_ends: bool = False,
     raster: PolygonRaster | None = None,
+    crs: str | None = None,
 ) -> SkeletonGeoJSON:
     """Branches as LineStrings and nodes as Points, in ``frame``'s coordinates (the
     parameters and properties as :meth:`~skelprune.output.document.PruneResult.to_geojson`
     describes them): one table and one summary per component, the mask they came from,
-    the collection's ``properties`` but its ``components``, and a polygon's raster."""
+    the collection's ``properties`` but its ``components``, a polygon's raster, and the
+    CRS of the frame's coordinates where one is known (a GeoTIFF's; a polygon's raster
+    has its own)."""
     polygon = None if raster is None or simplify <= 0 else raster_polygon(raster)
+    projection = None if raster is None else raster.projection
     index = None if polygon is None else boundary_index(polygon)
     distance = mask_distance(mask)
     features: list[Any] = []
@@ -69,7 +74,7 @@ def skeleton_geojson(
         removed = [None if k < 0 else k for k in t.removed_at.tolist()]
         used: set[int] = set()
         for i, line in zip(kept, simple, strict=True):
-            fx, fy = frame_points(frame, line[:, 0], line[:, 1])
+            fx, fy = _placed(frame, projection, line[:, 0], line[:, 1])
             src = ends_at.get((i, "source"), source[i])
             dst = ends_at.get((i, "target"), target[i])
             used.update((src, dst))
@@ -104,7 +109,7 @@ def skeleton_geojson(
             features.append(
                 {
                     "type": "Feature",
-                    "geometry": {"type": "Point", "coordinates": list(frame.point(x, y))},
+                    "geometry": {"type": "Point", "coordinates": _point(frame, projection, x, y)},
                     "properties": {
                         "component": ci,
                         "kind": kind,
@@ -118,4 +123,31 @@ def skeleton_geojson(
     properties: Any = {**header, "components": summaries}
     if raster is not None:
         properties["warnings"] = [w.to_dict() for w in raster.warnings]
-    return {"type": "FeatureCollection", "properties": properties, "features": features}
+    out: Any = {"type": "FeatureCollection", "properties": properties, "features": features}
+    crs = raster.crs if raster is not None and raster.crs is not None else crs
+    if crs is not None:
+        properties["crs"] = crs
+        out["crs"] = {"type": "name", "properties": {"name": crs}}
+    return out
+
+
+def _placed(
+    frame: PixelFrame, projection: LocalProjection | None, x: np.ndarray, y: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Pixel positions in the input's coordinates: the frame's, and back from the local
+    projection for geographic input (rounded to a thousandth of a pixel, as the frame)."""
+    fx, fy = frame_points(frame, x, y)
+    if projection is None:
+        return fx, fy
+    lon, lat = projection.back(fx, fy)
+    decimals = projection.decimals(frame.pixel_size)
+    return np.round(lon, decimals), np.round(lat, decimals)
+
+
+def _point(
+    frame: PixelFrame, projection: LocalProjection | None, x: float, y: float
+) -> list[float]:
+    if projection is None:
+        return list(frame.point(x, y))
+    fx, fy = _placed(frame, projection, np.array([x], float), np.array([y], float))
+    return [float(fx[0]), float(fy[0])]

@@ -42,8 +42,11 @@ __all__ = [
 RETRIES = 3
 
 
-def douglas_peucker(xy: np.ndarray, tolerance: float) -> np.ndarray:
+def douglas_peucker(xy: np.ndarray, tolerance: float | np.ndarray) -> np.ndarray:
     """Indices of the points kept by Douglas–Peucker (first and last always kept).
+
+    ``tolerance`` may be one per point (how far the line may move at that point: a
+    point is kept where its distance most exceeds its own tolerance).
 
     >>> xy = np.array([[0, 0], [1, 0.1], [2, 0], [3, 2]], float)
     >>> douglas_peucker(xy, 0.5).tolist()
@@ -53,8 +56,11 @@ def douglas_peucker(xy: np.ndarray, tolerance: float) -> np.ndarray:
     4
     """
     n = len(xy)
-    if n <= 2 or tolerance <= 0:
+    per_point = np.ndim(tolerance) > 0
+    if n <= 2 or (not per_point and tolerance <= 0):
         return np.arange(n)
+    if per_point:
+        tol = np.maximum(np.asarray(tolerance, float), 1e-12)
     keep = np.zeros(n, bool)
     keep[0] = keep[-1] = True
     stack = [(0, n - 1)]
@@ -74,8 +80,14 @@ def douglas_peucker(xy: np.ndarray, tolerance: float) -> np.ndarray:
             d = np.hypot(pts[:, 0], pts[:, 1])
         else:
             d = np.abs(seg[0] * pts[:, 1] - seg[1] * pts[:, 0]) / norm
-        i = int(np.argmax(d))
-        if d[i] > tolerance:
+        if per_point:
+            excess = d / tol[a + 1 : b]
+            i = int(np.argmax(excess))
+            far = bool(excess[i] > 1)
+        else:
+            i = int(np.argmax(d))
+            far = bool(d[i] > tolerance)
+        if far:
             m = a + 1 + i
             keep[m] = True
             stack += [(a, m), (m, b)]

@@ -307,12 +307,23 @@ class RasterInfoDoc(TypedDict):
     pixels_per_width: Annotated[float, Doc("The option (used when fitted).")]
     pixel_budget: Annotated[int, Doc("The option (used when fitted).")]
     repair: Annotated[bool, Doc("Whether invalid geometry was to be repaired.")]
+    crs: Annotated[str | None, Doc("The coordinates' CRS (null: none given, planar).")]
+    projection: NotRequired[
+        Annotated[
+            str,
+            Doc(
+                "Geographic coordinates: the local azimuthal equidistant projection (PROJ "
+                "string) the polygon was pruned in; the document's coordinates, lengths and "
+                "radii are in its metres, the GeoJSON's lines back in the input's CRS."
+            ),
+        ]
+    ]
 
 
 class RasterWarningItemDoc(TypedDict):
     """A part of the polygon that the raster does not hold as it is."""
 
-    kind: Literal["vanished", "split", "merged", "holes"]
+    kind: Literal["vanished", "split", "merged", "holes", "skipped"]
     message: str
     part: Annotated[int | None, Doc("The polygon part meant, if one is.")]
     pixel_size: Annotated[
@@ -450,6 +461,20 @@ class CollectionPropertiesDoc(TypedDict):
     warnings: NotRequired[
         Annotated[list[RasterWarningItemDoc], Doc("Polygon input only, as in the JSON document.")]
     ]
+    crs: NotRequired[
+        Annotated[str, Doc("The coordinates' CRS, where the input named one (else absent).")]
+    ]
+
+
+class CrsNamePropertiesDoc(TypedDict):
+    name: str
+
+
+class CrsDoc(TypedDict):
+    """The 2008 GeoJSON ``crs`` member, which GDAL and geopandas read."""
+
+    type: Literal["name"]
+    properties: CrsNamePropertiesDoc
 
 
 class SkeletonGeoJSON(TypedDict):
@@ -458,6 +483,9 @@ class SkeletonGeoJSON(TypedDict):
     type: Literal["FeatureCollection"]
     properties: CollectionPropertiesDoc
     features: list[BranchFeatureDoc | NodeFeatureDoc]
+    crs: NotRequired[
+        Annotated[CrsDoc, Doc("The coordinates' CRS, where the input named one (else absent).")]
+    ]
 
 
 # ------------------------------------------------------------------------- the check

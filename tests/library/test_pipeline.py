@@ -174,6 +174,7 @@ CHANGES: dict[str, tuple[dict[str, Any], Any]] = {
     ),
     "pixel_budget": ({"pixel_budget": 8192}, lambda r: _doc(r)["raster"]["pixel_budget"]),
     "repair": ({"repair": False}, lambda r: _doc(r)["raster"]["repair"]),
+    "crs": ({"crs": "EPSG:32633"}, lambda r: _doc(r)["raster"]["crs"]),
     # OutputOptions: what each output holds
     "curve": ({"curve": False}, lambda r: "curve" in _doc(r)["components"][0]),
     "overlay": ({"overlay": True}, lambda r: "overlay_png" in _doc(r)),

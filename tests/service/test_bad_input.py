@@ -392,11 +392,12 @@ CASES = [
         ("geojson", "Field required"),
     ),
     Case(
-        "unknown-body-field",
-        js({**polygon(RECT), "colour": "red"}),
+        # foreign members are GeoJSON (RFC 7946 §6.1), but an option there would be ignored
+        "option-inside-geojson",
+        js({**polygon(RECT), "colour": "red", "beta": 3}),
         "application/json",
         422,
-        ("colour", "Extra inputs"),
+        ("beta", "option inside the GeoJSON"),
     ),
     Case(
         "unknown-envelope-option",

@@ -1,0 +1,194 @@
+"""GIS data as it comes: GeoDataFrames and files of features, GeoTIFF masks, staircase
+outlines traced from pixels, lines a cartographer would draw."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+from shapely import affinity
+from shapely.geometry import MultiPolygon, Point, box, shape
+
+import skelprune
+
+gpd = pytest.importorskip("geopandas", reason="the geo extra")  # make test installs it
+rasterio = pytest.importorskip("rasterio", reason="the geo extra")
+from rasterio import features  # noqa: E402
+from rasterio.transform import from_origin  # noqa: E402
+
+from skelprune.geo import centerlines, feature_lines  # noqa: E402
+from testkit.rivers import lake, on_earth, river  # noqa: E402
+
+CLI = [sys.executable, "-m", "skelprune.cli"]
+
+
+def traced(geom: object, px: float) -> object:
+    """A polygon burnt into a mask of ``px`` pixels and traced back (staircase outline),
+    as a segmentation's polygons are made."""
+    minx, miny, maxx, maxy = geom.bounds  # type: ignore[attr-defined]
+    transform = from_origin(minx - 2 * px, maxy + 2 * px, px, px)
+    width, height = int((maxx - minx) / px) + 4, int((maxy - miny) / px) + 4
+    mask = features.rasterize([geom], out_shape=(height, width), transform=transform)
+    mask = mask.astype(np.uint8)
+    (poly,) = [
+        shape(g) for g, v in features.shapes(mask, mask=mask > 0, transform=transform) if v == 1
+    ]
+    return poly
+
+
+def test_staircase_t_gives_the_three_lines_a_person_draws() -> None:
+    # a T of 40 m strokes, turned 30°: a person draws three lines (the bar's two arms
+    # and the stem), whatever the pixel steps of its outline
+    tee = shapely.union_all([box(0, 0, 400, 40), box(180, -300, 220, 0)])
+    tee = affinity.rotate(tee, 30, origin=(200, 0))
+    for px in (10.0, 5.0):
+        stairs = traced(tee, px)
+        raw = skelprune.prune(stairs).to_geojson()
+        branches = [f for f in raw["features"] if f["properties"]["kind"] == "branch"]
+        assert len(branches) > 3  # the pruning's answer keeps corners' branches
+        rows, _ = feature_lines(stairs)
+        assert [r["kind"] for r in rows] == ["line"] * 3
+        lines = [r["geometry"] for r in rows]
+        assert all(stairs.covers(ln) for ln in lines)
+        # few vertices: at most 4 a mean width of line
+        vertices = sum(len(ln.coords) for ln in lines)
+        assert vertices <= 4 * sum(ln.length for ln in lines) / 40
+        # the lines meet: one network
+        assert shapely.union_all(lines).geom_type in ("MultiLineString", "LineString")
+        ends = [Point(c) for ln in lines for c in (ln.coords[0], ln.coords[-1])]
+        assert sum(any(e.distance(f) < 1e-6 for f in ends if f is not e) for e in ends) >= 3
+        # main_path: one line, the longest path (arm to arm, or arm to the stem's end)
+        (main,), _ = feature_lines(stairs, main_path=True)
+        assert main["geometry"].length > 350
+
+
+@pytest.mark.parametrize(
+    ("kind", "shape_kw"),
+    [
+        ("lake with islands", {"seed": 2, "islands": 3, "stretch": 1.5, "roughness": 0.2}),
+        ("lake with islets", {"seed": 4, "islets": 4, "stretch": 1.5, "roughness": 0.2}),
+        ("coastal strip", {"seed": 3, "stretch": 4, "roughness": 0.2}),
+    ],
+)
+def test_ragged_outlines_give_few_vertices_per_width(kind: str, shape_kw: dict) -> None:
+    geom = lake(**shape_kw)
+    rows, _ = feature_lines(geom)
+    lines = [r for r in rows if r["kind"] == "line"]
+    assert lines, kind
+    length = sum(r["geometry"].length for r in lines)
+    width = sum(r["width"] * r["geometry"].length for r in lines) / length
+    vertices = sum(len(r["geometry"].coords) for r in lines)
+    assert vertices / (length / width) <= 4, kind
+    assert all(geom.covers(r["geometry"]) for r in lines), kind
+    # every part has its row: the islets their points
+    parts = len(getattr(geom, "geoms", [geom]))
+    assert sorted({r["part"] for r in rows}) == list(range(parts))
+
+
+def test_each_feature_on_its_own_with_ids_and_attributes() -> None:
+    # two lakes that overlap: two features, each its own line, never merged
+    lakes = gpd.GeoDataFrame(
+        {"name": ["west", "east"]},
+        geometry=[box(0, 0, 3000, 600), box(2500, 0, 5500, 600)],
+        index=["w7", "e9"],
+        crs="EPSG:32633",
+    )
+    out = centerlines(lakes)
+    assert out.crs == lakes.crs
+    assert out["feature"].tolist() == ["w7", "e9"]
+    assert out["name"].tolist() == ["west", "east"]
+    assert out["length"].round().tolist() == [3000, 3000]
+    assert out["width"].between(500, 700).all()
+
+
+def test_lonlat_frame_comes_back_in_lonlat_with_lengths_in_metres() -> None:
+    reach = river(5_000, 20, 60, seed=1)
+    frame = gpd.GeoDataFrame(geometry=[on_earth(reach.polygon, 10.0, 60.0)], crs="EPSG:4326")
+    out = centerlines(frame, jobs=2)
+    assert out.crs == frame.crs
+    (line,) = out.geometry
+    lon, lat = np.asarray(line.coords).T
+    assert np.all((lon > 9.9) & (lon < 10.1) & (lat > 59.9) & (lat < 60.1))
+    assert 4500 < out["length"][0] < 5100  # metres, along a 5 km river
+    assert 20 < out["width"][0] < 60
+
+
+def test_cli_writes_a_geopackage_of_mixed_polygons(tmp_path: Path) -> None:
+    islets = MultiPolygon(
+        [box(0, 0, 2000, 600), *(box(3000 + 40 * i, 0, 3005 + 40 * i, 5) for i in range(3))]
+    )
+    lake_with_island = Point(0, 0).buffer(500).difference(Point(100, 50).buffer(120))
+    frame = gpd.GeoDataFrame(
+        {"name": ["river", "lake", "islets", "nothing"]},
+        geometry=[river(3_000, 20, 60, seed=2).polygon, lake_with_island, islets, None],
+        crs="EPSG:32633",
+    )
+    source, target = tmp_path / "mixed.gpkg", tmp_path / "lines.gpkg"
+    frame.to_file(source, driver="GPKG")
+    run = subprocess.run(
+        [*CLI, "centerlines", str(source), str(target), "--jobs", "2", "--pixel-size", "4"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert run.returncode == 1  # one feature failed: said, and the others written
+    assert "feature 3" in run.stderr and "no polygon" in run.stderr
+    out = gpd.read_file(target)
+    assert out.crs == frame.crs
+    assert sorted(set(out["name"])) == ["islets", "lake", "nothing", "river"]
+    islet_rows = out[out["name"] == "islets"]
+    # every part of the multi-polygon has its row: a line, and a point for each islet
+    assert islet_rows["kind"].tolist() == ["line", "point", "point", "point"]
+    assert islet_rows["part"].tolist() == [0, 1, 2, 3]
+    points = islet_rows[islet_rows["kind"] == "point"].geometry
+    assert all(islets.geoms[i + 1].contains(p) for i, p in enumerate(points))
+    failed = out[out["name"] == "nothing"]
+    assert failed.geometry.isna().all() and "no polygon" in failed["error"].iloc[0]
+    lake_rows = out[out["name"] == "lake"]
+    assert (lake_rows["kind"] == "line").all()
+    assert all(lake_with_island.covers(g) for g in lake_rows.geometry)
+
+
+def test_geotiff_mask_gives_lines_in_its_crs_and_map_coordinates(tmp_path: Path) -> None:
+    mask = np.zeros((60, 200), np.uint8)
+    mask[20:40, 10:190] = 1  # a strip 20 px = 40 m wide, 180 px = 360 m long
+    path = tmp_path / "mask.tif"
+    with rasterio.open(
+        path,
+        "w",
+        driver="GTiff",
+        width=200,
+        height=60,
+        count=1,
+        dtype="uint8",
+        crs="EPSG:32633",
+        transform=from_origin(500_000, 6_600_000, 2, 2),
+    ) as f:
+        f.write(mask, 1)
+    geo = skelprune.prune(path).to_geojson()
+    assert geo["crs"] == {"type": "name", "properties": {"name": "EPSG:32633"}}
+    branches = [f for f in geo["features"] if f["properties"]["kind"] == "branch"]
+    xy = np.concatenate([np.asarray(f["geometry"]["coordinates"]) for f in branches])
+    # the strip's map coordinates: x 500020…500380, y 6599920…6599960
+    assert np.all((xy[:, 0] >= 500_020) & (xy[:, 0] <= 500_380))
+    assert np.all((xy[:, 1] >= 6_599_920) & (xy[:, 1] <= 6_599_960))
+    longest = max(f["properties"]["length"] for f in branches)
+    assert 250 < longest < 360  # metres
+    run = subprocess.run(
+        [*CLI, "prune", str(path), "--geojson"], capture_output=True, text=True, timeout=120
+    )
+    assert run.returncode == 0 and '"EPSG:32633"' in run.stdout
+
+
+def test_prune_takes_a_one_feature_table_with_its_crs_and_refuses_a_merge() -> None:
+    reach = box(0, 0, 3000, 800)
+    lonlat = gpd.GeoDataFrame(geometry=[on_earth(reach, 10.0, 60.0)], crs="EPSG:4326")
+    raster = skelprune.prune(lonlat).to_dict()["raster"]
+    assert raster["crs"] == "EPSG:4326" and 2 < raster["pixel_size"] < 20  # metres
+    two = gpd.GeoDataFrame(geometry=[reach, box(2500, 0, 5500, 600)], crs="EPSG:32633")
+    with pytest.raises(skelprune.InvalidPolygonError, match="each is its own shape"):
+        skelprune.prune(two)

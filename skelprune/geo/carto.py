@@ -12,8 +12,8 @@ CRS, lengths and radii in its units):
    outline, not into a part of the shape: it is dropped, the lines joined again, and
    again, until none is.
 3. **Ends run straight to the boundary.** A free end's last stretch, as far as the tip
-   lies in the inscribed disk of a vertex before it, bends into a corner: it is cut, and
-   the line runs on in its own direction to the boundary.
+   lies within √2 radii of a vertex before it (a right angle's corner), bends into a
+   corner: it is cut, and the line runs on in its own direction to the boundary.
 4. **Simplified by the local width.** Douglas–Peucker where each vertex may move by
    ``share`` of its own half-width (the skeleton's radius there): a wide lake's line
    keeps few vertices, a narrow inlet's its detail. A line that leaves the polygon is
@@ -38,6 +38,9 @@ __all__ = ["END_FACTOR", "SHARE", "CartoLine", "cartographic_lines"]
 
 #: An end branch shorter than this many junction radii is a corner's, not a part's.
 END_FACTOR = 2.0
+#: How far (in radii of a vertex's inscribed disk) a free end may run on into a corner
+#: and still be cut: a right angle's corner lies √2 radii from the disk's centre.
+CORNER_REACH = float(np.sqrt(2.0))
 #: Share of the local half-width a simplified line may move by.
 SHARE = 0.25
 #: Halvings of the share tried for a line that leaves the polygon.
@@ -126,9 +129,11 @@ def _drop_short_ends(
 
 def _trim_tip(xy: np.ndarray, radii: np.ndarray) -> int:
     """How many vertices of a free end (at ``xy[0]``) run into a corner: those up to the
-    innermost vertex whose inscribed disk still holds the tip (along the line)."""
+    innermost vertex whose inscribed disk, grown by √2, still holds the tip (along the
+    line). A right angle's bisector runs √2 radii from the disk's centre to the corner,
+    so the stretch into a rectangle's corner is cut as a round end's hook is."""
     arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
-    inside = np.flatnonzero(arc <= radii)
+    inside = np.flatnonzero(arc <= CORNER_REACH * radii)
     if len(inside) == 0 or inside[-1] == 0 or inside[-1] >= len(xy) - 1:
         return 0
     return int(inside[-1])

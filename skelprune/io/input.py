@@ -392,16 +392,6 @@ def _image_values(source: Any, max_pixels: int | None) -> tuple[np.ndarray, np.n
 
 def _png_values(data: bytes, max_pixels: int | None) -> tuple[np.ndarray, np.ndarray | None]:
     """A PNG's values and alpha, after every check :func:`png.read_shape` makes."""
-    from . import png
+    from .png import read_values
 
-    width, height, depth, colour = png._ihdr(data)
-    png.check_png_size(data, max_pixels)
-    png._check_chunks(data)
-    png._check_image_data(data, width, height, depth, colour)
-    im = png._decode(data)
-    if im.size != (width, height):  # never decode something other than what was checked
-        raise InvalidImageError(
-            f"corrupt PNG: decoded size {im.size[0]}×{im.size[1]} differs from the "
-            f"IHDR size {width}×{height}"
-        )
-    return png._image_values(im, depth)
+    return read_values(data, max_pixels)

@@ -36,7 +36,7 @@ from skelprune.errors import ImageTooLargeError, InvalidImageError
 
 from .foreground import Foreground, check_rule, select
 
-__all__ = ["PNG_SIGNATURE", "check_png_size", "png_size", "read_mask", "read_shape"]
+__all__ = ["PNG_SIGNATURE", "check_png_size", "png_size", "read_mask", "read_shape", "read_values"]
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _MAX_DIMENSION = 2**31 - 1  # PNG spec limit for width and height
@@ -297,6 +297,34 @@ def _array_values(arr: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     )
 
 
+def read_values(data: bytes, max_pixels: int | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+    """A PNG's values (all 16 bits of a 16-bit image) and its alpha where it uses
+    transparency, after every check of the header, chunks and image data.
+
+    Examples
+    --------
+    >>> import io
+    >>> buf = io.BytesIO()
+    >>> Image.fromarray(np.array([[0, 7], [7, 0]], np.uint8)).save(buf, "PNG")
+    >>> values, alpha = read_values(buf.getvalue())
+    >>> values.tolist(), alpha
+    ([[0, 7], [7, 0]], None)
+    """
+    width, height, depth, colour = _ihdr(data)
+    check_png_size(data, max_pixels)
+    _check_chunks(data)
+    _check_image_data(data, width, height, depth, colour)
+    im = _decode(data)
+    if im.size != (width, height):  # never decode something other than what was checked
+        raise InvalidImageError(
+            f"corrupt PNG: decoded size {im.size[0]}×{im.size[1]} differs from the "
+            f"IHDR size {width}×{height}"
+        )
+    if depth == 16 and colour in (2, 4, 6):  # Pillow would keep the high byte
+        return _deep_values(data, colour)
+    return _image_values(im)
+
+
 def read_shape(
     source: bytes | bytearray | memoryview | str | os.PathLike[str] | np.ndarray,
     *,
@@ -359,20 +387,7 @@ def read_shape(
                 ) from None
         else:
             data = bytes(source)
-        width, height, depth, colour = _ihdr(data)
-        check_png_size(data, max_pixels)
-        _check_chunks(data)
-        _check_image_data(data, width, height, depth, colour)
-        im = _decode(data)
-        if im.size != (width, height):  # never decode something other than what was checked
-            raise InvalidImageError(
-                f"corrupt PNG: decoded size {im.size[0]}×{im.size[1]} differs from the "
-                f"IHDR size {width}×{height}"
-            )
-        if depth == 16 and colour in (2, 4, 6):  # Pillow would keep the high byte
-            values, alpha = _deep_values(data, colour)
-        else:
-            values, alpha = _image_values(im)
+        values, alpha = read_values(data, max_pixels)
     mask, taken = select(values, foreground, alpha)
     return np.ascontiguousarray(mask, dtype=bool), taken
 

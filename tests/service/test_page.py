@@ -334,7 +334,7 @@ def test_a_geojson_polygon(server: Running, browser, tmp_path: Path) -> None:
     _result(browser)
     box = browser.find_element(By.ID, "warnings")
     assert box.is_displayed()
-    assert "of 2 is smaller than the pixel" in box.text and "no pixel size" in box.text
+    assert "of 2 is smaller than the pixel" in box.text and "none of the sizes tried" in box.text
     _shot(browser, "islet-warning.png")
 
 

@@ -18,8 +18,8 @@ $(VENV)/.installed-%: pyproject.toml
 
 comma := ,
 SERVE := $(VENV)/.installed-service
-TESTS := $(VENV)/.installed-service+test
-BENCH := $(VENV)/.installed-service+test+bench
+TESTS := $(VENV)/.installed-service+test+parallel
+BENCH := $(VENV)/.installed-service+test+parallel+bench
 # numba's cache is keyed on each source file's time stamp: compile again when one changes
 KERNELS := $(VENV)/.compiled
 

@@ -111,5 +111,6 @@ def _wait_for_workers(
     except (subprocess.CalledProcessError, subprocess.TimeoutExpired) as exc:
         logs = "\n".join(p.read_text()[-2000:] for p in sorted(folder.glob("*.log")))
         dead = [p.args for p in procs if p.poll() is not None]
-        raise AssertionError(f"the Dask cluster did not start ({exc}); exited: {dead}\n{logs}")
+        message = f"the Dask cluster did not start ({exc}); exited: {dead}\n{logs}"
+        raise AssertionError(message) from None
     assert json.loads(out.stdout) == n

@@ -186,7 +186,7 @@ def test_label_images_give_one_document_an_object_in_the_image_coordinates(
 def test_a_geodataframe_is_a_table_of_rows_resumed_row_by_row(
     tmp_path: Path, scheduler: str
 ) -> None:
-    geopandas = pytest.importorskip("geopandas")
+    import geopandas
     from shapely.geometry import Polygon, box
 
     shapes = [box(0, 0, 100 + 10 * i, 20) for i in range(5)]

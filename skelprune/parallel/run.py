@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import logging
 import math
 import os
 from collections.abc import Iterator
@@ -100,6 +101,7 @@ def _client(client: Client | str | None, jobs: int | None, budget: Budget) -> It
             processes=True,
             memory_limit=limit,
             dashboard_address=None,
+            silence_logs=logging.ERROR,
         ) as cluster,
         Client(cluster) as c,
     ):
@@ -184,29 +186,41 @@ def _run(
     from distributed import as_completed
 
     with _client(client, jobs, job.budget) as c:
-        [job_future] = c.scatter([job], broadcast=True)
         batches, futures = {}, []
         for batch in _batches(todo, _workers(c), batch_size):
-            future = c.submit(run_batch, batch, job_future, pure=False)
+            future = c.submit(run_batch, batch, job, pure=False)
             batches[future.key] = batch
             futures.append(future)
         pending = as_completed(futures)
         del futures  # as_completed holds them; each is let go once handled
+        suspects: list[tuple[int, Item]] = []
         for future in pending:
             batch = batches.pop(future.key)
             try:
                 results = future.result()
-            except Exception as exc:  # the worker died (over its memory limit, killed)
-                if len(batch) > 1:  # find which: each of its inputs alone
+            except Exception:  # the worker died (over its memory limit, or killed)
+                if len(batch) > 1:  # which input was it? each alone, in parallel
                     for one in batch:
-                        f = c.submit(run_batch, [one], job_future, pure=False)
+                        f = c.submit(run_batch, [one], job, pure=False)
                         batches[f.key] = [one]
                         pending.add(f)
-                    continue
-                detail = f"the worker running it died ({type(exc).__name__}: {exc})"
-                results = [Done(batch[0][0], problem=(WORKER_CRASHED, detail))]
+                else:  # it, or another input on the same worker: tried alone, below
+                    suspects.extend(batch)
+                continue
             for done in results:
                 yield _record(done, items[done.position], store)
+        # one at a time, alone on the cluster: only an input that kills a worker by
+        # itself is reported as having done so
+        for one in suspects:
+            try:
+                results = c.submit(run_batch, [one], job, pure=False).result()
+            except Exception as exc:
+                detail = (
+                    f"its worker died while pruning it ({type(exc).__name__}): over the "
+                    "worker's memory limit, or killed"
+                )
+                results = [Done(one[0], problem=(WORKER_CRASHED, detail))]
+            yield _record(results[0], items[one[0]], store)
 
 
 def _record(done: Done, item: Item, store: Store | None) -> Outcome:

@@ -207,3 +207,32 @@ def test_a_geodataframe_is_a_table_of_rows_resumed_row_by_row(
     assert [o.status for o in again] == ["skipped"] * 2 + ["failed"] + ["skipped"] * 3
     assert len((out / "lakes.jsonl").read_text().splitlines()) == 5
     assert len((out / PROBLEMS_FILE).read_text().splitlines()) == 1  # tried again, not twice
+
+
+def test_an_input_that_kills_its_worker_fails_alone_as_worker_crashed() -> None:
+    """No estimate to stop it (the budget lifted), a worker memory limit it goes over: the
+    nanny restarts the worker, and the inputs that shared its task are done all the same."""
+    import dask
+    from distributed import Client, LocalCluster
+
+    small = blob(np.random.default_rng(5))
+    hog = np.zeros((9000, 9000), bool)  # an 81-million-pixel square: far over 700 MiB
+    hog[100:-100, 100:-100] = True
+    unlimited = Budget(memory_mb=None, seconds=None, max_pixels=None)
+    with (
+        dask.config.set({"distributed.scheduler.allowed-failures": 0}),
+        LocalCluster(
+            n_workers=1, threads_per_worker=1, memory_limit="700MiB", dashboard_address=None
+        ) as cluster,
+        Client(cluster) as client,
+    ):
+        outcomes = prune_many(
+            {"a": small, "hog": hog, "b": small},
+            client=client,
+            budget=unlimited,
+            batch_size=3,
+            ordered=True,
+        )
+    assert [o.status for o in outcomes] == ["done", "failed", "done"]
+    assert outcomes[1].problem["kind"] == "worker-crashed"
+    assert outcomes[0].result == outcomes[2].result == skelprune.prune(small).to_dict()

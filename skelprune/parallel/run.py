@@ -34,6 +34,8 @@ __all__ = ["Outcome", "iter_prune_many", "prune_many"]
 #: workers and to stream results, large enough that dask's per-task cost (about a
 #: millisecond) stays small against a few milliseconds an input.
 MAX_BATCH = 32
+#: Seconds to wait for restarted workers before trying a suspect input alone.
+RESTART_TIMEOUT = 60
 #: Memory a worker process holds besides the input it prunes (dask, the library, numba's
 #: kernels), added to the budget for the worker's memory limit.
 WORKER_OWN_MB = 512
@@ -187,7 +189,8 @@ def _run(
 
     with _client(client, jobs, job.budget) as c:
         batches, futures = {}, []
-        for batch in _batches(todo, _workers(c), batch_size):
+        workers = _workers(c)
+        for batch in _batches(todo, workers, batch_size):
             future = c.submit(run_batch, batch, job, pure=False)
             batches[future.key] = batch
             futures.append(future)
@@ -212,6 +215,8 @@ def _run(
         # one at a time, alone on the cluster: only an input that kills a worker by
         # itself is reported as having done so
         for one in suspects:
+            with contextlib.suppress(Exception):  # the workers restarted by the nanny
+                c.wait_for_workers(workers, timeout=RESTART_TIMEOUT)
             try:
                 results = c.submit(run_batch, [one], job, pure=False).result()
             except Exception as exc:

@@ -236,3 +236,44 @@ def test_an_input_that_kills_its_worker_fails_alone_as_worker_crashed() -> None:
     assert [o.status for o in outcomes] == ["done", "failed", "done"]
     assert outcomes[1].problem["kind"] == "worker-crashed"
     assert outcomes[0].result == outcomes[2].result == skelprune.prune(small).to_dict()
+
+
+def test_a_geoparquet_becomes_a_geoparquet_of_lines_with_the_rows_attributes(
+    tmp_path: Path, scheduler: str
+) -> None:
+    import geopandas
+    from shapely.geometry import LineString, box
+
+    from skelprune.parallel.geoparquet import prune_geoparquet
+
+    shapes = [box(0, 0, 60 + i, 12 + i % 7) for i in range(40)]
+    shapes[17] = LineString([(0, 0), (5, 5)])  # not a polygon: its row fails alone
+    table = geopandas.GeoDataFrame(
+        {"name": [f"lake{i}" for i in range(40)], "depth": np.arange(40.0)},
+        geometry=shapes,
+        crs="EPSG:3857",
+        index=range(1000, 1040),
+    )
+    table.to_parquet(tmp_path / "lakes.parquet")
+    out = prune_geoparquet(
+        tmp_path / "lakes.parquet", tmp_path / "lines", client=scheduler, npartitions=4
+    )
+    lines = geopandas.read_parquet(out)
+    assert len(list(out.glob("*.parquet"))) == 4
+    assert lines.crs == table.crs
+    failed = lines[lines["problem"].notna()]
+    assert list(failed["source_row"]) == [1017] and failed.geometry.isna().all()
+    assert failed["problem"].iloc[0] == "invalid-polygon"
+    good = lines[lines["problem"].isna()]
+    assert sorted(set(good["source_row"])) == [i for i in range(1000, 1040) if i != 1017]
+    for row, group in good.groupby("source_row"):  # the input's attributes, on every line
+        assert set(group["name"]) == {f"lake{row - 1000}"}
+        assert set(group["depth"]) == {float(row - 1000)}
+    for row in (1000, 1021, 1039):
+        expected = [
+            f["geometry"]["coordinates"]
+            for f in skelprune.prune(table.geometry.loc[row]).to_geojson()["features"]
+            if f["geometry"]["type"] == "LineString"
+        ]
+        got = good[good["source_row"] == row].sort_values("branch")
+        assert [[list(c) for c in g.coords] for g in got.geometry] == expected

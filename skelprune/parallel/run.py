@@ -102,7 +102,7 @@ def _client(client: Client | str | None, jobs: int | None, budget: Budget) -> It
             threads_per_worker=1,
             processes=True,
             memory_limit=limit,
-            dashboard_address=None,
+            dashboard_address=":0",  # a free port: never a clash with another cluster
             silence_logs=logging.ERROR,
         ) as cluster,
         Client(cluster) as c,

@@ -222,7 +222,7 @@ def test_an_input_that_kills_its_worker_fails_alone_as_worker_crashed() -> None:
     with (
         dask.config.set({"distributed.scheduler.allowed-failures": 0}),
         LocalCluster(
-            n_workers=1, threads_per_worker=1, memory_limit="700MiB", dashboard_address=None
+            n_workers=1, threads_per_worker=1, memory_limit="700MiB", dashboard_address=":0"
         ) as cluster,
         Client(cluster) as client,
     ):

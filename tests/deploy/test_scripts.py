@@ -73,7 +73,8 @@ def test_unknown_option_is_a_usage_error() -> None:
 
 
 def test_make_run_installs_only_the_serving_extras() -> None:
-    """``make run`` sets up with the service extra alone; ``make test`` adds the test one."""
+    """``make run`` sets up with the service extra alone; ``make test`` adds the test one
+    and the parallel one (dask: ``prune_many``'s tests start a real cluster)."""
 
     def installs(target: str) -> list[str]:
         """The extras each editable pip install of ``make -n TARGET`` asks for."""
@@ -89,7 +90,7 @@ def test_make_run_installs_only_the_serving_extras() -> None:
 
     assert installs("run") == ["service"]
     test = installs("test")  # (and the service extra alone, which the kernels' stamp needs)
-    assert "service,test" in test
+    assert "service,test,parallel" in test
     assert not [extras for extras in test if "bench" in extras]
     assert "bench" in installs("bench")[0]
     assert installs("client") == ["service,client"]

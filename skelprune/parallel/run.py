@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
+from ..errors import InvalidOptionError, shown
 from ..options import (
     OutputOptions,
     PruneOptions,
@@ -135,6 +136,11 @@ def iter_prune_many(
     The first value is the number of inputs (an ``int``), for a progress bar; then one
     :class:`Outcome` an input.
     """
+    for name, value in (("jobs", jobs), ("batch_size", batch_size)):
+        if value is not None and (
+            isinstance(value, bool) or not isinstance(value, int) or value < 1
+        ):
+            raise InvalidOptionError(f"{name} must be a whole number >= 1, got {shown(value)}")
     groups = split_options(keywords)
     job = Job(
         options=options_value(PruneOptions, options, groups[PruneOptions]),

@@ -69,6 +69,14 @@ def test_clashing_reserved_and_missing_names_are_refused(tmp_path: Path) -> None
         Labels(np.zeros((3, 3), float)).items()
 
 
+@pytest.mark.parametrize("bad", [{"jobs": 0}, {"batch_size": 0}, {"batch_size": 2.5}])
+def test_counts_are_whole_numbers_checked_before_any_work(bad) -> None:
+    from skelprune.parallel import prune_many
+
+    with pytest.raises(InvalidOptionError, match="whole number >= 1"):
+        prune_many([np.ones((4, 4), bool)], **bad)
+
+
 def test_a_batch_runs_every_item_and_names_each_failure() -> None:
     m = np.zeros((20, 30), bool)
     m[4:16, 4:26] = True

@@ -13,7 +13,8 @@
 ARG BASE_IMAGE=python:3.11-slim
 
 # ---------------------------------------------------------------------------------------
-# build: a virtual environment with the package and its `service` extra
+# build: a virtual environment with the package, its `service` extra and its `parallel`
+# extra (dask: the same image runs the Dask cluster of deploy/dask)
 # ---------------------------------------------------------------------------------------
 FROM ${BASE_IMAGE} AS build
 
@@ -29,7 +30,7 @@ RUN python3 -m venv /opt/venv
 # download them again.
 WORKDIR /src
 COPY pyproject.toml ./
-RUN python3 -c "import tomllib; p = tomllib.load(open('pyproject.toml', 'rb'))['project']; print('\n'.join(p['dependencies'] + p['optional-dependencies']['service']))" > /tmp/requirements.txt
+RUN python3 -c "import tomllib; p = tomllib.load(open('pyproject.toml', 'rb'))['project']; e = p['optional-dependencies']; print('\n'.join(p['dependencies'] + e['service'] + e['parallel']))" > /tmp/requirements.txt
 RUN --mount=type=secret,id=cacert,required=false \
     --mount=type=cache,target=/root/.cache/pip \
     if [ -s /run/secrets/cacert ]; then \
@@ -44,9 +45,9 @@ RUN --mount=type=secret,id=cacert,required=false \
     if [ -s /run/secrets/cacert ]; then \
         export PIP_CERT=/run/secrets/cacert REQUESTS_CA_BUNDLE=/run/secrets/cacert; \
     fi \
-    && /opt/venv/bin/pip install ".[service]" \
+    && /opt/venv/bin/pip install ".[service,parallel]" \
     && /opt/venv/bin/pip check \
-    && /opt/venv/bin/python -c "import service, skelprune"
+    && /opt/venv/bin/python -c "import service, skelprune, distributed"
 
 
 # ---------------------------------------------------------------------------------------

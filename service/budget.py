@@ -1,34 +1,33 @@
 """A job's memory and time, estimated from its input before any work starts, against
-its budget.
-
-Pruning needs memory and time in proportion to what the input can make it build: arrays
-over every pixel (the mask, its distance transform, the crops), objects over every
-skeleton point and boundary pixel, and over every component. A few kilobytes of PNG can
-describe sixteen million pixels of noise, so the service counts these before it prunes
-(one pass over the mask and a labelling) and refuses (413) a job whose memory estimate,
-added to what the worker already holds, is over ``SKELPRUNE_JOB_MEMORY_MB``, or whose
-time estimate is over ``SKELPRUNE_JOB_TIMEOUT``: such a job would otherwise hold a
-worker for the whole time limit and end in a 504. The memory coefficients are above
-the most seen per unit on the adversarial masks of ``python -m benchmarks adversarial``
-(see ``docs/hostile-input.md``); the time coefficients are typical of a busy two-core
-machine, so the estimate is a first screen and the time limit stays the hard stop.
-
-The estimate is a screen, not the bound: what bounds a job is its worker's resident
-set, which the pool samples while the job runs (:class:`service.pool.WorkerPool`,
-``memory_limit``): a worker over the budget is killed and replaced and the job answered
-with the same 413. Virtual memory is not what a job uses (allocators and thread arenas
-reserve far more address space than they touch), so it is not capped.
+its budget: the library's :mod:`skelprune.budget`, which the service's jobs use (and so
+does :func:`skelprune.parallel.prune_many`, with the same limits). The names are kept
+here for the service's modules; what bounds a running job is the pool's resident-memory
+watchdog (:mod:`service.pool`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-import numpy as np
-from scipy import ndimage
-
-from service.pool import resident_bytes as _resident
-from skelprune.errors import InvalidPolygonError, SkelpruneError
+from skelprune.budget import (
+    BYTES_PER_ANSWER_PIXEL,
+    BYTES_PER_COMPONENT,
+    BYTES_PER_PIXEL,
+    BYTES_PER_SKELETON_POINT,
+    SECONDS_PER_COMPONENT,
+    SECONDS_PER_PART,
+    SECONDS_PER_PART_PAIR,
+    SECONDS_PER_PIXEL,
+    SECONDS_PER_POSITION,
+    SECONDS_PER_SKELETON_POINT,
+    Estimate,
+    check_budget,
+    check_polygon,
+    estimate,
+    out_of_memory,
+    polygon_estimate,
+    resident_bytes,
+    shape_counts,
+)
+from skelprune.errors import JobTooLargeError
 
 __all__ = [
     "BYTES_PER_ANSWER_PIXEL",
@@ -46,176 +45,8 @@ __all__ = [
     "check_budget",
     "check_polygon",
     "estimate",
+    "out_of_memory",
     "polygon_estimate",
     "resident_bytes",
     "shape_counts",
 ]
-
-# The memory coefficients are fitted so that what a warm worker holds plus the estimate
-# is within 1.5x of the worker's measured peak on every mask of the adversarial corpus
-# that runs and every silhouette of ``python -m benchmarks large`` (docs/hostile-input.md):
-# a tight estimate refuses no job that fits; the resident-memory watchdog is the bound.
-#: Bytes per input pixel: the PNG decoded, mask, distance transform, labels, crops
-#: (4096² silhouettes: 13-37) ...
-BYTES_PER_PIXEL = 32
-#: ... per pixel that can be a skeleton point, at most min(shape pixels, boundary
-#: pixels): graph, branch lists and their copies (pixel noise, checkerboards: 400-1,000) ...
-BYTES_PER_SKELETON_POINT = 768
-#: ... per 8-connected component: its crop, result and document (isolated dots: ~13,000) ...
-BYTES_PER_COMPONENT = 16 * 1024
-#: ... and per pixel of an answer image (the overlay, RGB, and its PNG encoding).
-BYTES_PER_ANSWER_PIXEL = 16
-#: Seconds per input pixel (distance transform, medial axis: ~0.3 µs for 4096² blobs) ...
-SECONDS_PER_PIXEL = 0.5e-6
-#: ... per pixel that can be a skeleton point (pixel noise, checkerboards: 25–60 µs) ...
-SECONDS_PER_SKELETON_POINT = 60e-6
-#: ... and per component (isolated dots: 0.3–0.7 ms).
-SECONDS_PER_COMPONENT = 0.7e-3
-#: A polygon's cost before it has pixels: seconds per position (decoding, validation,
-#: the geometry's construction; 100,000 positions: ~2 s on a busy machine) ...
-SECONDS_PER_POSITION = 20e-6
-#: ... per part (its validation, fitting, share of the union, and its pruning as a
-#: component of the raster: ~2.3 ms a unit square) ...
-SECONDS_PER_PART = 2.5e-3
-#: ... and per pair of parts: the fitting and union of many parts grow faster than
-#: their number (20,000 unit squares: ~20 s, 10,000: ~4 s).
-SECONDS_PER_PART_PAIR = 60e-9
-_EIGHT = np.ones((3, 3), bool)
-
-
-class JobTooLargeError(SkelpruneError):
-    """The job's estimated memory is over the per-job budget, or it ran out of memory."""
-
-
-def shape_counts(mask: np.ndarray) -> tuple[int, int, int, int]:
-    """``(pixels, shape pixels, boundary pixels, components)`` of a boolean mask.
-
-    Boundary pixels are the 4-adjacent (shape, background) pairs, the image's edge
-    counting as background; components are 8-connected.
-
-    >>> m = np.zeros((4, 5), bool); m[1:3, 1:3] = True; m[0, 4] = True
-    >>> shape_counts(m)
-    (20, 5, 12, 2)
-    """
-    mask = np.asarray(mask, dtype=bool)
-    fg = int(np.count_nonzero(mask))
-    boundary = int(
-        np.count_nonzero(mask[:, 1:] != mask[:, :-1])
-        + np.count_nonzero(mask[1:] != mask[:-1])
-        + np.count_nonzero(mask[0])
-        + np.count_nonzero(mask[-1])
-        + np.count_nonzero(mask[:, 0])
-        + np.count_nonzero(mask[:, -1])
-    )
-    n_components = int(ndimage.label(mask, structure=_EIGHT)[1]) if fg else 0
-    return mask.size, fg, boundary, n_components
-
-
-@dataclass(frozen=True)
-class Estimate:
-    """What pruning one input is expected to cost at worst."""
-
-    bytes: int
-    seconds: float
-
-    def __add__(self, other: Estimate) -> Estimate:
-        return Estimate(self.bytes + other.bytes, self.seconds + other.seconds)
-
-
-def estimate(mask: np.ndarray, answer_pixels: int = 0) -> Estimate:
-    """Worst-case memory and time of pruning ``mask`` (and rendering ``answer_pixels``)."""
-    pixels, fg, boundary, n_components = shape_counts(mask)
-    skeleton = min(fg, boundary)
-    return Estimate(
-        bytes=BYTES_PER_PIXEL * pixels
-        + BYTES_PER_SKELETON_POINT * skeleton
-        + BYTES_PER_COMPONENT * n_components
-        + BYTES_PER_ANSWER_PIXEL * answer_pixels,
-        seconds=SECONDS_PER_PIXEL * pixels
-        + SECONDS_PER_SKELETON_POINT * skeleton
-        + SECONDS_PER_COMPONENT * n_components,
-    )
-
-
-def polygon_estimate(parts: int, positions: int) -> Estimate:
-    """Time to read, fit and union a polygon of ``parts`` parts and ``positions``
-    positions, before its pixels exist (their cost is :func:`estimate`'s, after).
-
-    >>> round(polygon_estimate(20_000, 100_000).seconds)
-    76
-    """
-    seconds = (
-        SECONDS_PER_POSITION * positions
-        + SECONDS_PER_PART * parts
-        + SECONDS_PER_PART_PAIR * parts * parts
-    )
-    return Estimate(bytes=0, seconds=seconds)
-
-
-def check_polygon(
-    parts: int, positions: int, max_vertices: int | None, seconds: float | None
-) -> None:
-    """Refuse a polygon over the vertex limit, or whose reading alone
-    (:func:`polygon_estimate`) would take longer than ``seconds``, before any work.
-
-    Raises
-    ------
-    InvalidPolygonError
-        More than ``max_vertices`` positions.
-    JobTooLargeError
-        Estimated over the time limit.
-    """
-    if max_vertices is not None and positions > max_vertices:
-        raise InvalidPolygonError(
-            f"too many vertices: {positions} positions, more than {max_vertices} allowed"
-        )
-    cost = polygon_estimate(parts, positions)
-    if seconds is not None and cost.seconds > seconds:
-        raise JobTooLargeError(
-            f"this polygon would take about {cost.seconds:.0f} s to read, fit and combine "
-            f"(judged by its {parts} parts and {positions} positions), over the job time "
-            f"limit of {seconds:g} s: send fewer parts (merge touching ones) or fewer "
-            "vertices"
-        )
-
-
-def resident_bytes() -> int:
-    """This process's resident set now, bytes (0 where ``/proc`` is missing)."""
-    return _resident()
-
-
-def _mib(n: float) -> str:
-    return f"{n / 2**20:,.0f} MiB"
-
-
-def check_budget(cost: Estimate, memory: int | None, seconds: float | None = None) -> None:
-    """Refuse a job whose estimate (:func:`estimate`) is over its budget: ``memory``
-    bytes on top of what this worker holds now, or ``seconds`` (the job time limit).
-
-    Raises
-    ------
-    JobTooLargeError
-        Naming the estimate and the limit.
-    """
-    advice = "send fewer pixels or a cleaner mask (noise, one-pixel patterns and scattered "
-    advice += "dots cost the most)"
-    if memory is not None:
-        held = resident_bytes()
-        if held + cost.bytes > memory:
-            raise JobTooLargeError(
-                f"this input would need about {_mib(cost.bytes)} to prune (judged by its "
-                f"pixels, boundary and components; a worker holds {_mib(held)} already), "
-                f"over the memory budget of {_mib(memory)} a job: {advice}"
-            )
-    if seconds is not None and cost.seconds > seconds:
-        raise JobTooLargeError(
-            f"this input would take about {cost.seconds:.0f} s to prune (judged by its "
-            f"pixels, boundary and components), over the job time limit of {seconds:g} s: "
-            f"{advice}"
-        )
-
-
-def out_of_memory(budget: int | None) -> JobTooLargeError:
-    """The error of a job that ran out of memory all the same."""
-    limit = f"the memory budget of {_mib(budget)} a job" if budget else "the memory available"
-    return JobTooLargeError(f"this input needs more than {limit}: send fewer pixels")

@@ -20,7 +20,6 @@ from fastapi.responses import JSONResponse, Response
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.requests import ClientDisconnect
 
-from service.budget import JobTooLargeError
 from service.logs import request_id_var
 from service.pool import (
     JobFailedError,
@@ -37,6 +36,7 @@ from skelprune.errors import (
     InvalidImageError,
     InvalidOptionError,
     InvalidPolygonError,
+    JobTooLargeError,
     SkelpruneError,
 )
 from skelprune.matching import UnmatchableShapeError
@@ -107,17 +107,18 @@ class ProblemKind:
 
 
 #: The one table: exception type -> (status, problem type, title). Looked up along
-#: the MRO, so subclasses inherit their parent's row.
+#: the MRO, so subclasses inherit their parent's row. The library's errors name their
+#: own problem type (``kind``), which is also what ``prune_many`` records.
 PROBLEMS: dict[type[BaseException], ProblemKind] = {
-    InvalidImageError: ProblemKind(400, "invalid-image", "Invalid image"),
-    ImageTooLargeError: ProblemKind(413, "image-too-large", "Image too large"),
-    JobTooLargeError: ProblemKind(413, "job-too-large", "Job too large"),
-    JobOverMemoryError: ProblemKind(413, "job-too-large", "Job too large"),
-    EmptyMaskError: ProblemKind(422, "empty-mask", "Empty mask"),
-    InvalidPolygonError: ProblemKind(422, "invalid-polygon", "Invalid polygon"),
-    InvalidOptionError: ProblemKind(422, "invalid-option", "Invalid option"),
-    UnmatchableShapeError: ProblemKind(422, "unmatchable-shape", "Shape cannot be matched"),
-    SkelpruneError: ProblemKind(422, "invalid-input", "Invalid input"),
+    InvalidImageError: ProblemKind(400, InvalidImageError.kind, "Invalid image"),
+    ImageTooLargeError: ProblemKind(413, ImageTooLargeError.kind, "Image too large"),
+    JobTooLargeError: ProblemKind(413, JobTooLargeError.kind, "Job too large"),
+    JobOverMemoryError: ProblemKind(413, JobTooLargeError.kind, "Job too large"),
+    EmptyMaskError: ProblemKind(422, EmptyMaskError.kind, "Empty mask"),
+    InvalidPolygonError: ProblemKind(422, InvalidPolygonError.kind, "Invalid polygon"),
+    InvalidOptionError: ProblemKind(422, InvalidOptionError.kind, "Invalid option"),
+    UnmatchableShapeError: ProblemKind(422, UnmatchableShapeError.kind, "Shape cannot be matched"),
+    SkelpruneError: ProblemKind(422, SkelpruneError.kind, "Invalid input"),
     BodyTooLargeError: ProblemKind(413, "body-too-large", "Request body too large"),
     BadRequestError: ProblemKind(400, "bad-request", "Bad request"),
     HeaderTooLargeError: ProblemKind(431, "header-too-large", "Request header fields too large"),

@@ -27,7 +27,6 @@ import contextlib
 import contextvars
 import logging
 import multiprocessing as mp
-import os
 import signal
 import threading
 import time
@@ -37,6 +36,7 @@ from concurrent.futures import ThreadPoolExecutor
 from multiprocessing.connection import Connection
 from typing import Any
 
+from skelprune.budget import resident_bytes
 from skelprune.errors import SkelpruneError
 
 __all__ = [
@@ -55,17 +55,6 @@ log = logging.getLogger("service.pool")
 
 #: Seconds between two samples of a running job's resident set.
 MEMORY_SAMPLE_SECONDS = 0.02
-_PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
-
-
-def resident_bytes(pid: int | None = None) -> int:
-    """Resident set of process ``pid`` (this one by default), bytes; 0 where ``/proc``
-    cannot say (another OS, the process gone)."""
-    try:
-        with open(f"/proc/{pid or 'self'}/statm", "rb") as f:
-            return int(f.read().split()[1]) * _PAGE
-    except (OSError, ValueError, IndexError):
-        return 0
 
 
 def _trim_heap() -> None:

@@ -15,6 +15,7 @@ every other and prints one JSON line per shape with its ``K`` closest.
 from __future__ import annotations
 
 import enum
+import importlib.util
 import json
 import os
 import sys
@@ -420,6 +421,75 @@ def retrieve_command(
         )
     if failed:
         raise typer.Exit(1)
+
+
+@app.command("prune-many", cls=_CleanCommand)
+def prune_many_command(
+    inputs: Annotated[
+        list[str],
+        typer.Argument(
+            metavar="INPUTS",
+            help="PNG masks or GeoJSON polygons, folders of them (*.png, *.geojson, *.json) "
+            "or globs ('masks/**/*.png', quoted).",
+        ),
+    ],
+    out: Annotated[
+        Path, typer.Option(help="Folder for the results: NAME.json an input, problems.jsonl.")
+    ],
+    jobs: Annotated[
+        int | None,
+        typer.Option(help="Worker processes of a local Dask cluster (default: one a core)."),
+    ] = None,
+    scheduler: Annotated[
+        str | None,
+        typer.Option(help="Run on this Dask scheduler instead (tcp://HOST:8786)."),
+    ] = None,
+    beta: BetaOption = PruneOptions.beta,
+    method: MethodOption = Method(PruneOptions.method),
+    coarse: CoarseOption = Coarse("dce"),
+    dce_threshold: ThresholdOption = None,
+    min_margin: MarginOption = None,
+    choice: ChoiceOption = Choice(PruneOptions.choice),
+    trim: TrimOption = PruneOptions.trim,
+    foreground: ForegroundOption = Rule(ReadOptions.foreground),
+    curve: Annotated[bool, typer.Option(help=HELP["curve"])] = OutputOptions.curve,
+    sequence: Annotated[bool, typer.Option(help=HELP["sequence"])] = OutputOptions.sequence,
+    pixel_size: Annotated[float | None, typer.Option(help=_geojson_only("pixel_size"))] = None,
+    longest_side: Annotated[int | None, typer.Option(help=_geojson_only("longest_side"))] = None,
+    pixels_per_width: Annotated[
+        float, typer.Option(help=_geojson_only("pixels_per_width"))
+    ] = RasterOptions.pixels_per_width,
+    pixel_budget: Annotated[
+        int, typer.Option(help=_geojson_only("pixel_budget"))
+    ] = RasterOptions.pixel_budget,
+    repair: Annotated[bool, typer.Option(help=_geojson_only("repair"))] = RasterOptions.repair,
+) -> None:
+    """Prune a whole data set on Dask: one NAME.json an input under --out, written as each
+    finishes; failed inputs on stderr and in problems.jsonl; a second run skips what is
+    written. Needs the parallel extra (dask, distributed)."""
+    options, read, raster, output = _options_or_exit(
+        locals(), PruneOptions, ReadOptions, RasterOptions, OutputOptions
+    )
+    if jobs is not None and scheduler is not None:
+        raise _usage("give --jobs (a local cluster) or --scheduler (a running one), not both")
+    if jobs is not None and jobs < 1:
+        raise _usage(f"--jobs must be >= 1, got {jobs}")
+    if importlib.util.find_spec("distributed") is None:
+        raise _usage("prune-many needs dask: pip install 'skelprune[parallel]'")
+    from .parallel.console import run_command
+
+    code = run_command(
+        inputs,
+        out,
+        options=options,
+        read=read,
+        raster=raster,
+        output=output,
+        client=scheduler,
+        jobs=jobs,
+    )
+    if code:
+        raise typer.Exit(code)
 
 
 @app.command("version")

@@ -2,7 +2,10 @@
 
 Every error a caller can cause derives from :class:`SkelpruneError` (itself a
 ``ValueError``), so that a service can map each kind to one HTTP status without
-ever letting an unexpected exception through as a bad-input answer.
+ever letting an unexpected exception through as a bad-input answer. Each class names its
+problem ``kind`` (the service's problem type, ``urn:skelprune:problem:KIND``), so that
+whoever records a failure (the service, :func:`skelprune.parallel.prune_many`) says it
+the same way: :func:`problem_kind`.
 """
 
 from __future__ import annotations
@@ -15,7 +18,9 @@ __all__ = [
     "InvalidImageError",
     "InvalidOptionError",
     "InvalidPolygonError",
+    "JobTooLargeError",
     "SkelpruneError",
+    "problem_kind",
     "shown",
 ]
 
@@ -23,21 +28,31 @@ __all__ = [
 class SkelpruneError(ValueError):
     """Base class of every error caused by the caller's input."""
 
+    kind = "invalid-input"
+
 
 class InvalidImageError(SkelpruneError):
     """The bytes are not a decodable PNG (bad signature, truncated, corrupt)."""
+
+    kind = "invalid-image"
 
 
 class ImageTooLargeError(SkelpruneError):
     """The image has more pixels than the configured limit."""
 
+    kind = "image-too-large"
+
 
 class EmptyMaskError(SkelpruneError):
     """The mask has no foreground pixel, so there is no shape to skeletonise."""
 
+    kind = "empty-mask"
+
 
 class InvalidPolygonError(SkelpruneError):
     """A polygon is malformed (unclosed ring, non-finite coordinates, too many vertices)."""
+
+    kind = "invalid-polygon"
 
 
 class InvalidOptionError(SkelpruneError):
@@ -48,9 +63,27 @@ class InvalidOptionError(SkelpruneError):
     when options are refused together (two that exclude each other).
     """
 
+    kind = "invalid-option"
+
     def __init__(self, message: str, errors: list[tuple[str, str]] | None = None) -> None:
         super().__init__(message)
         self.errors = errors or []
+
+
+class JobTooLargeError(SkelpruneError):
+    """The job's estimated memory or time is over its budget, or it ran out of memory
+    (:mod:`skelprune.budget`)."""
+
+    kind = "job-too-large"
+
+
+def problem_kind(exc: BaseException) -> str | None:
+    """The problem kind of a caller's error (``None`` for any other exception).
+
+    >>> problem_kind(EmptyMaskError("no shape")), problem_kind(KeyError("x"))
+    ('empty-mask', None)
+    """
+    return exc.kind if isinstance(exc, SkelpruneError) else None
 
 
 def shown(value: Any) -> str:

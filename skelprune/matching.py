@@ -62,6 +62,8 @@ class UnmatchableShapeError(SkelpruneError):
     """The skeleton has fewer than two endpoints (so no endpoint-to-endpoint path), or
     more than :data:`MAX_ENDPOINTS`."""
 
+    kind = "unmatchable-shape"
+
 
 @dataclass(frozen=True)
 class SkeletonDescriptor:

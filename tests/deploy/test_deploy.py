@@ -203,9 +203,10 @@ def test_dockerfile_is_multistage_with_base_image_argument():
     # the venv is built in the first stage and copied, not rebuilt, into the runtime
     copies = [args for k, args in runtime_stage() if k == "COPY"]
     assert any("--from=build" in c and "/opt/venv" in c for c in copies), copies
-    # only the service extra goes into the image
+    # only the service extra, and the parallel one (the Dask workers of deploy/dask), go
+    # into the image
     runs = " ".join(args for k, args in instrs if k == "RUN")
-    assert '".[service]"' in runs
+    assert '".[service,parallel]"' in runs
     assert "[test]" not in runs and "bench" not in runs
 
 

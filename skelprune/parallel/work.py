@@ -1,0 +1,146 @@
+"""What runs inside a task, on a worker: read, check the budget, prune and serialise a
+batch of items, each one's failure caught and named, so that one bad input fails alone.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..budget import check_budget, estimate, out_of_memory
+from ..errors import JobTooLargeError, SkelpruneError, problem_kind
+from ..options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
+from .items import Feature, Item, LabelObject
+
+__all__ = [
+    "INTERNAL_ERROR",
+    "UNREADABLE",
+    "WORKER_CRASHED",
+    "Budget",
+    "Done",
+    "Job",
+    "document_bytes",
+    "run_batch",
+]
+
+#: Problem kinds of failures that are not the input's own error (the service's names).
+WORKER_CRASHED = "worker-crashed"
+INTERNAL_ERROR = "internal-error"
+#: A file that cannot be read at all (missing, no permission): the input's problem.
+UNREADABLE = SkelpruneError.kind
+
+
+@dataclass(frozen=True)
+class Budget:
+    """What one input may cost: the service's limits, with the service's defaults.
+
+    ``memory_mb``: a worker's memory for one input, its own included; an input whose
+    estimate (:mod:`skelprune.budget`) is over it is refused before any work
+    (``job-too-large``), and so is one that runs out all the same. ``seconds``: the time
+    an input may be expected to take (the same estimate). ``max_pixels`` and
+    ``max_vertices``: the largest image or raster, and polygon. ``None``: no limit.
+    """
+
+    memory_mb: int | None = 2048
+    seconds: float | None = 30.0
+    max_pixels: int | None = 4096 * 4096
+    max_vertices: int | None = 100_000
+
+
+@dataclass(frozen=True)
+class Job:
+    """Everything a task needs besides its items: the options and the budget."""
+
+    options: PruneOptions = field(default_factory=PruneOptions)
+    read: ReadOptions | None = None
+    raster: RasterOptions | None = None
+    output: OutputOptions = field(default_factory=OutputOptions)
+    budget: Budget = field(default_factory=Budget)
+
+
+@dataclass(frozen=True)
+class Done:
+    """One item's outcome: its position in the run, and its serialised result (a
+    document, or a table's line) or its problem ``(kind, detail)``."""
+
+    position: int
+    payload: bytes | None = None
+    problem: tuple[str, str] | None = None
+
+
+def document_bytes(doc: Any) -> bytes:
+    """A result document as ``prune_many`` and ``skelprune prune-many`` write it:
+    compact JSON (no spaces), UTF-8, one newline at the end.
+
+    >>> document_bytes({"a": [1, 2.5], "b": None})
+    b'{"a":[1,2.5],"b":null}\\n'
+    """
+    try:
+        return json.dumps(doc, separators=(",", ":"), allow_nan=False).encode() + b"\n"
+    except ValueError:
+        raise SkelpruneError(
+            "the answer would hold a number JSON cannot write (an overflow); scale the "
+            "input coordinates down"
+        ) from None
+
+
+def _read(item: Item, job: Job) -> Any:
+    from ..io.frame import PixelFrame
+    from ..io.input import Input, read_input
+
+    source = item.source
+    limits = {"max_pixels": job.budget.max_pixels, "max_vertices": job.budget.max_vertices}
+    if isinstance(source, LabelObject):
+        row, col = source.origin
+        # the object's own crop, answered in the label image's pixel coordinates
+        frame = PixelFrame(x0=float(col), y0=float(row))
+        return Input(source.mask, frame=frame)
+    if isinstance(source, Feature):
+        return read_input(source.geometry, kind="geojson", raster=job.raster, **limits)
+    return read_input(source, read=job.read, raster=job.raster, **limits)
+
+
+def _result(item: Item, job: Job) -> bytes:
+    from ..api import prune_input
+
+    shape = _read(item, job)
+    budget = job.budget
+    memory = None if budget.memory_mb is None else budget.memory_mb * 2**20
+    check_budget(estimate(shape.mask), memory, budget.seconds)
+    res = prune_input(shape, job.options, job.output)
+    if isinstance(item.source, Feature):
+        line = {"row": item.source.row, "index": _plain(item.source.index)}
+        line["result"] = res.to_geojson()
+        return document_bytes(line)
+    return document_bytes(res.to_dict())
+
+
+def _plain(value: Any) -> Any:
+    """A table's index label as JSON writes it (numpy scalars as Python ones)."""
+    return value.item() if hasattr(value, "item") else value
+
+
+def run_item(item: Item, job: Job) -> tuple[bytes | None, tuple[str, str] | None]:
+    """One item's serialised result, or its problem ``(kind, detail)``."""
+    try:
+        return _result(item, job), None
+    except MemoryError:
+        budget = job.budget.memory_mb
+        err: JobTooLargeError = out_of_memory(None if budget is None else budget * 2**20)
+        return None, (err.kind, str(err))
+    except SkelpruneError as exc:
+        return None, (problem_kind(exc) or SkelpruneError.kind, str(exc))
+    except OSError as exc:
+        return None, (UNREADABLE, f"cannot read {item.source!s}: {exc.strerror or exc}")
+    except Exception as exc:  # a bug: named, and the batch goes on
+        return None, (INTERNAL_ERROR, f"{type(exc).__name__}: {exc}")
+
+
+def run_batch(batch: list[tuple[int, Item]], job: Job) -> list[Done]:
+    """A task: every item of the batch, in order (what runs on a worker)."""
+    out = []
+    for position, item in batch:
+        payload, problem = run_item(item, job)
+        out.append(Done(position, payload, problem))
+    return out

@@ -210,7 +210,7 @@ def pruning_sequence(
                     alpha,
                     lbar,
                 )
-                if pick < 0 or not guard.is_limb(pick):
+                if pick < 0 or not guard.is_limb(pick, int(cov.exclusive[pick + 1])):
                     break
                 is_end[pick] = False
             if pick < 0:  # only limbs are left

@@ -33,11 +33,15 @@ from ..grid.graph import BranchGraph
 from ..grid.medial_axis import squared_distance
 from ._rowcover import cover_counts, uncover
 
-__all__ = ["RIM", "LimbGuard"]
+__all__ = ["MIN_LIMB_AREA", "RIM", "LimbGuard"]
 
 #: Squared radius up to which a disk lies in the boundary's one-pixel rim (as
 #: :data:`skelprune.pruning.floor.RIM`).
 RIM = 2
+#: The fewest pixels a limb alone covers: the whole disks of at least 4 distinct points
+#: (``2·r > 2·√2``), each holding the 3 × 3 block around its point (``r² ≥ 4``), cover
+#: at least a 4 × 4 block. A branch alone covering fewer is no limb, untested.
+MIN_LIMB_AREA = 16
 
 
 class LimbGuard:
@@ -55,19 +59,24 @@ class LimbGuard:
 
     def __init__(self, graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> None:
         self.graph, self.mask, self.r2 = graph, mask, r2
-        alive = graph.alive_points()
-        h, w = mask.shape
-        self.counts = cover_counts(h, w, graph.rows[alive], graph.cols[alive], r2[alive])
+        # The disk counts of the current skeleton, made when first needed.
+        self.counts: np.ndarray | None = None
         self.limb = np.zeros(len(graph.branches), np.bool_)
 
     def _points(self, b: int) -> np.ndarray:
         return np.asarray(self.graph.branches[b].points, np.int64)
 
-    def is_limb(self, b: int) -> bool:
-        """Whether end branch ``b`` is a limb, on the current skeleton; a limb is
-        remembered (:attr:`limb`)."""
+    def is_limb(self, b: int, exclusive: int) -> bool:
+        """Whether end branch ``b``, which alone covers ``exclusive`` pixels, is a limb,
+        on the current skeleton; a limb is remembered (:attr:`limb`)."""
         if self.limb[b]:
             return True
+        if exclusive < MIN_LIMB_AREA:
+            return False
+        if self.counts is None:
+            g, alive = self.graph, self.graph.alive_points()
+            h, w = self.mask.shape
+            self.counts = cover_counts(h, w, g.rows[alive], g.cols[alive], self.r2[alive])
         pts = self._points(b)
         rows, cols, r2 = self.graph.rows[pts], self.graph.cols[pts], self.r2[pts]
         deep = r2 > RIM
@@ -92,6 +101,8 @@ class LimbGuard:
 
     def removed(self, b: int) -> None:
         """Branch ``b`` leaves the skeleton (call before the graph removes it)."""
+        if self.counts is None:
+            return
         pts = self._points(b)
         uncover(self.counts, self.graph.rows[pts], self.graph.cols[pts], self.r2[pts])
 

@@ -55,6 +55,20 @@ class LimbGuard:
         The padded shape.
     r2 : int array
         Squared radius of every point of ``graph``.
+
+    Examples
+    --------
+    A disc with three arms 5 px wide: each arm's end branch is a limb.
+
+    >>> from skelprune.skeleton import Skeleton
+    >>> yy, xx = np.mgrid[:100, :100]
+    >>> m = (yy - 50) ** 2 + (xx - 50) ** 2 < 22**2
+    >>> m[48:53, 60:95] = m[60:95, 48:53] = m[5:40, 48:53] = True
+    >>> sk = Skeleton.medial_axis(m)
+    >>> g = sk.working_graph()
+    >>> guard = LimbGuard(g, sk.mask, sk.r2)
+    >>> [guard.is_limb(b, exclusive=10**6) for b in g.end_branches()]
+    [True, True, True]
     """
 
     def __init__(self, graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> None:

@@ -76,21 +76,43 @@ def naive_sequence(
         nd = sum(br.nd for b, br in enumerate(graph.branches) if br.alive and b != skip)
         return na, nd
 
+    def is_limb(b: int) -> bool:
+        # docs/algorithm.md, "Limbs": at least 2·r points deeper than the rim (r² > 2)
+        # whose whole disk no other point's disk touches, r the largest of them.
+        others = np.zeros(flat.size, bool)
+        pts = current_points(skip=b)
+        if pts:
+            others[np.concatenate([disks[p] for p in pts])] = True
+        whole = [
+            int(r2[p]) for p in graph.branches[b].points if r2[p] > 2 and not others[disks[p]].any()
+        ]
+        return bool(whole) and len(whole) >= 2.0 * math.sqrt(max(whole))
+
     lost = uncovered(flat, disks, current_points())
     lams = [objective(lost, area, *total_length(), alpha, lbar)]
     removed = []
+    limbs: set[int] = set()  # found once, kept for good
     while True:
         cands = [b for b in range(len(graph.branches)) if graph.is_end_branch(b)]
-        if not cands:
-            break
-        best = None
+        ranked = []
         for b in cands:
+            if b in limbs:
+                continue
             lost_b = uncovered(flat, disks, current_points(skip=b))
             lam = objective(lost_b, area, *total_length(skip=b), alpha, lbar)
-            key = candidate_key(graph, b, lam, lost_b - lost)
-            if best is None or key < best:
-                best, pick, pick_lost = key, b, lost_b
-        graph.remove_end_branch(pick)
+            ranked.append((candidate_key(graph, b, lam, lost_b - lost), b, lost_b))
+        pick = None
+        for _, b, lost_b in sorted(ranked):  # the best that is not a limb
+            if is_limb(b):
+                limbs.add(b)
+                continue
+            pick, pick_lost = b, lost_b
+            break
+        if pick is None:
+            break
+        merged = graph.remove_end_branch(pick)
+        if merged is not None and merged[1] in limbs:
+            limbs.add(merged[0])
         removed.append(pick)
         lost = pick_lost
         lams.append(objective(lost, area, *total_length(), alpha, lbar))

@@ -25,6 +25,7 @@ from numba import njit
 from ..grid.coverage import Coverage
 from ..grid.graph import BranchGraph, step_length
 from ..skeleton import Skeleton
+from .limbs import LimbGuard
 
 __all__ = [
     "PruningSequence",
@@ -178,8 +179,12 @@ def pruning_sequence(
     bnd = np.array([br.nd for br in graph.branches], np.int64)
     ep = np.zeros((nb, 2), np.int64)
 
+    # Limbs are never candidates (docs/algorithm.md, "Limbs"); only the greedy order
+    # looks for them.
+    guard = LimbGuard(graph, mask, r2) if order is None else None
+
     def mark_end(b: int) -> None:
-        is_end[b] = graph.is_end_branch(b)
+        is_end[b] = graph.is_end_branch(b) and not (guard is not None and guard.limb[b])
         if is_end[b]:
             p = graph.endpoint(b)
             ep[b] = graph.rows[p], graph.cols[p]
@@ -190,9 +195,30 @@ def pruning_sequence(
         ends = np.flatnonzero(is_end)
         seq.end_areas.append((ends, cov.exclusive[ends + 1]))
         if order is None:
-            pick = _pick(
-                is_end, cov.exclusive, bna, bnd, ep, cov.lost, area, graph.na, graph.nd, alpha, lbar
-            )
+            # The best end branch that is not a limb; a limb found is kept for good.
+            while True:
+                pick = _pick(
+                    is_end,
+                    cov.exclusive,
+                    bna,
+                    bnd,
+                    ep,
+                    cov.lost,
+                    area,
+                    graph.na,
+                    graph.nd,
+                    alpha,
+                    lbar,
+                )
+                if pick < 0 or not guard.is_limb(pick, int(cov.exclusive[pick + 1])):
+                    break
+                is_end[pick] = False
+            if pick < 0:  # only limbs are left
+                seq.end_areas.pop()
+                break
+            ends = np.flatnonzero(is_end)
+            seq.end_areas[-1] = (ends, cov.exclusive[ends + 1])
+            guard.removed(pick)
         elif len(seq.removed) < len(order):
             pick = order[len(seq.removed)]
         else:
@@ -205,6 +231,8 @@ def pruning_sequence(
         seq.merges.append(None if merged is None else (merged[0], merged[1]))
         if merged is not None:
             kept, absorbed, jid = merged
+            if guard is not None:
+                guard.merged(kept, absorbed)
             cov.merge_label(nb + 1 + jid, kept + 1)
             cov.merge_label(absorbed + 1, kept + 1)
             is_end[absorbed] = False

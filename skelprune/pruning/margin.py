@@ -11,8 +11,8 @@ For the answer ``Ŝ = S(k)`` of the greedy sequence and ``λ`` its target (eq. 7
   its margin is ``λ(S(j)) − λ(Ŝ)`` for the first step ``j > k`` at which the sequence
   removes any of its points (it first becomes part of an end branch, then goes). It is
   > 0 by the argmin.
-- a branch the sequence never removes (the last path of a tree, the cycles of a shape
-  with holes) has no margin (``None``): nothing in the trade-off would take it.
+- a branch the sequence never removes (the last path of a tree, a limb, the cycles of a
+  shape with holes) has no margin (``None``): nothing in the pruning would take it.
 
 ``removed_at`` is that step ``j`` for every branch (``None``: never removed). Both come
 from the sequence already run: it records, at each step, the area each end branch alone
@@ -74,12 +74,16 @@ def branch_margins(
         margin[b] = None if j is None else float(lam[j]) - base
     if trim is not None:
         for b, d in trim.exclusive.items():
+            if removed_at.get(b, 0) is None:  # a limb: never removed
+                continue
             na, nd = graph.counts_without(b)
             margin[b] = objective(trim.lost + d, seq.area, na, nd, seq.alpha, seq.lbar) - base
     elif chosen < len(seq.end_areas):
         lost = seq.lost[chosen]
         ends, areas = seq.end_areas[chosen]
         for b, d in zip(ends.tolist(), areas.tolist(), strict=True):
+            if removed_at.get(b, 0) is None:  # a limb found later: never removed
+                continue
             na, nd = graph.counts_without(b)
             margin[b] = objective(lost + d, seq.area, na, nd, seq.alpha, seq.lbar) - base
     return Margins(margin, removed_at)

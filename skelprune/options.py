@@ -259,7 +259,8 @@ class PruneOptions:
         "For method=bayesian: also drop the answer's end branches whose margin is "
         f"below this, >= 0, cheapest first, as the sequence goes on (default "
         f"{DEFAULT_MIN_MARGIN:g}, chosen for endpoint stability under noise, turns and "
-        "scaling at every size; 0: the paper's answer, the argmin of λ).",
+        "scaling at every size; 0: the argmin of λ over the sequence, which never removes "
+        "a limb: docs/algorithm.md).",
         _number(0, strict=False),
     )
     choice: str = _option(

@@ -14,7 +14,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from service.budget import check_budget, estimate, out_of_memory
+from skelprune.budget import check_budget, estimate, out_of_memory
 from skelprune.errors import ImageTooLargeError, SkelpruneError
 from skelprune.io.input import Input, Kind, read_input
 from skelprune.options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
@@ -183,7 +183,7 @@ def run_job(job: Job) -> JobResult:
     """Decode the input, check its memory estimate, prune it and serialise the answer.
 
     A ``MemoryError`` anywhere is the input's size: the same 413 as an estimate over
-    the budget (:class:`~service.budget.JobTooLargeError`), not an internal error.
+    the budget (:class:`~skelprune.errors.JobTooLargeError`), not an internal error.
     """
     try:
         return _run_job(job)

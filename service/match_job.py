@@ -7,9 +7,9 @@ from dataclasses import dataclass
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from service.budget import check_budget, estimate, out_of_memory
 from service.jobs import Job, dumps, read_job
 from service.schemas import GeoJSONInput
+from skelprune.budget import check_budget, estimate, out_of_memory
 
 __all__ = [
     "MatchDocument",

@@ -25,6 +25,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import contextvars
+import functools
 import logging
 import multiprocessing as mp
 import signal
@@ -36,7 +37,7 @@ from concurrent.futures import ThreadPoolExecutor
 from multiprocessing.connection import Connection
 from typing import Any
 
-from skelprune.budget import resident_bytes
+from skelprune.budget import mib, resident_bytes
 from skelprune.errors import SkelpruneError
 
 __all__ = [
@@ -57,15 +58,23 @@ log = logging.getLogger("service.pool")
 MEMORY_SAMPLE_SECONDS = 0.02
 
 
+@functools.cache
+def _malloc_trim() -> Any:
+    """glibc's ``malloc_trim``, loaded once a worker (None: not glibc)."""
+    import ctypes
+
+    try:
+        return ctypes.CDLL("libc.so.6").malloc_trim
+    except (OSError, AttributeError):
+        return None
+
+
 def _trim_heap() -> None:
     """Give the C heap's free pages back to the system (glibc), so that the resident
     set after a job is what the worker still uses."""
-    try:
-        import ctypes
-
-        ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except (OSError, AttributeError):
-        pass
+    trim = _malloc_trim()
+    if trim is not None:
+        trim(0)
 
 
 class PoolError(Exception):
@@ -213,26 +222,22 @@ class _Worker:
 
     def _wait(self, timeout: float, memory_limit: int | None) -> None:
         """Wait for the job's answer; its resident set is sampled meanwhile."""
+        timed_out = JobTimeoutError(f"job exceeded the time limit of {timeout:g} s and was stopped")
         if memory_limit is None:
             if not self.conn.poll(timeout):
-                raise JobTimeoutError(
-                    f"job exceeded the time limit of {timeout:g} s and was stopped"
-                )
+                raise timed_out
             return
         deadline = time.monotonic() + timeout
         while not self.conn.poll(MEMORY_SAMPLE_SECONDS):
             held = self.resident()
             if held > memory_limit:
                 raise JobOverMemoryError(
-                    f"this input needed more than the memory budget of "
-                    f"{memory_limit / 2**20:,.0f} MiB a job (its worker held "
-                    f"{held / 2**20:,.0f} MiB) and was stopped: send fewer pixels or a "
-                    "cleaner mask"
+                    f"this input needed more than the memory budget of {mib(memory_limit)} "
+                    f"a job (its worker held {mib(held)}) and was stopped: send fewer pixels "
+                    "or a cleaner mask"
                 )
             if time.monotonic() > deadline:
-                raise JobTimeoutError(
-                    f"job exceeded the time limit of {timeout:g} s and was stopped"
-                )
+                raise timed_out
 
     def stop(self, grace: float = 1.0) -> None:
         with contextlib.suppress(OSError):
@@ -463,8 +468,7 @@ class WorkerPool:
         self.recycled += 1
         return self._replace(
             worker,
-            f"it held {held / 2**20:,.0f} MiB after a job, "
-            f"{(held - worker.warm_bytes) / 2**20:,.0f} MiB more than when warm",
+            f"it held {mib(held)} after a job, {mib(held - worker.warm_bytes)} more than when warm",
         )
 
     def _release(self, worker: _Worker) -> None:

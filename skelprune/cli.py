@@ -180,6 +180,20 @@ TrimOption = Annotated[bool, typer.Option(help=HELP["trim"])]
 Choice = enum.Enum("Choice", {name: name for name in CHOICES}, type=str)
 ChoiceOption = Annotated[Choice, typer.Option(help=HELP["choice"])]
 ForegroundOption = Annotated[Rule, typer.Option(help=HELP["foreground"])]
+LabelsOption = Annotated[bool, typer.Option(help=HELP["labels"])]
+FillHolesOption = Annotated[int, typer.Option(help=HELP["fill_holes"])]
+MinAreaOption = Annotated[int, typer.Option(help=HELP["min_area"])]
+CurveOption = Annotated[bool, typer.Option(help=HELP["curve"])]
+SequenceOption = Annotated[bool, typer.Option(help=HELP["sequence"])]
+PixelSizeOption = Annotated[float | None, typer.Option(help=HELP["pixel_size"])]
+LongestSideOption = Annotated[int | None, typer.Option(help=_geojson_only("longest_side"))]
+PixelsPerWidthOption = Annotated[float, typer.Option(help=_geojson_only("pixels_per_width"))]
+PixelBudgetOption = Annotated[int, typer.Option(help=_geojson_only("pixel_budget"))]
+RepairOption = Annotated[bool, typer.Option(help=_geojson_only("repair"))]
+CrsOption = Annotated[str | None, typer.Option(help=_geojson_only("crs"))]
+SimplifyOption = Annotated[float, typer.Option(help=HELP["simplify"])]
+CutEndsOption = Annotated[bool, typer.Option(help=HELP["cut_ends"])]
+OverlayScaleOption = Annotated[int | None, typer.Option(help=HELP["overlay_scale"])]
 
 
 @app.command("prune", cls=_CleanCommand)
@@ -200,9 +214,9 @@ def prune_command(
     choice: ChoiceOption = Choice(PruneOptions.choice),
     trim: TrimOption = PruneOptions.trim,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
-    labels: Annotated[bool, typer.Option(help=HELP["labels"])] = ReadOptions.labels,
-    fill_holes: Annotated[int, typer.Option(help=HELP["fill_holes"])] = ReadOptions.fill_holes,
-    min_area: Annotated[int, typer.Option(help=HELP["min_area"])] = ReadOptions.min_area,
+    labels: LabelsOption = ReadOptions.labels,
+    fill_holes: FillHolesOption = ReadOptions.fill_holes,
+    min_area: MinAreaOption = ReadOptions.min_area,
     csv: Annotated[
         Path | None,
         typer.Option(
@@ -212,22 +226,18 @@ def prune_command(
     overlay: Annotated[
         Path | None, typer.Option(help="Write the overlay PNG here (one input file only).")
     ] = None,
-    overlay_scale: Annotated[int | None, typer.Option(help=HELP["overlay_scale"])] = None,
+    overlay_scale: OverlayScaleOption = None,
     overlay_legend: Annotated[
         bool, typer.Option(help=HELP["overlay_legend"])
     ] = OutputOptions.overlay_legend,
-    curve: Annotated[bool, typer.Option(help=HELP["curve"])] = OutputOptions.curve,
-    sequence: Annotated[bool, typer.Option(help=HELP["sequence"])] = OutputOptions.sequence,
-    pixel_size: Annotated[float | None, typer.Option(help=HELP["pixel_size"])] = None,
-    longest_side: Annotated[int | None, typer.Option(help=_geojson_only("longest_side"))] = None,
-    pixels_per_width: Annotated[
-        float, typer.Option(help=_geojson_only("pixels_per_width"))
-    ] = RasterOptions.pixels_per_width,
-    pixel_budget: Annotated[
-        int, typer.Option(help=_geojson_only("pixel_budget"))
-    ] = RasterOptions.pixel_budget,
-    repair: Annotated[bool, typer.Option(help=_geojson_only("repair"))] = RasterOptions.repair,
-    crs: Annotated[str | None, typer.Option(help=_geojson_only("crs"))] = None,
+    curve: CurveOption = OutputOptions.curve,
+    sequence: SequenceOption = OutputOptions.sequence,
+    pixel_size: PixelSizeOption = None,
+    longest_side: LongestSideOption = None,
+    pixels_per_width: PixelsPerWidthOption = RasterOptions.pixels_per_width,
+    pixel_budget: PixelBudgetOption = RasterOptions.pixel_budget,
+    repair: RepairOption = RasterOptions.repair,
+    crs: CrsOption = None,
     geojson: Annotated[
         bool,
         typer.Option(
@@ -236,8 +246,8 @@ def prune_command(
             "instead of the document.",
         ),
     ] = False,
-    simplify: Annotated[float, typer.Option(help=HELP["simplify"])] = OutputOptions.simplify,
-    cut_ends: Annotated[bool, typer.Option(help=HELP["cut_ends"])] = OutputOptions.cut_ends,
+    simplify: SimplifyOption = OutputOptions.simplify,
+    cut_ends: CutEndsOption = OutputOptions.cut_ends,
     workers: Annotated[
         int, typer.Option(help="Worker processes for several files, >= 0 (0: one a CPU core).")
     ] = 0,
@@ -452,17 +462,13 @@ def prune_many_command(
     choice: ChoiceOption = Choice(PruneOptions.choice),
     trim: TrimOption = PruneOptions.trim,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
-    curve: Annotated[bool, typer.Option(help=HELP["curve"])] = OutputOptions.curve,
-    sequence: Annotated[bool, typer.Option(help=HELP["sequence"])] = OutputOptions.sequence,
-    pixel_size: Annotated[float | None, typer.Option(help=_geojson_only("pixel_size"))] = None,
-    longest_side: Annotated[int | None, typer.Option(help=_geojson_only("longest_side"))] = None,
-    pixels_per_width: Annotated[
-        float, typer.Option(help=_geojson_only("pixels_per_width"))
-    ] = RasterOptions.pixels_per_width,
-    pixel_budget: Annotated[
-        int, typer.Option(help=_geojson_only("pixel_budget"))
-    ] = RasterOptions.pixel_budget,
-    repair: Annotated[bool, typer.Option(help=_geojson_only("repair"))] = RasterOptions.repair,
+    curve: CurveOption = OutputOptions.curve,
+    sequence: SequenceOption = OutputOptions.sequence,
+    pixel_size: PixelSizeOption = None,
+    longest_side: LongestSideOption = None,
+    pixels_per_width: PixelsPerWidthOption = RasterOptions.pixels_per_width,
+    pixel_budget: PixelBudgetOption = RasterOptions.pixel_budget,
+    repair: RepairOption = RasterOptions.repair,
 ) -> None:
     """Prune a whole data set on Dask: one NAME.json an input under --out, written as each
     finishes; failed inputs on stderr and in problems.jsonl; a second run skips what is

@@ -12,7 +12,6 @@ from fastapi import APIRouter, Depends, Request, Response
 from fastapi.responses import StreamingResponse
 
 from service import openapi
-from service.budget import check_polygon
 from service.builder import JobBuilder, job_builder
 from service.errors import InternalError, UnsupportedMediaTypeError, lookup, problem
 from service.examples import PRUNE_RESPONSES
@@ -35,6 +34,7 @@ from service.http.scan import BatchItem
 from service.jobs import Job, run_job
 from service.pool import PoolError, WorkerPool
 from service.settings import Settings
+from skelprune.budget import check_polygon
 from skelprune.errors import InvalidPolygonError, SkelpruneError
 from skelprune.io.input import check_image_size
 

@@ -19,8 +19,7 @@ from ..options import (
     PruneOptions,
     RasterOptions,
     ReadOptions,
-    options_value,
-    split_options,
+    resolve_options,
 )
 from .items import Item, expand
 from .store import Store
@@ -141,18 +140,8 @@ def iter_prune_many(
             isinstance(value, bool) or not isinstance(value, int) or value < 1
         ):
             raise InvalidOptionError(f"{name} must be a whole number >= 1, got {shown(value)}")
-    groups = split_options(keywords)
-    job = Job(
-        options=options_value(PruneOptions, options, groups[PruneOptions]),
-        read=None
-        if read is None and not groups[ReadOptions]
-        else options_value(ReadOptions, read, groups[ReadOptions]),
-        raster=None
-        if raster is None and not groups[RasterOptions]
-        else options_value(RasterOptions, raster, groups[RasterOptions]),
-        output=options_value(OutputOptions, output, groups[OutputOptions]),
-        budget=budget or Budget(),
-    )
+    options, read, raster, output = resolve_options(options, read, raster, output, keywords)
+    job = Job(options, read, raster, output, budget=budget or Budget())
     # label images, once the read options know them: every object is its own shape
     items = expand(inputs, labels=bool(getattr(job.read, "labels", False)))
     store = None if out is None else Store(out)

@@ -21,6 +21,7 @@ from fastapi.testclient import TestClient
 from PIL import Image
 
 from service.schemas import Problem, PruneDocument
+from testkit.pngfile import chunk
 
 pytestmark = pytest.mark.timeout(300)
 
@@ -31,15 +32,6 @@ BOW_TIE = [[0, 0], [10, 10], [10, 0], [0, 10], [0, 0]]
 
 
 # ----------------------------------------------------------------------- builders
-def chunk(kind: bytes, payload: bytes) -> bytes:
-    return (
-        struct.pack(">I", len(payload))
-        + kind
-        + payload
-        + struct.pack(">I", zlib.crc32(kind + payload))
-    )
-
-
 def header_only_png(width: int, height: int, depth: int = 8, colour: int = 0) -> bytes:
     """Signature + a valid IHDR claiming ``width`` × ``height``, then nothing useful."""
     ihdr = struct.pack(">IIBBBBB", width, height, depth, colour, 0, 0, 0)

@@ -26,7 +26,7 @@ KERNELS := $(VENV)/.compiled
 
 # Compile the numba kernels ahead (loaded in under a second afterwards), not on the
 # first request or in every worker.
-$(KERNELS): $(SERVE) $(shell find skelprune -name "*.py") service/jobs.py
+$(KERNELS): $(SERVE) $(shell find skelprune -name "*.py") service/worker/jobs.py
 	@echo "setup: compiling the numba kernels (once; half a minute to a minute)"
 	@$(BIN)/python -m service.compile
 	@touch $(KERNELS)
@@ -64,7 +64,7 @@ eval: $(BENCH) $(KERNELS)
 	$(BIN)/python -m evaluation --out docs
 
 openapi: $(SERVE)
-	$(BIN)/python -m service.openapi_md > openapi.md
+	$(BIN)/python -m service.apidocs.openapi_md > openapi.md
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info

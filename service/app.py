@@ -22,21 +22,22 @@ from prometheus_client import CollectorRegistry, Gauge, Histogram
 from prometheus_fastapi_instrumentator import Instrumentator
 from pydantic.json_schema import models_json_schema
 
-from service import __version__, examples
+from service import __version__
+from service.apidocs import examples
 from service.errors import install_error_handlers
 from service.http.middleware import BodyLimitMiddleware, HeadMiddleware, SlashRedirectMiddleware
-from service.jobs import warmup
-from service.match_job import MatchDocument, MatchPolygons
-from service.pool import WorkerPool
-from service.routes import ROUTERS
-from service.schemas import Problem, PruneDocument, SkeletonGeoJSON, polygon_request_adapter
-from service.security import (
+from service.http.request_context import (
     OPEN_PATHS,
     REQUEST_ID_HEADER,
     ApiKeyMiddleware,
     RequestContextMiddleware,
 )
+from service.http.routes import ROUTERS
+from service.http.schemas import Problem, PruneDocument, SkeletonGeoJSON, polygon_request_adapter
 from service.settings import Settings
+from service.worker.jobs import warmup
+from service.worker.match_job import MatchDocument, MatchPolygons
+from service.worker.pool import WorkerPool
 
 __all__ = ["Metrics", "create_app"]
 
@@ -224,7 +225,7 @@ def create_app(
         initializer=warmup if settings.warmup else None,
         startup_timeout=settings.startup_timeout,
         context=settings.mp_context,
-        preload=("skelprune", "service.jobs"),
+        preload=("skelprune", "service.worker.jobs"),
         memory_limit=settings.job_memory_mb * 2**20,
     )
 

@@ -14,7 +14,7 @@ the most seen per unit on the adversarial masks of ``python -m benchmarks advers
 machine, so the estimate is a first screen and the time limit stays the hard stop.
 
 The estimate is a screen, not the bound: what bounds a job is its worker's resident
-set, which the pool samples while the job runs (:class:`service.pool.WorkerPool`,
+set, which the pool samples while the job runs (:class:`service.worker.pool.WorkerPool`,
 ``memory_limit``): a worker over the budget is killed and replaced and the job answered
 with the same 413. Virtual memory is not what a job uses (allocators and thread arenas
 reserve far more address space than they touch), so it is not capped.

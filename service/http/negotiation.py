@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from service.errors import NotAcceptableError
-from service.jobs import Output
+from service.worker.jobs import Output
 
 __all__ = ["NDJSON", "PRODUCES", "accept_ndjson", "negotiate"]
 

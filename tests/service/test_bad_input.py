@@ -20,7 +20,7 @@ import pytest
 from fastapi.testclient import TestClient
 from PIL import Image
 
-from service.schemas import Problem, PruneDocument
+from service.http.schemas import Problem, PruneDocument
 from testkit.pngfile import chunk
 
 pytestmark = pytest.mark.timeout(300)
@@ -554,7 +554,7 @@ def test_valid_odd_pngs_give_the_same_shape(client: TestClient) -> None:
 def test_a_number_json_cannot_write_is_the_callers_error() -> None:
     """Should a non-finite number still reach the encoder, the answer is a 4xx, not a 500."""
     from service.errors import lookup
-    from service.jobs import dumps as _dumps
+    from service.worker.jobs import dumps as _dumps
 
     for value in (float("inf"), float("nan")):
         with pytest.raises(ValueError, match="JSON cannot write") as info:

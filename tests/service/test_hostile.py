@@ -19,8 +19,8 @@ from fastapi.testclient import TestClient
 from PIL import Image
 
 import skelprune
-from service.jobs import Job, run_job
-from service.schemas import Problem
+from service.http.schemas import Problem
+from service.worker.jobs import Job, run_job
 from skelprune.budget import (
     Estimate,
     JobTooLargeError,

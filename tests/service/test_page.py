@@ -22,7 +22,7 @@ import pytest
 from PIL import Image
 
 import skelprune
-from service.schemas import PruneDocument
+from service.http.schemas import PruneDocument
 from skelprune.io import read_mask
 from testkit import DATA, REPO
 from testkit.browser import MISSING, chromium

@@ -13,8 +13,8 @@ from fastapi.testclient import TestClient
 
 from service.http import bodies
 from service.http.bodies import BATCH_MAX_ITEMS
+from service.http.routes import prune
 from service.http.scan import count_polygon, split_batch
-from service.routes import prune
 from skelprune.budget import polygon_estimate
 from testkit.adversarial import circle_polygon, unit_squares
 

@@ -16,7 +16,7 @@ from fastapi.testclient import TestClient
 from PIL import Image
 
 import skelprune
-from service.schemas import Problem, PruneDocument, Readiness, SkeletonGeoJSON
+from service.http.schemas import Problem, PruneDocument, Readiness, SkeletonGeoJSON
 from skelprune.io import read_mask
 from testkit import DATA
 

@@ -73,7 +73,7 @@ def _option_models() -> tuple[type[BaseModel], dict[str, Any]]:
 
     Only the wire types are declared here (a number, a flag, one of the choices); the
     values are checked once, by the library's option classes, when the request builder
-    makes them (:mod:`service.builder`), which locates each error where it was given.
+    makes them (:mod:`service.http.builder`), which locates each error where it was given.
     The checks' bounds are shown in the schema.
     """
     fields: dict[str, Any] = {}

@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from service.jobs import Job, dumps, read_job
-from service.schemas import GeoJSONInput
+from service.http.schemas import GeoJSONInput
+from service.worker.jobs import Job, dumps, read_job
 from skelprune.budget import check_budget, estimate, out_of_memory
 
 __all__ = [
@@ -78,7 +78,7 @@ class MatchResult:
 
 def run_match_job(job: MatchJob) -> MatchResult:
     """Decode both inputs, prune them and answer the match as JSON (memory checked
-    and serialised as :func:`service.jobs.run_job` does)."""
+    and serialised as :func:`service.worker.jobs.run_job` does)."""
     try:
         return _run_match_job(job)
     except MemoryError:

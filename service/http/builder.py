@@ -4,7 +4,7 @@ Every endpoint that prunes (``POST /v1/prune``, each shape of ``POST /v1/prune/b
 both shapes of ``POST /v1/match``) goes through :func:`job_builder`: it gathers the
 options from the query and the body, refuses an option where it does not apply, has the
 library's option classes check the values, and :meth:`JobBuilder.job` makes the
-:class:`~service.jobs.Job` of each shape. A :class:`~service.jobs.Job` is made nowhere
+:class:`~service.worker.jobs.Job` of each shape. A :class:`~service.worker.jobs.Job` is made nowhere
 else.
 """
 
@@ -16,10 +16,10 @@ from typing import Any
 from fastapi.exceptions import RequestValidationError
 from pydantic import BaseModel
 
-from service.jobs import MEDIA_TYPES, Job, Output
-from service.match_job import MatchJob
-from service.schemas import POLYGON_ONLY, PruneQuery
+from service.http.schemas import POLYGON_ONLY, PruneQuery
 from service.settings import Settings
+from service.worker.jobs import MEDIA_TYPES, Job, Output
+from service.worker.match_job import MatchJob
 from skelprune.errors import InvalidOptionError
 from skelprune.options import GROUPS, OutputOptions, PruneOptions, RasterOptions, ReadOptions
 

@@ -7,8 +7,7 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Request, Response
 
-from service import openapi
-from service.builder import job_builder
+from service.apidocs import openapi
 from service.errors import UnsupportedMediaTypeError
 from service.http.bodies import (
     JSON_TYPES,
@@ -19,10 +18,11 @@ from service.http.bodies import (
     refuse_encoding,
     validate_json,
 )
+from service.http.builder import job_builder
 from service.http.query import QUERY_OPTIONS, parse_query
-from service.match_job import MatchJob, run_match_job
-from service.pool import WorkerPool
 from service.settings import Settings
+from service.worker.match_job import MatchJob, run_match_job
+from service.worker.pool import WorkerPool
 from skelprune.errors import InvalidOptionError
 from skelprune.io.input import check_image_size
 
@@ -33,7 +33,7 @@ router = APIRouter()
 
 async def match_function() -> Callable[[MatchJob], Any]:
     """The worker-side function of ``/v1/match`` (a dependency, as
-    :func:`service.routes.prune.job_function`)."""
+    :func:`service.http.routes.prune.job_function`)."""
     return run_match_job
 
 

@@ -11,10 +11,9 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, Request, Response
 from fastapi.responses import StreamingResponse
 
-from service import openapi
-from service.builder import JobBuilder, job_builder
+from service.apidocs import openapi
+from service.apidocs.examples import PRUNE_RESPONSES
 from service.errors import InternalError, UnsupportedMediaTypeError, lookup, problem
-from service.examples import PRUNE_RESPONSES
 from service.http.bodies import (
     BATCH_MAX_ITEMS,
     JSON_TYPES,
@@ -28,12 +27,13 @@ from service.http.bodies import (
     refuse_encoding,
     validate_json,
 )
+from service.http.builder import JobBuilder, job_builder
 from service.http.negotiation import NDJSON, accept_ndjson, negotiate
 from service.http.query import parse_query
 from service.http.scan import BatchItem
-from service.jobs import Job, run_job
-from service.pool import PoolError, WorkerPool
 from service.settings import Settings
+from service.worker.jobs import Job, run_job
+from service.worker.pool import PoolError, WorkerPool
 from skelprune.budget import check_polygon
 from skelprune.errors import InvalidPolygonError, SkelpruneError
 from skelprune.io.input import check_image_size
@@ -41,7 +41,7 @@ from skelprune.io.input import check_image_size
 __all__ = ["job_function", "router"]
 
 router = APIRouter()
-log = logging.getLogger("service.routes")
+log = logging.getLogger("service.http.routes")
 
 
 async def job_function() -> Callable[[Job], Any]:

@@ -23,7 +23,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from service.errors import InternalError, UnauthorizedError, problem
 from service.logs import request_id_var
-from service.pool import PoolClosedError
+from service.worker.pool import PoolClosedError
 
 __all__ = [
     "OPEN_PATHS",

@@ -52,7 +52,7 @@ __all__ = [
     "WorkerPool",
 ]
 
-log = logging.getLogger("service.pool")
+log = logging.getLogger("service.worker.pool")
 
 #: Seconds between two samples of a running job's resident set.
 MEMORY_SAMPLE_SECONDS = 0.02
@@ -308,7 +308,7 @@ class WorkerPool:
         self._ctx = mp.get_context(context)
         if context == "forkserver":
             # Only takes effect before the (process-wide) fork server first starts.
-            self._ctx.set_forkserver_preload(["service.pool", *preload])
+            self._ctx.set_forkserver_preload(["service.worker.pool", *preload])
         self._idle: asyncio.Queue[_Worker | None] | None = None  # None: "pool closed"
         self._workers: set[_Worker] = set()
         self._lock = threading.Lock()

@@ -20,8 +20,7 @@ from starlette.datastructures import QueryParams, UploadFile
 from service.errors import BodyTooLargeError, UnsupportedMediaTypeError
 from service.http.query import parse_query, validation_error
 from service.http.scan import BatchItem, count_polygon, split_batch
-from service.http.schemas import PolygonJob, PruneQuery, polygon_request_adapter
-from service.worker.match_job import MatchPolygons
+from service.http.schemas import MatchPolygons, PolygonJob, PruneQuery, polygon_request_adapter
 from skelprune.budget import check_polygon
 from skelprune.errors import InvalidOptionError, InvalidPolygonError
 

@@ -115,7 +115,7 @@ def test_memory_error_in_a_job_is_the_budget_problem(monkeypatch: pytest.MonkeyP
         raise MemoryError
 
     monkeypatch.setattr(skelprune.api, "prune_input", exhausted)
-    job = Job(output="json", kind="image", data=png(dots(20)), memory_budget=2**31)
+    job = Job(media="json", kind="image", data=png(dots(20)), memory_budget=2**31)
     with pytest.raises(JobTooLargeError, match="more than the memory budget of 2,048 MiB"):
         run_job(job)
 

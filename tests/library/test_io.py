@@ -15,7 +15,7 @@ from hypothesis.extra.numpy import arrays
 from PIL import Image
 
 from skelprune.errors import ImageTooLargeError, InvalidImageError
-from skelprune.io import png_size, read_mask, read_shape
+from skelprune.io.png import png_size, read_mask, read_shape
 from testkit import DATA
 from testkit.pngfile import chunk as _chunk
 

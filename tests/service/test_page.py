@@ -23,7 +23,7 @@ from PIL import Image
 
 import skelprune
 from service.http.schemas import PruneDocument
-from skelprune.io import read_mask
+from skelprune.io.png import read_mask
 from testkit import DATA, REPO
 from testkit.browser import MISSING, chromium
 from testkit.browser import missing as browser_missing

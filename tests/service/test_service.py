@@ -17,7 +17,7 @@ from PIL import Image
 
 import skelprune
 from service.http.schemas import Problem, PruneDocument, Readiness, SkeletonGeoJSON
-from skelprune.io import read_mask
+from skelprune.io.png import read_mask
 from testkit import DATA
 
 pytestmark = pytest.mark.timeout(300)

@@ -50,11 +50,13 @@ $(BROWSER):
 test: lint $(KERNELS) $(BROWSER)
 	$(BIN)/python -m pytest -q
 
-# ruff (lint and format) for the Python, shellcheck for the shell scripts CI runs
+# ruff (lint and format) for the Python, mypy for the library's types (its settings and
+# gaps: pyproject.toml, docs/typing.md), shellcheck for the shell scripts CI runs
 PY_SOURCES := skelprune service tests testkit benchmarks evaluation
 lint: $(TESTS)
 	$(BIN)/ruff check $(PY_SOURCES)
 	$(BIN)/ruff format --check $(PY_SOURCES)
+	$(BIN)/python -m mypy
 	$(BIN)/shellcheck scripts/*.sh .ci/run
 
 bench: $(BENCH) $(KERNELS)

@@ -243,7 +243,7 @@ def _longest_path(lines: list[dict[str, Any]]) -> dict[str, Any]:
     a = int(np.argmax(np.where(np.isfinite(d0), d0, -1)))
     d, pred = dijkstra(graph.tocsr(), directed=False, indices=a, return_predecessors=True)
     b = int(np.argmax(np.where(np.isfinite(d), d, -1)))
-    by_pair = {}
+    by_pair: dict[tuple[int, int], dict[str, Any]] = {}
     for ln, r, c in zip(lines, rows, cols, strict=True):
         by_pair.setdefault((r, c), ln)
         by_pair.setdefault((c, r), {**ln, "xy": ln["xy"][::-1], "radii": ln["radii"][::-1]})

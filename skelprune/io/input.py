@@ -119,7 +119,7 @@ class Input:
             return [(crop, origin, None) for crop, origin in components8(self.mask)]
         from .foreground import label_boxes
 
-        out = []
+        out: list[tuple[np.ndarray, tuple[int, int], int | None]] = []
         for v, box in label_boxes(self.labels):
             top, left = box[0].start, box[1].start
             own = self.labels[box] == v
@@ -257,7 +257,7 @@ def read_input(
     """
     if isinstance(source, Input):
         return source
-    data = (np.ndarray, bytes, bytearray, memoryview)
+    data: tuple[type, ...] = (np.ndarray, bytes, bytearray, memoryview)
     if kind is None:
         kind, source = _guess(source)
         data = (*data, Path)  # a path given as such

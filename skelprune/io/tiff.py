@@ -76,7 +76,7 @@ def is_georeferenced(path: os.PathLike[str] | str) -> bool:
                 return False
             f.seek(0)
             with tifffile.TiffFile(f) as tif:
-                tags = tif.pages[0].tags
+                tags = tif.pages.first.tags
                 return any(code in tags for code in GEO_TAGS)
     except Exception:  # a broken header: the image reader names what is wrong
         return False

@@ -52,7 +52,9 @@ def branch_lines(part: Any, job: Job) -> Any:
     from shapely.geometry import shape
 
     attributes = part.drop(columns=part.geometry.name)
-    rows, geometries, sources = [], [], []
+    rows: list[dict[str, Any]] = []
+    geometries: list[Any] = []
+    sources: list[Any] = []
     for position, (index, geom) in enumerate(zip(part.index, part.geometry, strict=True)):
         line, problem = run_item(Item("", Feature(position, index, geom)), job, finite_lines)
         if problem is not None:

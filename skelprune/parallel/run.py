@@ -72,7 +72,9 @@ class Outcome:
     problem: dict[str, str] | None = None
 
 
-def _batches(todo: list[tuple[int, Item]], workers: int, size: int | None) -> list[list]:
+def _batches(
+    todo: list[tuple[int, Item]], workers: int, size: int | None
+) -> list[list[tuple[int, Item]]]:
     if size is None:  # some eight tasks a worker, so that the work spreads and streams
         size = max(1, min(MAX_BATCH, math.ceil(len(todo) / (8 * max(workers, 1)))))
     return [todo[i : i + size] for i in range(0, len(todo), size)]
@@ -154,6 +156,7 @@ def iter_prune_many(
             else store.has_document(item.name)
         )
         if done:
+            assert store is not None  # only a store says what is done
             yield Outcome(item.key, position, "skipped", path=_path(store, item))
         else:
             todo.append((position, item))

@@ -114,15 +114,27 @@ def _read(item: Item, job: Job) -> Any:
     from ..io.input import Input, read_input
 
     source = item.source
-    limits = {"max_pixels": job.budget.max_pixels, "max_vertices": job.budget.max_vertices}
+    most_pixels, most_vertices = job.budget.max_pixels, job.budget.max_vertices
     if isinstance(source, LabelObject):
         row, col = source.origin
         # the object's own crop, answered in the label image's pixel coordinates
         frame = PixelFrame(x0=float(col), y0=float(row))
         return Input(source.mask, frame=frame)
     if isinstance(source, Feature):
-        return read_input(source.geometry, kind="geojson", raster=job.raster, **limits)
-    return read_input(source, read=job.read, raster=job.raster, **limits)
+        return read_input(
+            source.geometry,
+            kind="geojson",
+            raster=job.raster,
+            max_pixels=most_pixels,
+            max_vertices=most_vertices,
+        )
+    return read_input(
+        source,
+        read=job.read,
+        raster=job.raster,
+        max_pixels=most_pixels,
+        max_vertices=most_vertices,
+    )
 
 
 def _answer(item: Item, job: Job) -> dict[str, Any]:
@@ -146,10 +158,10 @@ def _plain(value: Any) -> Any:
 
 
 def run_item(
-    item: Item, job: Job, encode: Callable[[dict[str, Any]], T] = document_bytes
+    item: Item, job: Job, encode: Callable[[dict[str, Any]], T]
 ) -> tuple[T | None, tuple[str, str] | None]:
-    """One item's result, serialised by ``encode`` (:func:`document_bytes`; a caller that
-    reads the result at once passes a check such as :func:`finite_lines`), or its
+    """One item's result, serialised by ``encode`` (:func:`document_bytes`, or for a
+    caller that reads the result at once a check such as :func:`finite_lines`), or its
     problem ``(kind, detail)``."""
     try:
         return encode(_answer(item, job)), None
@@ -169,6 +181,6 @@ def run_batch(batch: list[tuple[int, Item]], job: Job) -> list[Done]:
     """A task: every item of the batch, in order (what runs on a worker)."""
     out = []
     for position, item in batch:
-        payload, problem = run_item(item, job)
+        payload, problem = run_item(item, job, document_bytes)
         out.append(Done(position, payload, problem))
     return out

@@ -1,7 +1,7 @@
 """The worker side: what runs in the worker processes and the pool that runs it.
 
 - :mod:`.pool`: the fixed pool of killable worker processes (time limit, resident-memory
-  watchdog, recycling), used from asyncio;
+  watchdog, recycling), used from asyncio; :mod:`.process`, the loop each one runs;
 - :mod:`.jobs`: one shape's job as a worker runs it (read, budget, prune, serialise), and
   the warm-up that loads the compiled kernels;
 - :mod:`.match_job`: a match's job (two shapes pruned alike, matched);

@@ -25,20 +25,17 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import contextvars
-import functools
 import logging
 import multiprocessing as mp
 import signal
 import threading
 import time
-import traceback
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from multiprocessing.connection import Connection
 from typing import Any
 
+from service.worker.process import worker_main
 from skelprune.budget import mib, resident_bytes
-from skelprune.errors import SkelpruneError
 
 __all__ = [
     "JobFailedError",
@@ -52,29 +49,10 @@ __all__ = [
     "WorkerPool",
 ]
 
-log = logging.getLogger("service.worker.pool")
+log = logging.getLogger("service.pool")
 
 #: Seconds between two samples of a running job's resident set.
 MEMORY_SAMPLE_SECONDS = 0.02
-
-
-@functools.cache
-def _malloc_trim() -> Any:
-    """glibc's ``malloc_trim``, loaded once a worker (None: not glibc)."""
-    import ctypes
-
-    try:
-        return ctypes.CDLL("libc.so.6").malloc_trim
-    except (OSError, AttributeError):
-        return None
-
-
-def _trim_heap() -> None:
-    """Give the C heap's free pages back to the system (glibc), so that the resident
-    set after a job is what the worker still uses."""
-    trim = _malloc_trim()
-    if trim is not None:
-        trim(0)
 
 
 class PoolError(Exception):
@@ -109,42 +87,6 @@ class JobFailedError(PoolError):
     """The job raised an unexpected exception inside the worker (a bug, not bad input)."""
 
 
-def _worker_main(conn: Connection, initializer: Callable[[], object] | None) -> None:
-    """Worker process: warm up, say ready (with what the initializer returned, for the
-    log), then run ``(fn, args)`` jobs until told to stop."""
-    # Ctrl-C in a terminal reaches the whole process group; the parent decides when we stop.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    info = None
-    try:
-        if initializer is not None:
-            info = initializer()
-    except BaseException as exc:  # report, then exit: the parent replaces us
-        conn.send(("init-failed", f"{type(exc).__name__}: {exc}"))
-        return
-    conn.send(("ready", None if info is None else str(info)))
-    while True:
-        try:
-            msg = conn.recv()
-        except (EOFError, OSError):
-            return
-        if msg is None:
-            return
-        fn, args = msg
-        try:
-            reply: tuple[str, Any] = ("ok", fn(*args))
-        except SkelpruneError as exc:  # the caller's fault: travels back as itself
-            reply = ("error", exc)
-        except Exception as exc:
-            reply = ("failed", (f"{type(exc).__name__}: {exc}", traceback.format_exc()))
-        del msg, fn, args  # the job's input is freed before the heap is trimmed
-        try:
-            conn.send(reply)
-        except Exception as exc:  # unpicklable result or exception
-            conn.send(("failed", (f"cannot send result: {exc}", traceback.format_exc())))
-        del reply
-        _trim_heap()
-
-
 def _exit_reason(code: int | None) -> str:
     if code is None:
         return "did not exit"
@@ -162,7 +104,7 @@ class _Worker:
     def __init__(self, ctx: Any, initializer: Callable[[], object] | None) -> None:
         self.conn, child = ctx.Pipe(duplex=True)
         self.proc = ctx.Process(
-            target=_worker_main, args=(child, initializer), daemon=True, name="skelprune-worker"
+            target=worker_main, args=(child, initializer), daemon=True, name="skelprune-worker"
         )
         self.proc.start()
         child.close()

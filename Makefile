@@ -26,7 +26,7 @@ KERNELS := $(VENV)/.compiled
 
 # Compile the numba kernels ahead (loaded in under a second afterwards), not on the
 # first request or in every worker.
-$(KERNELS): $(SERVE) $(shell find skelprune -name "*.py") service/jobs.py
+$(KERNELS): $(SERVE) $(shell find skelprune -name "*.py") service/worker/jobs.py
 	@echo "setup: compiling the numba kernels (once; half a minute to a minute)"
 	@$(BIN)/python -m service.compile
 	@touch $(KERNELS)
@@ -50,11 +50,13 @@ $(BROWSER):
 test: lint $(KERNELS) $(BROWSER)
 	$(BIN)/python -m pytest -q
 
-# ruff (lint and format) for the Python, shellcheck for the shell scripts CI runs
+# ruff (lint and format) for the Python, mypy for the library's types (its settings and
+# gaps: pyproject.toml, docs/typing.md), shellcheck for the shell scripts CI runs
 PY_SOURCES := skelprune service tests testkit benchmarks evaluation
 lint: $(TESTS)
 	$(BIN)/ruff check $(PY_SOURCES)
 	$(BIN)/ruff format --check $(PY_SOURCES)
+	$(BIN)/python -m mypy
 	$(BIN)/shellcheck scripts/*.sh .ci/run
 
 bench: $(BENCH) $(KERNELS)
@@ -64,7 +66,7 @@ eval: $(BENCH) $(KERNELS)
 	$(BIN)/python -m evaluation --out docs
 
 openapi: $(SERVE)
-	$(BIN)/python -m service.openapi_md > openapi.md
+	$(BIN)/python -m service.apidocs.openapi_md > openapi.md
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info

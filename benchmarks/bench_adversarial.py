@@ -18,7 +18,7 @@ Before each request the workers' peak-RSS counters are reset (``/proc/PID/clear_
 while it runs they are read every 5 ms (a worker replaced after its job is measured
 before it goes), and the main process's peak after it. "predicted" is what
 the worker held before the job plus the service's own estimate
-(:func:`service.budget.estimate`): the estimate is calibrated so that it is within 1.5x
+(:func:`skelprune.budget.estimate`): the estimate is calibrated so that it is within 1.5x
 of the measured peak, and the peak must stay under the budget.
 
 ``python -m benchmarks adversarial`` (Linux; about fifteen minutes);
@@ -32,11 +32,9 @@ import io
 import itertools
 import json
 import os
-import struct
 import tempfile
 import threading
 import time
-import zlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -46,10 +44,11 @@ import httpx
 import numpy as np
 from PIL import Image
 
-from service.budget import estimate, polygon_estimate, shape_counts
 from service.http.scan import count_polygon
 from service.settings import Settings
+from skelprune.budget import estimate, polygon_estimate, shape_counts
 from testkit.adversarial import CORPUS, checkerboard, circle_polygon, unit_squares
+from testkit.pngfile import png16
 from testkit.realserver import running_server
 
 from .common import table
@@ -66,32 +65,9 @@ def _png(mask: np.ndarray) -> bytes:
 
 def _png16(grey: np.ndarray, alpha: bool) -> bytes:
     """A 16-bit grey-and-alpha (or RGB) PNG of ``grey``, unfiltered."""
-    colour, samples = (
-        (4, np.stack([grey, np.full_like(grey, 65535)], -1))
-        if alpha
-        else (
-            2,
-            np.repeat(grey[..., None], 3, -1),
-        )
-    )
-    h, w = grey.shape
-
-    def chunk(kind: bytes, payload: bytes) -> bytes:
-        return (
-            struct.pack(">I", len(payload))
-            + kind
-            + payload
-            + struct.pack(">I", zlib.crc32(kind + payload))
-        )
-
-    rows = b"".join(b"\x00" + samples[r].astype(">u2").tobytes() for r in range(h))
-    head = struct.pack(">IIBBBBB", w, h, 16, colour, 0, 0, 0)
-    return (
-        b"\x89PNG\r\n\x1a\n"
-        + chunk(b"IHDR", head)
-        + chunk(b"IDAT", zlib.compress(rows))
-        + chunk(b"IEND", b"")
-    )
+    if alpha:
+        return png16(np.stack([grey, np.full_like(grey, 65535)], -1), 4)
+    return png16(np.repeat(grey[..., None], 3, -1), 2)
 
 
 def _descendants(pid: int) -> list[int]:

@@ -14,8 +14,8 @@ from typing import Any
 from pydantic import ValidationError
 
 from service.logs import logging_config
-from service.numba_seed import seed_numba_cache
 from service.settings import Settings, settings_error
+from service.worker.numba_seed import seed_numba_cache
 
 
 def _exit_cleanly(signum: int, frame: FrameType | None) -> None:
@@ -74,7 +74,7 @@ def main() -> None:
     import uvicorn  # only after the port is bound: a port in use fails sooner
 
     from service.app import create_app  # only now: importing it already compiles
-    from service.protocol import Limits, guarded_protocol
+    from service.http.connection_guard import Limits, guarded_protocol
 
     # uvicorn drains in-flight requests and closes the pool on SIGTERM/SIGINT, then
     # re-raises the signal under the handlers it found. These make that final step a

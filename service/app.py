@@ -1,47 +1,32 @@
-"""Application factory: settings, worker pool, metrics, errors, OpenAPI."""
+"""Application factory: the settings, the worker pool, the metrics, the routes with their
+errors and middlewares, and the API's documentation, wired together."""
 
 from __future__ import annotations
 
 import asyncio
-import json
 import logging
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
 from functools import partial
-from pathlib import Path
-from typing import Any
 
 from fastapi import FastAPI
 from fastapi.middleware.cors import CORSMiddleware
-from fastapi.openapi.docs import get_redoc_html, get_swagger_ui_html
-from fastapi.openapi.utils import get_openapi
-from fastapi.responses import HTMLResponse
-from fastapi.staticfiles import StaticFiles
 from prometheus_client import CollectorRegistry, Gauge, Histogram
 from prometheus_fastapi_instrumentator import Instrumentator
-from pydantic.json_schema import models_json_schema
 
-from service import __version__, examples
+from service import __version__
+from service.apidocs.document import install_docs
 from service.errors import install_error_handlers
+from service.http.api_key import ApiKeyMiddleware
 from service.http.middleware import BodyLimitMiddleware, HeadMiddleware, SlashRedirectMiddleware
-from service.jobs import warmup
-from service.match_job import MatchDocument, MatchPolygons
-from service.pool import WorkerPool
-from service.routes import ROUTERS
-from service.schemas import Problem, PruneDocument, SkeletonGeoJSON, polygon_request_adapter
-from service.security import (
-    OPEN_PATHS,
-    REQUEST_ID_HEADER,
-    ApiKeyMiddleware,
-    RequestContextMiddleware,
-)
+from service.http.request_context import REQUEST_ID_HEADER, RequestContextMiddleware
+from service.http.routes import ROUTERS
 from service.settings import Settings
+from service.worker.jobs import warmup
+from service.worker.pool import WorkerPool
 
 __all__ = ["Metrics", "create_app"]
-
-REF_TEMPLATE = "#/components/schemas/{model}"
-DOCS_ASSETS = "/docs-assets"  # Swagger UI's and ReDoc's scripts
 
 log = logging.getLogger("service")
 
@@ -101,101 +86,6 @@ def _fixed_paths(app: FastAPI) -> set[str]:
     return {p for p in (getattr(r, "path", "") for r in routes) if p and "{" not in p}
 
 
-def _simplify_query_params(schema: dict[str, Any]) -> None:
-    """``X | None`` query options: drop the ``null`` branch, a query string cannot be null."""
-    for operations in schema.get("paths", {}).values():
-        for op in operations.values():
-            for param in op.get("parameters", []):
-                sub = param.get("schema", {})
-                branches = sub.get("anyOf")
-                if param.get("in") == "query" and branches:
-                    kept = [b for b in branches if b != {"type": "null"}]
-                    if len(kept) == 1:
-                        del sub["anyOf"]
-                        sub.update(kept[0])
-
-
-def _openapi(app: FastAPI) -> Callable[[], dict[str, Any]]:
-    def build() -> dict[str, Any]:
-        if app.openapi_schema is None:
-            schema = get_openapi(
-                title=app.title,
-                version=app.version,
-                description=app.description,
-                routes=app.routes,
-            )
-            _simplify_query_params(schema)
-            # get_openapi drops None values from examples; put the 200 examples back whole.
-            ok = schema["paths"]["/v1/prune"]["post"]["responses"]["200"]["content"]
-            for media, content in examples.PRUNE_RESPONSES[200]["content"].items():
-                if "example" in content:
-                    ok[media]["example"] = content["example"]
-            components = schema.setdefault("components", {}).setdefault("schemas", {})
-            _, defs = models_json_schema(
-                [
-                    (m, "validation")
-                    for m in (Problem, PruneDocument, SkeletonGeoJSON, MatchDocument, MatchPolygons)
-                ],
-                ref_template=REF_TEMPLATE,
-            )
-            components.update(defs.get("$defs", {}))
-            request = polygon_request_adapter.json_schema(ref_template=REF_TEMPLATE)
-            components.update(request.pop("$defs", {}))
-            components["PolygonRequest"] = {"title": "PolygonRequest", **request}
-            # SKELPRUNE_API_KEY, when set: either header will do; {} = no key configured.
-            schema["components"]["securitySchemes"] = {
-                "bearer": {
-                    "type": "http",
-                    "scheme": "bearer",
-                    "description": "`Authorization: Bearer <SKELPRUNE_API_KEY>`",
-                },
-                "apiKey": {
-                    "type": "apiKey",
-                    "in": "header",
-                    "name": "X-API-Key",
-                    "description": "`X-API-Key: <SKELPRUNE_API_KEY>`",
-                },
-            }
-            for path, operations in schema["paths"].items():
-                if path not in OPEN_PATHS:
-                    for op in operations.values():
-                        op["security"] = [{"bearer": []}, {"apiKey": []}, {}]
-            # Round-trip through JSON so that the document is plain data (stable output).
-            app.openapi_schema = json.loads(json.dumps(schema, sort_keys=True))
-        return app.openapi_schema
-
-    return build
-
-
-def _offline_docs(app: FastAPI) -> None:
-    """``/docs`` (Swagger UI) and ``/redoc`` with their scripts served by the service
-    itself, from the ``fastapi-offline`` package: they work with no network."""
-    import fastapi_offline
-
-    assets = Path(fastapi_offline.__file__).parent / "static"
-    app.mount(DOCS_ASSETS, StaticFiles(directory=assets), name="docs-assets")
-
-    @app.get("/docs", include_in_schema=False)
-    async def swagger_ui() -> HTMLResponse:
-        return get_swagger_ui_html(
-            openapi_url="/openapi.json",
-            title=f"{app.title} - Swagger UI",
-            swagger_js_url=f"{DOCS_ASSETS}/swagger-ui-bundle.js",
-            swagger_css_url=f"{DOCS_ASSETS}/swagger-ui.css",
-            swagger_favicon_url=f"{DOCS_ASSETS}/favicon.png",
-        )
-
-    @app.get("/redoc", include_in_schema=False)
-    async def redoc() -> HTMLResponse:
-        return get_redoc_html(
-            openapi_url="/openapi.json",
-            title=f"{app.title} - ReDoc",
-            redoc_js_url=f"{DOCS_ASSETS}/redoc.standalone.js",
-            redoc_favicon_url=f"{DOCS_ASSETS}/favicon.png",
-            with_google_fonts=False,
-        )
-
-
 def create_app(
     settings: Settings | None = None,
     *,
@@ -224,7 +114,7 @@ def create_app(
         initializer=warmup if settings.warmup else None,
         startup_timeout=settings.startup_timeout,
         context=settings.mp_context,
-        preload=("skelprune", "service.jobs"),
+        preload=("skelprune", "service.worker.jobs"),
         memory_limit=settings.job_memory_mb * 2**20,
     )
 
@@ -278,7 +168,7 @@ def create_app(
     app.state.metrics = _metrics(registry, pool)
     for router in ROUTERS:
         app.include_router(router)
-    _offline_docs(app)
+    install_docs(app)  # /openapi.json, /docs and /redoc
     install_error_handlers(app, retry_after=settings.retry_after)
     Instrumentator(registry=registry, excluded_handlers=["/metrics"]).instrument(app)
     # Middlewares, innermost first (each add wraps the ones before it):
@@ -306,5 +196,4 @@ def create_app(
     app.add_middleware(SlashRedirectMiddleware, paths=partial(_fixed_paths, app))
     app.add_middleware(RequestContextMiddleware, access_log_enabled=settings.access_log)
     app.add_middleware(HeadMiddleware)
-    app.openapi = _openapi(app)  # type: ignore[method-assign]
     return app

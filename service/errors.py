@@ -21,7 +21,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.requests import ClientDisconnect
 
 from service.logs import request_id_var
-from service.pool import (
+from service.worker.pool import (
     JobFailedError,
     JobOverMemoryError,
     JobTimeoutError,

@@ -18,7 +18,7 @@ import logging
 import traceback
 from typing import Any
 
-#: The current request's ID: set by the request middleware (:mod:`service.security`),
+#: The current request's ID: set by the request middleware (:mod:`service.http.request_context`),
 #: read by problem bodies and log records.
 request_id_var: contextvars.ContextVar[str | None] = contextvars.ContextVar(
     "skelprune_request_id", default=None

@@ -24,6 +24,13 @@ Options travel as one value each (:mod:`skelprune.options`), or as keywords:
 >>> doc["version"] == {"library": skelprune.__version__, "algorithm": ALGORITHM_VERSION}
 True
 
+``__all__`` is what a user needs: :func:`prune`, :func:`read_input` and :func:`match`
+(with :func:`describe`), the options classes, the result types (:class:`PruneResult`,
+:class:`ComponentResult`, :class:`Skeleton`, :class:`Match`, :class:`Input` with its
+:class:`PixelFrame`), the paper's medial axis and reconstruction, and the errors. The
+graph, the kernels and the other readers are reached through their modules
+(``skelprune.grid.graph.BranchGraph``, ``skelprune.io.png.read_mask``, ...).
+
 The names below are imported when first used (``import skelprune`` alone loads neither
 numba nor scipy): a command line that prints its help, or a program that only needs the
 errors, does not pay for the pipeline.
@@ -40,25 +47,24 @@ from .errors import (
     InvalidImageError,
     InvalidOptionError,
     InvalidPolygonError,
+    JobTooLargeError,
     SkelpruneError,
 )
 from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
 
 if TYPE_CHECKING:
-    from .api import components, prune
-    from .grid.graph import BranchGraph
-    from .grid.medial_axis import MedialAxis, medial_axis, squared_distance
+    from .api import prune
+    from .grid.medial_axis import MedialAxis, medial_axis
     from .grid.reconstruction import reconstruction, reconstruction_error
     from .io.frame import PixelFrame
     from .io.input import Input, read_input
     from .matching import Match, SkeletonDescriptor, UnmatchableShapeError, describe, match
     from .output.document import ComponentResult, PruneResult
+    from .skeleton import Skeleton
 
 #: Where each lazily imported name lives (a submodule of this package).
 _LAZY = {
-    "components": "api",
     "prune": "api",
-    "BranchGraph": "grid.graph",
     "PixelFrame": "io.frame",
     "Input": "io.input",
     "read_input": "io.input",
@@ -69,11 +75,11 @@ _LAZY = {
     "match": "matching",
     "MedialAxis": "grid.medial_axis",
     "medial_axis": "grid.medial_axis",
-    "squared_distance": "grid.medial_axis",
     "ComponentResult": "output.document",
     "PruneResult": "output.document",
     "reconstruction": "grid.reconstruction",
     "reconstruction_error": "grid.reconstruction",
+    "Skeleton": "skeleton",
 }
 
 
@@ -82,7 +88,6 @@ __getattr__, __dir__ = lazy_exports(__name__, _LAZY, submodules=True)
 
 __all__ = [
     "ALGORITHM_VERSION",
-    "BranchGraph",
     "ComponentResult",
     "EmptyMaskError",
     "ImageTooLargeError",
@@ -90,6 +95,7 @@ __all__ = [
     "InvalidImageError",
     "InvalidOptionError",
     "InvalidPolygonError",
+    "JobTooLargeError",
     "Match",
     "MedialAxis",
     "OutputOptions",
@@ -98,10 +104,10 @@ __all__ = [
     "PruneResult",
     "RasterOptions",
     "ReadOptions",
+    "Skeleton",
     "SkeletonDescriptor",
     "SkelpruneError",
     "UnmatchableShapeError",
-    "components",
     "describe",
     "match",
     "medial_axis",
@@ -109,5 +115,4 @@ __all__ = [
     "read_input",
     "reconstruction",
     "reconstruction_error",
-    "squared_distance",
 ]

@@ -16,8 +16,7 @@ from .options import (
     PruneOptions,
     RasterOptions,
     ReadOptions,
-    options_value,
-    split_options,
+    resolve_options,
 )
 from .output.document import ComponentResult, GraphSummary, PruneResult
 from .pruning.bayesian import choose_step, pruning_sequence, remove_unsupported
@@ -203,24 +202,12 @@ def prune(
     >>> line["type"], all(0 <= x <= 1000 and 0 <= y <= 20 for x, y in line["coordinates"])
     ('LineString', True)
     """
-    groups = split_options(keywords)
-    options = options_value(PruneOptions, options, groups[PruneOptions])
-    output = options_value(OutputOptions, output, groups[OutputOptions])
+    options, read, raster, output = resolve_options(options, read, raster, output, keywords)
     if isinstance(source, Input):
-        if read is not None or raster is not None or groups[ReadOptions] or groups[RasterOptions]:
+        if read is not None or raster is not None:
             raise TypeError("read and raster options apply to reading; this input is read")
         shape = source
     else:
-        read = (
-            None
-            if read is None and not groups[ReadOptions]
-            else options_value(ReadOptions, read, groups[ReadOptions])
-        )
-        raster = (
-            None
-            if raster is None and not groups[RasterOptions]
-            else options_value(RasterOptions, raster, groups[RasterOptions])
-        )
         shape = read_input(source, read=read, raster=raster)
     return prune_input(shape, options, output)
 

@@ -14,7 +14,7 @@ the most seen per unit on the adversarial masks of ``python -m benchmarks advers
 machine, so the estimate is a first screen and the time limit stays the hard stop.
 
 The estimate is a screen, not the bound: what bounds a job is its worker's resident
-set, which the pool samples while the job runs (:class:`service.pool.WorkerPool`,
+set, which the pool samples while the job runs (:class:`service.worker.pool.WorkerPool`,
 ``memory_limit``): a worker over the budget is killed and replaced and the job answered
 with the same 413. Virtual memory is not what a job uses (allocators and thread arenas
 reserve far more address space than they touch), so it is not capped.
@@ -46,6 +46,7 @@ __all__ = [
     "check_budget",
     "check_polygon",
     "estimate",
+    "mib",
     "out_of_memory",
     "polygon_estimate",
     "resident_bytes",
@@ -186,7 +187,12 @@ def resident_bytes(pid: int | None = None) -> int:
         return 0
 
 
-def _mib(n: float) -> str:
+def mib(n: float) -> str:
+    """Bytes as the messages say them.
+
+    >>> mib(3 * 2**30)
+    '3,072 MiB'
+    """
     return f"{n / 2**20:,.0f} MiB"
 
 
@@ -205,9 +211,9 @@ def check_budget(cost: Estimate, memory: int | None, seconds: float | None = Non
         held = resident_bytes()
         if held + cost.bytes > memory:
             raise JobTooLargeError(
-                f"this input would need about {_mib(cost.bytes)} to prune (judged by its "
-                f"pixels, boundary and components; a worker holds {_mib(held)} already), "
-                f"over the memory budget of {_mib(memory)} a job: {advice}"
+                f"this input would need about {mib(cost.bytes)} to prune (judged by its "
+                f"pixels, boundary and components; a worker holds {mib(held)} already), "
+                f"over the memory budget of {mib(memory)} a job: {advice}"
             )
     if seconds is not None and cost.seconds > seconds:
         raise JobTooLargeError(
@@ -219,5 +225,5 @@ def check_budget(cost: Estimate, memory: int | None, seconds: float | None = Non
 
 def out_of_memory(budget: int | None) -> JobTooLargeError:
     """The error of a job that ran out of memory all the same."""
-    limit = f"the memory budget of {_mib(budget)} a job" if budget else "the memory available"
+    limit = f"the memory budget of {mib(budget)} a job" if budget else "the memory available"
     return JobTooLargeError(f"this input needs more than {limit}: send fewer pixels")

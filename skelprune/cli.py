@@ -19,6 +19,7 @@ import importlib.util
 import json
 import os
 import sys
+from collections.abc import Callable
 from dataclasses import fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -134,25 +135,30 @@ def _usage(message: str) -> typer.Exit:
     return typer.Exit(2)
 
 
+def _no_type(ctx: Any) -> str:
+    """A parameter's type as --help shows it: not at all."""
+    return ""
+
+
 class _CleanCommand(typer.core.TyperCommand):
     """``--help`` without typer's type labels where they say nothing: none for flags and
     for the file arguments (``<list[Path]>``), ``FILE...`` in the usage line."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
+        # typer has no setting for these: each parameter's own methods are replaced
         for param in self.params:
             if isinstance(param, typer.core.TyperArgument):
-                param.display_type = lambda ctx: ""  # type: ignore[method-assign]
-                param._usage_display_name = lambda p=param: (  # type: ignore[method-assign]
-                    f"{p.metavar or p.name.upper()}..."
-                )
+                setattr(param, "display_type", _no_type)  # noqa: B010
+                name = f"{param.metavar or (param.name or '').upper()}..."
+                setattr(param, "_usage_display_name", lambda name=name: name)  # noqa: B010
             elif getattr(param, "is_flag", False):
-                param.display_type = lambda ctx: ""  # type: ignore[method-assign]
+                setattr(param, "display_type", _no_type)  # noqa: B010
 
     def get_help_option(self, ctx: Any) -> Any:
         option = super().get_help_option(ctx)
         if option is not None:
-            option.display_type = lambda ctx: ""
+            setattr(option, "display_type", _no_type)  # noqa: B010
         return option
 
 
@@ -166,10 +172,11 @@ def _geojson_only(name: str) -> str:
     return "GeoJSON input: " + HELP[name][0].lower() + HELP[name][1:]
 
 
-# the choices as typer shows them (it lists an Enum's values in --help)
-Method = enum.Enum("Method", {name: name for name in METHODS}, type=str)
-Coarse = enum.Enum("Coarse", {name: name for name in COARSE}, type=str)
-Rule = enum.Enum("Rule", {name: name for name in FOREGROUND_RULES}, type=str)
+# the choices as typer shows them (it lists an Enum's values in --help); made from the
+# tuples of skelprune.options, where each is defined once, which mypy cannot read
+Method = enum.Enum("Method", {name: name for name in METHODS}, type=str)  # type: ignore[misc]
+Coarse = enum.Enum("Coarse", {name: name for name in COARSE}, type=str)  # type: ignore[misc]
+Rule = enum.Enum("Rule", {n: n for n in FOREGROUND_RULES}, type=str)  # type: ignore[misc]
 # the options every pruning command takes, declared once
 BetaOption = Annotated[float, typer.Option(help=HELP["beta"])]
 MethodOption = Annotated[Method, typer.Option(help=HELP["method"])]
@@ -177,9 +184,23 @@ CoarseOption = Annotated[Coarse, typer.Option(help=HELP["coarse"])]
 ThresholdOption = Annotated[float | None, typer.Option(help=HELP["dce_threshold"])]
 MarginOption = Annotated[float | None, typer.Option(help=HELP["min_margin"])]
 TrimOption = Annotated[bool, typer.Option(help=HELP["trim"])]
-Choice = enum.Enum("Choice", {name: name for name in CHOICES}, type=str)
+Choice = enum.Enum("Choice", {name: name for name in CHOICES}, type=str)  # type: ignore[misc]
 ChoiceOption = Annotated[Choice, typer.Option(help=HELP["choice"])]
 ForegroundOption = Annotated[Rule, typer.Option(help=HELP["foreground"])]
+LabelsOption = Annotated[bool, typer.Option(help=HELP["labels"])]
+FillHolesOption = Annotated[int, typer.Option(help=HELP["fill_holes"])]
+MinAreaOption = Annotated[int, typer.Option(help=HELP["min_area"])]
+CurveOption = Annotated[bool, typer.Option(help=HELP["curve"])]
+SequenceOption = Annotated[bool, typer.Option(help=HELP["sequence"])]
+PixelSizeOption = Annotated[float | None, typer.Option(help=HELP["pixel_size"])]
+LongestSideOption = Annotated[int | None, typer.Option(help=_geojson_only("longest_side"))]
+PixelsPerWidthOption = Annotated[float, typer.Option(help=_geojson_only("pixels_per_width"))]
+PixelBudgetOption = Annotated[int, typer.Option(help=_geojson_only("pixel_budget"))]
+RepairOption = Annotated[bool, typer.Option(help=_geojson_only("repair"))]
+CrsOption = Annotated[str | None, typer.Option(help=_geojson_only("crs"))]
+SimplifyOption = Annotated[float, typer.Option(help=HELP["simplify"])]
+CutEndsOption = Annotated[bool, typer.Option(help=HELP["cut_ends"])]
+OverlayScaleOption = Annotated[int | None, typer.Option(help=HELP["overlay_scale"])]
 
 
 @app.command("prune", cls=_CleanCommand)
@@ -200,9 +221,9 @@ def prune_command(
     choice: ChoiceOption = Choice(PruneOptions.choice),
     trim: TrimOption = PruneOptions.trim,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
-    labels: Annotated[bool, typer.Option(help=HELP["labels"])] = ReadOptions.labels,
-    fill_holes: Annotated[int, typer.Option(help=HELP["fill_holes"])] = ReadOptions.fill_holes,
-    min_area: Annotated[int, typer.Option(help=HELP["min_area"])] = ReadOptions.min_area,
+    labels: LabelsOption = ReadOptions.labels,
+    fill_holes: FillHolesOption = ReadOptions.fill_holes,
+    min_area: MinAreaOption = ReadOptions.min_area,
     csv: Annotated[
         Path | None,
         typer.Option(
@@ -212,22 +233,18 @@ def prune_command(
     overlay: Annotated[
         Path | None, typer.Option(help="Write the overlay PNG here (one input file only).")
     ] = None,
-    overlay_scale: Annotated[int | None, typer.Option(help=HELP["overlay_scale"])] = None,
+    overlay_scale: OverlayScaleOption = None,
     overlay_legend: Annotated[
         bool, typer.Option(help=HELP["overlay_legend"])
     ] = OutputOptions.overlay_legend,
-    curve: Annotated[bool, typer.Option(help=HELP["curve"])] = OutputOptions.curve,
-    sequence: Annotated[bool, typer.Option(help=HELP["sequence"])] = OutputOptions.sequence,
-    pixel_size: Annotated[float | None, typer.Option(help=HELP["pixel_size"])] = None,
-    longest_side: Annotated[int | None, typer.Option(help=_geojson_only("longest_side"))] = None,
-    pixels_per_width: Annotated[
-        float, typer.Option(help=_geojson_only("pixels_per_width"))
-    ] = RasterOptions.pixels_per_width,
-    pixel_budget: Annotated[
-        int, typer.Option(help=_geojson_only("pixel_budget"))
-    ] = RasterOptions.pixel_budget,
-    repair: Annotated[bool, typer.Option(help=_geojson_only("repair"))] = RasterOptions.repair,
-    crs: Annotated[str | None, typer.Option(help=_geojson_only("crs"))] = None,
+    curve: CurveOption = OutputOptions.curve,
+    sequence: SequenceOption = OutputOptions.sequence,
+    pixel_size: PixelSizeOption = None,
+    longest_side: LongestSideOption = None,
+    pixels_per_width: PixelsPerWidthOption = RasterOptions.pixels_per_width,
+    pixel_budget: PixelBudgetOption = RasterOptions.pixel_budget,
+    repair: RepairOption = RasterOptions.repair,
+    crs: CrsOption = None,
     geojson: Annotated[
         bool,
         typer.Option(
@@ -236,8 +253,8 @@ def prune_command(
             "instead of the document.",
         ),
     ] = False,
-    simplify: Annotated[float, typer.Option(help=HELP["simplify"])] = OutputOptions.simplify,
-    cut_ends: Annotated[bool, typer.Option(help=HELP["cut_ends"])] = OutputOptions.cut_ends,
+    simplify: SimplifyOption = OutputOptions.simplify,
+    cut_ends: CutEndsOption = OutputOptions.cut_ends,
     workers: Annotated[
         int, typer.Option(help="Worker processes for several files, >= 0 (0: one a CPU core).")
     ] = 0,
@@ -267,10 +284,11 @@ def prune_command(
             raise typer.Exit(1) from None
         for warning in res.warnings:  # also in the document; here for the reader
             typer.echo(f"warning: {inputs[0]}: {warning['message']}", err=True)
-        for flag, out, what in (
+        written: tuple[tuple[str, Path | None, Callable[[], bytes]], ...] = (
             ("--overlay", overlay, res.overlay_png),
             ("--csv", csv, lambda: res.to_csv().encode()),
-        ):
+        )
+        for flag, out, what in written:
             if out is None:
                 continue
             try:
@@ -452,17 +470,13 @@ def prune_many_command(
     choice: ChoiceOption = Choice(PruneOptions.choice),
     trim: TrimOption = PruneOptions.trim,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
-    curve: Annotated[bool, typer.Option(help=HELP["curve"])] = OutputOptions.curve,
-    sequence: Annotated[bool, typer.Option(help=HELP["sequence"])] = OutputOptions.sequence,
-    pixel_size: Annotated[float | None, typer.Option(help=_geojson_only("pixel_size"))] = None,
-    longest_side: Annotated[int | None, typer.Option(help=_geojson_only("longest_side"))] = None,
-    pixels_per_width: Annotated[
-        float, typer.Option(help=_geojson_only("pixels_per_width"))
-    ] = RasterOptions.pixels_per_width,
-    pixel_budget: Annotated[
-        int, typer.Option(help=_geojson_only("pixel_budget"))
-    ] = RasterOptions.pixel_budget,
-    repair: Annotated[bool, typer.Option(help=_geojson_only("repair"))] = RasterOptions.repair,
+    curve: CurveOption = OutputOptions.curve,
+    sequence: SequenceOption = OutputOptions.sequence,
+    pixel_size: PixelSizeOption = None,
+    longest_side: LongestSideOption = None,
+    pixels_per_width: PixelsPerWidthOption = RasterOptions.pixels_per_width,
+    pixel_budget: PixelBudgetOption = RasterOptions.pixel_budget,
+    repair: RepairOption = RasterOptions.repair,
 ) -> None:
     """Prune a whole data set on Dask: one NAME.json an input under --out, written as each
     finishes; failed inputs on stderr and in problems.jsonl; a second run skips what is

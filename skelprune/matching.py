@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -169,7 +169,7 @@ def _sample(line: np.ndarray, samples: int) -> tuple[np.ndarray, float]:
 
 
 def describe_skeleton(
-    skeleton: dict[str, Any],
+    skeleton: Mapping[str, Any],
     mask: np.ndarray,
     mean_radius: float,
     component: int = 0,

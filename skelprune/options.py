@@ -43,6 +43,7 @@ __all__ = [
     "check_option",
     "option_fields",
     "options_value",
+    "resolve_options",
     "split_options",
 ]
 
@@ -485,6 +486,34 @@ def options_value(cls: type, given: Any, keywords: Mapping[str, Any]) -> Any:
     if not isinstance(given, cls):
         raise TypeError(f"expected {cls.__name__}, got {type(given).__name__}")
     return given
+
+
+def resolve_options(
+    options: PruneOptions | None,
+    read: ReadOptions | None,
+    raster: RasterOptions | None,
+    output: OutputOptions | None,
+    keywords: Mapping[str, Any],
+) -> tuple[PruneOptions, ReadOptions | None, RasterOptions | None, OutputOptions]:
+    """A call's four options values from its objects and its keyword options (what
+    :func:`skelprune.prune` and the data-set runs take): read and raster stay None when
+    neither is given, so that the input's kind picks their defaults.
+
+    >>> opts, read, raster, out = resolve_options(None, None, None, None, {"beta": 3.0})
+    >>> opts.beta, read, raster, out == OutputOptions()
+    (3.0, None, None, True)
+    """
+    groups = split_options(keywords)
+    return (
+        options_value(PruneOptions, options, groups[PruneOptions]),
+        None
+        if read is None and not groups[ReadOptions]
+        else options_value(ReadOptions, read, groups[ReadOptions]),
+        None
+        if raster is None and not groups[RasterOptions]
+        else options_value(RasterOptions, raster, groups[RasterOptions]),
+        options_value(OutputOptions, output, groups[OutputOptions]),
+    )
 
 
 def option_fields(*groups: type) -> list[tuple[str, Any, str, tuple[str, ...] | None]]:

@@ -17,12 +17,11 @@ from fastapi.exceptions import RequestValidationError
 from pydantic import ValidationError
 from starlette.datastructures import QueryParams, UploadFile
 
-from service.budget import check_polygon
 from service.errors import BodyTooLargeError, UnsupportedMediaTypeError
 from service.http.query import parse_query, validation_error
 from service.http.scan import BatchItem, count_polygon, split_batch
-from service.match_job import MatchPolygons
-from service.schemas import PolygonJob, PruneQuery, polygon_request_adapter
+from service.http.schemas import MatchPolygons, PolygonJob, PruneQuery, polygon_request_adapter
+from skelprune.budget import check_polygon
 from skelprune.errors import InvalidOptionError, InvalidPolygonError
 
 __all__ = [
@@ -96,7 +95,7 @@ def check_polygon_body(
 ) -> Callable[[bytes], None]:
     """The check of a JSON body holding ``shapes`` polygons: their positions counted on
     the bytes, refused over ``shapes × max_vertices`` or when reading them would take
-    longer than ``seconds`` (:func:`service.budget.check_polygon`), before any object
+    longer than ``seconds`` (:func:`skelprune.budget.check_polygon`), before any object
     is built."""
 
     def check(body: bytes) -> None:
@@ -168,8 +167,7 @@ def parse_batch(body: bytes) -> list[BatchItem]:
         raise BodyTooLargeError(
             f"a batch holds at most {BATCH_MAX_ITEMS} shapes; this one holds more"
         ) from None
-    if not items:
-        raise InvalidOptionError("the batch is empty: send at least one shape")
+    batch_size(items)
     return items
 
 

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 from service.errors import NotAcceptableError
-from service.jobs import Output
+from service.worker.jobs import Media
 
 __all__ = ["NDJSON", "PRODUCES", "accept_ndjson", "negotiate"]
 
 #: Media types ``POST /v1/prune`` can answer with, in the server's order of preference.
-PRODUCES: dict[str, Output] = {
+PRODUCES: dict[str, Media] = {
     "application/json": "json",
     "image/png": "png",
     "application/geo+json": "geojson",
@@ -53,7 +53,7 @@ def _quality(ranges: list[tuple[str, float]], candidate: str) -> float:
     return best if best_rank >= 0 else 0.0
 
 
-def negotiate(accept: str | None) -> Output:
+def negotiate(accept: str | None) -> Media:
     """Pick the output for an ``Accept`` header (q-values honoured; none means JSON).
 
     Raises

@@ -8,7 +8,7 @@ from fastapi.exceptions import RequestValidationError
 from pydantic import ValidationError
 from starlette.datastructures import QueryParams
 
-from service.schemas import PruneQuery
+from service.http.schemas import PruneQuery
 
 __all__ = ["QUERY_OPTIONS", "parse_query", "validation_error"]
 

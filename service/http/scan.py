@@ -117,6 +117,12 @@ def split_batch(body: bytes, max_items: int) -> list[BatchItem]:
         )
     pos += 1
     items: list[BatchItem] = []
+
+    def add(text: bytes) -> None:
+        items.append(_item(text))
+        if len(items) > max_items:
+            raise OverflowError(len(items))
+
     start, depth = pos, 0
     while True:
         found = (_OUTER if depth == 0 else _INNER).search(body, pos)
@@ -140,17 +146,13 @@ def split_batch(body: bytes, max_items: int) -> list[BatchItem]:
             pos = end + 1
             text = body[start:end].strip()
             if text or items:
-                items.append(_item(text))
-            if len(items) > max_items:
-                raise OverflowError(len(items))
+                add(text)
             if body[pos:].strip():
                 raise _invalid("invalid JSON: extra data after the list")
             return items
         elif token == b",":
-            items.append(_item(body[start : found.start()].strip()))
+            add(body[start : found.start()].strip())
             start = pos
-        if len(items) > max_items:
-            raise OverflowError(len(items))
 
 
 def _item(text: bytes) -> BatchItem:

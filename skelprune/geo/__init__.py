@@ -29,6 +29,7 @@ import shapely
 from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 
 from ..errors import SkelpruneError
+from ..io.crs import crs_name
 from .carto import END_FACTOR, SHARE, cartographic_lines
 
 __all__ = ["centerlines", "feature_lines", "read_frame", "write_frame"]
@@ -153,13 +154,6 @@ def _one(args: tuple[Any, bytes | None, str | None, dict[str, Any]]) -> tuple[An
         return index, None, str(exc)
 
 
-def _crs_name(crs: Any) -> str | None:
-    if crs is None:
-        return None
-    epsg = crs.to_epsg()
-    return f"EPSG:{epsg}" if epsg else crs.to_wkt()
-
-
 def centerlines(
     source: Any,
     *,
@@ -221,7 +215,7 @@ def centerlines(
     frame = read_frame(source) if isinstance(source, str | os.PathLike) else source
     if isinstance(frame, gpd.GeoSeries):
         frame = gpd.GeoDataFrame(geometry=frame)
-    crs = _crs_name(frame.crs)
+    crs = crs_name(frame.crs)
     settings = {"share": share, "end_factor": end_factor, "main_path": main_path, **options}
     tasks = [
         (index, None if g is None else shapely.to_wkb(g), crs, settings)

@@ -32,7 +32,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from shapely.geometry import LineString
 
-from ..output.lines import douglas_peucker
+from ..output.lines import RETRIES, douglas_peucker
 
 __all__ = ["END_FACTOR", "SHARE", "CartoLine", "cartographic_lines"]
 
@@ -43,17 +43,14 @@ END_FACTOR = 2.0
 CORNER_REACH = float(np.sqrt(2.0))
 #: Share of the local half-width a simplified line may move by.
 SHARE = 0.25
-#: Halvings of the share tried for a line that leaves the polygon.
-RETRIES = 3
 
 
 @dataclass
 class CartoLine:
-    """One map line: its coordinates, its skeleton radii, and its network."""
+    """One map line: its coordinates and its skeleton radii."""
 
     xy: np.ndarray  # (n, 2)
     radii: np.ndarray  # (n,)
-    network: tuple[int, int]  # (component, smallest node id): lines of one network share it
 
     @property
     def length(self) -> float:
@@ -70,6 +67,8 @@ class CartoLine:
 
 
 def _branches(geo: dict[str, Any]) -> tuple[list[dict[str, Any]], dict[tuple[int, int], float]]:
+    """Each branch's coordinates and end nodes, and each node's radius (a branch's radii
+    are measured again on the polygon)."""
     branches, radius = [], {}
     for f in geo["features"]:
         p = f["properties"]
@@ -78,9 +77,7 @@ def _branches(geo: dict[str, Any]) -> tuple[list[dict[str, Any]], dict[tuple[int
             branches.append(
                 {
                     "xy": xy,
-                    "radii": np.asarray(p["radii"], float),
                     "ends": ((p["component"], p["source"]), (p["component"], p["target"])),
-                    "length": float(p["length"]),
                 }
             )
         else:
@@ -210,7 +207,7 @@ def _simplify(xy: np.ndarray, radii: np.ndarray, share: float, polygon: Any) -> 
     ``polygon``."""
     if len(xy) <= 2:
         return np.arange(len(xy))
-    for _ in range(RETRIES):
+    for _ in range(RETRIES):  # the share halved each time the line leaves the polygon
         keep = douglas_peucker(xy, share * np.maximum(radii, 0.0))
         if len(keep) == len(xy) or polygon.covers(LineString(xy[keep])):
             return keep
@@ -246,7 +243,7 @@ def _longest_path(lines: list[dict[str, Any]]) -> dict[str, Any]:
     a = int(np.argmax(np.where(np.isfinite(d0), d0, -1)))
     d, pred = dijkstra(graph.tocsr(), directed=False, indices=a, return_predecessors=True)
     b = int(np.argmax(np.where(np.isfinite(d), d, -1)))
-    by_pair = {}
+    by_pair: dict[tuple[int, int], dict[str, Any]] = {}
     for ln, r, c in zip(lines, rows, cols, strict=True):
         by_pair.setdefault((r, c), ln)
         by_pair.setdefault((c, r), {**ln, "xy": ln["xy"][::-1], "radii": ln["radii"][::-1]})
@@ -314,8 +311,7 @@ def cartographic_lines(
             for net in dict.fromkeys(nets)
         ]
     out = []
-    nets = _networks(lines)
-    for ln, net in zip(lines, nets, strict=True):
+    for ln in lines:
         keep = _simplify(ln["xy"], ln["radii"], share, polygon)
-        out.append(CartoLine(ln["xy"][keep], ln["radii"][keep], (net, 0)))
+        out.append(CartoLine(ln["xy"][keep], ln["radii"][keep]))
     return out

@@ -23,7 +23,14 @@ import shapely
 
 from ..errors import InvalidOptionError, InvalidPolygonError
 
-__all__ = ["CRS_NAME", "MAX_RADIUS", "LocalProjection", "check_crs_name", "local_projection"]
+__all__ = [
+    "CRS_NAME",
+    "MAX_RADIUS",
+    "LocalProjection",
+    "check_crs_name",
+    "crs_name",
+    "local_projection",
+]
 
 #: The CRS names accepted: an authority and a code (``EPSG:4326``, ``OGC:CRS84``,
 #: ``ESRI:102003``) or its OGC URN (``urn:ogc:def:crs:EPSG::32633``). Nothing else reaches
@@ -65,6 +72,24 @@ def check_crs_name(name: str, what: str = "crs") -> str:
             "urn:ogc:def:crs:EPSG::32633"
         )
     return name
+
+
+def crs_name(crs: Any) -> str | None:
+    """The name of a pyproj or rasterio CRS object as :func:`check_crs_name` takes it:
+    ``EPSG:code`` where it has one, else its authority and code (``ESRI:102003``); None
+    for no CRS.
+
+    A CRS with no authority at all is named ``?:?``, which :func:`check_crs_name`
+    refuses with a clear error (its WKT would be refused too, and is no name).
+
+    >>> import pyproj
+    >>> crs_name(pyproj.CRS("EPSG:32633")), crs_name(pyproj.CRS("ESRI:102003"))
+    ('EPSG:32633', 'ESRI:102003')
+    """
+    if crs is None:
+        return None
+    epsg = crs.to_epsg()
+    return f"EPSG:{epsg}" if epsg else ":".join(crs.to_authority() or ("?", "?"))
 
 
 def _crs(name: str) -> Any:

@@ -193,7 +193,9 @@ def label_values(values: np.ndarray, alpha: np.ndarray | None = None) -> np.ndar
     return out
 
 
-def _small_holes(background: np.ndarray, max_area: int) -> list[tuple[np.ndarray, tuple]]:
+def _small_holes(
+    background: np.ndarray, max_area: int
+) -> list[tuple[np.ndarray, tuple[slice, ...]]]:
     """4-connected background components not touching the border, of fewer than
     ``max_area`` pixels: each as its boolean crop and the slices of its box."""
     from scipy import ndimage

@@ -15,17 +15,12 @@ from typing import Any
 import numpy as np
 
 from ..errors import InvalidImageError
-from ..options import ARRAY_FOREGROUND
-from .foreground import Foreground
 from .frame import PixelFrame
 
 #: File name endings read as GeoTIFF masks (any case).
 GEOTIFF_SUFFIXES = (".tif", ".tiff")
 
 __all__ = ["GEOTIFF_SUFFIXES", "read_geotiff"]
-
-#: What a GeoTIFF mask takes as the shape: its non-zero pixels (not nodata).
-GEOTIFF_FOREGROUND = Foreground(ARRAY_FOREGROUND, "nonzero")
 
 
 def read_geotiff(
@@ -75,8 +70,6 @@ def read_geotiff(
         mask &= band != nodata
     # pixel (col, row)'s centre is the transform of (col + 0.5, row + 0.5)
     frame = PixelFrame(x0=t.c + 0.5 * t.a, y0=t.f + 0.5 * t.e, pixel_size=t.a, flip_y=True)
-    name = None
-    if crs is not None:
-        epsg = crs.to_epsg()
-        name = f"EPSG:{epsg}" if epsg else crs.to_wkt()
-    return mask, frame, name
+    from .crs import crs_name  # shapely, which crs imports, only when a GeoTIFF is read
+
+    return mask, frame, crs_name(crs)

@@ -21,7 +21,7 @@ from ..errors import ImageTooLargeError, InvalidImageError, InvalidPolygonError
 from ..options import ARRAY_FOREGROUND, RasterOptions, ReadOptions
 from .foreground import POLYGON_FOREGROUND, Foreground
 from .frame import IDENTITY, PixelFrame
-from .geotiff import GEOTIFF_FOREGROUND, GEOTIFF_SUFFIXES
+from .geotiff import GEOTIFF_SUFFIXES
 from .tiff import is_georeferenced
 
 if TYPE_CHECKING:
@@ -43,7 +43,8 @@ Kind = Literal["image", "geojson"]
 GEOJSON_SUFFIXES = (".geojson", ".json")
 #: The image formats read (by their signature, whatever the file's name).
 IMAGE_FORMATS = ("PNG", "TIFF")
-#: What a mask given as it is takes as the shape: its non-zero pixels.
+#: What a mask given as it is (an array, a GeoTIFF) takes as the shape: its non-zero
+#: pixels (a GeoTIFF's nodata value is not the shape either).
 MASK_FOREGROUND = Foreground(ARRAY_FOREGROUND, "nonzero")
 
 
@@ -118,7 +119,7 @@ class Input:
             return [(crop, origin, None) for crop, origin in components8(self.mask)]
         from .foreground import label_boxes
 
-        out = []
+        out: list[tuple[np.ndarray, tuple[int, int], int | None]] = []
         for v, box in label_boxes(self.labels):
             top, left = box[0].start, box[1].start
             own = self.labels[box] == v
@@ -145,10 +146,10 @@ def _table(source: Any) -> Mapping[str, Any]:
             "one, or all with skelprune.geo.centerlines(table)"
         )
     obj = dict(source.__geo_interface__)
-    crs = source.crs
-    if crs is not None:
-        epsg = crs.to_epsg()
-        name = f"EPSG:{epsg}" if epsg else ":".join(crs.to_authority() or ("?", "?"))
+    from .crs import crs_name  # not at import: it loads shapely
+
+    name = crs_name(source.crs)
+    if name is not None:
         obj["crs"] = {"type": "name", "properties": {"name": name}}
     return obj
 
@@ -256,7 +257,7 @@ def read_input(
     """
     if isinstance(source, Input):
         return source
-    data = (np.ndarray, bytes, bytearray, memoryview)
+    data: tuple[type, ...] = (np.ndarray, bytes, bytearray, memoryview)
     if kind is None:
         kind, source = _guess(source)
         data = (*data, Path)  # a path given as such
@@ -282,7 +283,7 @@ def read_input(
         from .geotiff import read_geotiff
 
         mask, frame, crs = read_geotiff(source, max_pixels=max_pixels)
-        return Input(mask, frame, GEOTIFF_FOREGROUND, crs=crs)
+        return Input(mask, frame, MASK_FOREGROUND, crs=crs)  # its non-zero pixels
     if read is None:
         read = ReadOptions(ARRAY_FOREGROUND) if isinstance(source, np.ndarray) else ReadOptions()
     values, alpha = _image_values(source, max_pixels)
@@ -387,11 +388,4 @@ def _image_values(source: Any, max_pixels: int | None) -> tuple[np.ndarray, np.n
         from .tiff import read_tiff
 
         return read_tiff(data, max_pixels=max_pixels), None
-    return _png_values(data, max_pixels)
-
-
-def _png_values(data: bytes, max_pixels: int | None) -> tuple[np.ndarray, np.ndarray | None]:
-    """A PNG's values and alpha, after every check :func:`png.read_shape` makes."""
-    from .png import read_values
-
-    return read_values(data, max_pixels)
+    return png.read_values(data, max_pixels)

@@ -124,7 +124,8 @@ def _areas(geom: Any) -> list[Polygon]:
 
 
 def _bounds(geom: Any) -> tuple[float, float, float, float]:
-    return tuple(shapely.bounds(geom))  # type: ignore[return-value]
+    minx, miny, maxx, maxy = shapely.bounds(geom).tolist()
+    return minx, miny, maxx, maxy
 
 
 def _ring(ring: Any, where: str) -> np.ndarray:

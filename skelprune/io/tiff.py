@@ -71,12 +71,13 @@ def is_georeferenced(path: os.PathLike[str] | str) -> bool:
     import tifffile
 
     try:
-        with open(path, "rb") as f:
+        with open(path, "rb") as f:  # opened once: the signature, then the header
             if not is_tiff(f.read(4)):
                 return False
-        with tifffile.TiffFile(path) as tif:
-            tags = tif.pages[0].tags
-            return any(code in tags for code in GEO_TAGS)
+            f.seek(0)
+            with tifffile.TiffFile(f) as tif:
+                tags = tif.pages.first.tags
+                return any(code in tags for code in GEO_TAGS)
     except Exception:  # a broken header: the image reader names what is wrong
         return False
 

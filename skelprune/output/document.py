@@ -9,9 +9,10 @@ plain JSON types (:mod:`skelprune.output.schema`).
 from __future__ import annotations
 
 import base64
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -31,7 +32,7 @@ from ..pruning.margin import Margins
 from ..pruning.tips import Trim
 from ..skeleton import Skeleton
 from .render import auto_scale, encode_png, result_overlay
-from .schema import ComponentDoc, SequenceDoc
+from .schema import BranchDoc, ComponentDoc, NodeDoc, SequenceDoc
 from .table import BranchTable, branch_table, frame_distances
 from .views import branch_dicts, node_dicts, sequence_dict, to_networkx
 
@@ -145,10 +146,10 @@ class ComponentResult:
         coordinates (:mod:`skelprune.output.table`): what every output reads."""
         return branch_table(self.skeleton, self.margins)
 
-    def skeleton_table(self) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    def skeleton_table(self) -> tuple[list[NodeDoc], list[BranchDoc]]:
         """Nodes and branches of the pruned skeleton, in image pixel coordinates
         (the ``skeleton`` part of the document before any frame is applied)."""
-        return node_dicts(self.table), branch_dicts(self.table)  # type: ignore[return-value]
+        return node_dicts(self.table), branch_dicts(self.table)
 
     def sequence_table(self, frame: PixelFrame = IDENTITY) -> SequenceDoc:
         """The pruning sequence as a viewer needs it (:func:`~.views.sequence_dict`)."""
@@ -162,27 +163,32 @@ class ComponentResult:
         ma = self.axis_summary
         seq = self.sequence
         chosen = self.chosen_point()
-        doc: ComponentDoc = {  # type: ignore[typeddict-item]
-            **({} if self.label is None else {"label": self.label}),
-            "area": self.area,
-            "alpha": None if self.alpha is None else float(self.alpha),
-            "rer": chosen[1],
-            "ss": chosen[2],
-            "objective": chosen[3],
-            "medial_axis": {
-                "rer": float(self.ma_rer),
-                "length": frame.distance(ma.length),
-                "endpoints": ma.endpoints,
-                "branches": ma.branches,
+        # cast: the label's key comes first when there is one, which a TypedDict
+        # literal cannot say
+        doc = cast(
+            ComponentDoc,
+            {
+                **({} if self.label is None else {"label": self.label}),
+                "area": self.area,
+                "alpha": None if self.alpha is None else float(self.alpha),
+                "rer": chosen[1],
+                "ss": chosen[2],
+                "objective": chosen[3],
+                "medial_axis": {
+                    "rer": float(self.ma_rer),
+                    "length": frame.distance(ma.length),
+                    "endpoints": ma.endpoints,
+                    "branches": ma.branches,
+                },
+                "skeleton": {
+                    "length": frame.distance(chosen[0]),
+                    "nodes": nodes,
+                    "branches": branch_dicts(view),
+                    "endpoints": [n["id"] for n in nodes if n["kind"] == "endpoint"],
+                },
+                "chosen_step": self.chosen_step,
             },
-            "skeleton": {
-                "length": frame.distance(chosen[0]),
-                "nodes": nodes,
-                "branches": branch_dicts(view),
-                "endpoints": [n["id"] for n in nodes if n["kind"] == "endpoint"],
-            },
-            "chosen_step": self.chosen_step,
-        }
+        )
         if curve:
             length = frame_distances(frame, np.asarray(seq.length, np.float64)).tolist()
             doc["curve"] = [
@@ -199,15 +205,15 @@ class ComponentResult:
             ]
             if self.trim is not None:  # the chosen point is the answer, tips cut
                 L, a, lr, o = chosen
-                doc["curve"][self.chosen_step].update(
-                    length=frame.distance(L), ar=a, lr=lr, objective=o
-                )
+                point = doc["curve"][self.chosen_step]
+                point["length"], point["ar"] = frame.distance(L), a
+                point["lr"], point["objective"] = lr, o
         if sequence:
             doc["sequence"] = self.sequence_table(frame)
         return doc
 
 
-def branch_line(skeleton: dict[str, Any], branch: dict[str, Any]) -> list[list[float]]:
+def branch_line(skeleton: Mapping[str, Any], branch: Mapping[str, Any]) -> list[list[float]]:
     """A branch of a document as a polyline ``[x, y, radius]`` from its source node to
     its target node.
 
@@ -436,8 +442,8 @@ class PruneResult:
         )
         from .summary import geojson_numbers
 
-        return geojson_numbers(  # type: ignore[return-value]
-            self, collection, self.frame if frame is None else frame
+        return geojson_numbers(
+            self, cast(dict[str, Any], collection), self.frame if frame is None else frame
         )
 
     def to_networkx(self, frame: PixelFrame | None = None) -> Any:

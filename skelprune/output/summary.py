@@ -308,11 +308,10 @@ def branch_rows(
 def component_rows(result: PruneResult) -> list[dict[str, Any]]:
     """One row per component (:data:`COMPONENT_COLUMNS`)."""
     scale, unit = unit_of(result)
-    branches = branch_rows(result)
     out = []
     for ci, c in enumerate(result.components):
         t = c.table
-        mine = [b for b in branches if b["component"] == ci]
+        mine = _component_branches(t, ci, c.label, t.margin, scale, unit)
         idx = t.paths
         width = 2.0 * t.radius[idx] * scale
         kinds = t.node_kind
@@ -425,22 +424,12 @@ def graphml(result: PruneResult) -> str:
     return "\n".join(lines)
 
 
-#: The branch table's numbers a GeoJSON line carries besides its own properties (its
-#: ``length`` stays the document's step length; the table's ``kind`` is ``branch_kind``).
-GEOJSON_NUMBERS = (
-    "chord",
-    "tortuosity",
-    "width_mean",
-    "width_median",
-    "width_min",
-    "width_max",
-    "width_std",
-    "angle_source",
-    "angle_target",
-    "junction_angle_source",
-    "junction_angle_target",
-    "strahler",
-)
+#: The branch table's numbers a GeoJSON line carries besides its own properties, from
+#: ``chord`` to ``strahler`` (its ``length`` stays the document's step length; the
+#: table's ``kind`` is ``branch_kind``; its ``margin`` is the document's already).
+GEOJSON_NUMBERS = BRANCH_COLUMNS[
+    BRANCH_COLUMNS.index("chord") : BRANCH_COLUMNS.index("strahler") + 1
+]
 
 
 def geojson_numbers(

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
@@ -45,7 +45,9 @@ __all__ = [
 ]
 
 #: Node kinds, by their code in :attr:`BranchTable.node_kind`.
-KINDS = ("endpoint", "junction", "loop")
+#: A node's kind, as the document names it.
+NodeKind = Literal["endpoint", "junction", "loop"]
+KINDS: tuple[NodeKind, ...] = ("endpoint", "junction", "loop")
 _ENDPOINT, _JUNCTION, _LOOP = range(3)
 
 
@@ -152,7 +154,7 @@ class BranchTable:
     def n_branches(self) -> int:
         return int(self.source.size)
 
-    def kinds(self) -> list[str]:
+    def kinds(self) -> list[NodeKind]:
         """Each node's kind, as the document names it."""
         return [KINDS[k] for k in self.node_kind.tolist()]
 

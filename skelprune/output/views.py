@@ -145,7 +145,8 @@ def to_networkx(tables: list[BranchTable], labels: list[int | None] | None = Non
         label = None if labels is None else labels[ci]
         tag = {} if label is None else {"label": label}
         for nd in node_dicts(t):
-            g.add_node((ci, nd.pop("id")), component=ci, **tag, **nd)
+            attrs = {k: v for k, v in nd.items() if k != "id"}
+            g.add_node((ci, nd["id"]), component=ci, **tag, **attrs)
         lines = [ln.tolist() for ln in t.lines()]
         for br, line in zip(branch_dicts(t, margins=False), lines, strict=True):
             g.add_edge(

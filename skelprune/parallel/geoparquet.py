@@ -19,12 +19,10 @@ from ..options import (
     OutputOptions,
     PruneOptions,
     RasterOptions,
-    ReadOptions,
-    options_value,
-    split_options,
+    resolve_options,
 )
 from .items import Feature, Item
-from .work import Budget, Job, run_item
+from .work import Budget, Job, finite_lines, run_item
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -49,23 +47,23 @@ def branch_lines(part: Any, job: Job) -> Any:
     """One partition's skeleton branches: a GeoDataFrame of one row a branch (a
     LineString), the input row's attributes and :data:`LINE_COLUMNS`, in the partition's
     CRS. A feature that fails gives one row with no geometry and its problem."""
-    import json
-
     import geopandas
     import pandas as pd
     from shapely.geometry import shape
 
     attributes = part.drop(columns=part.geometry.name)
-    rows, geometries, sources = [], [], []
+    rows: list[dict[str, Any]] = []
+    geometries: list[Any] = []
+    sources: list[Any] = []
     for position, (index, geom) in enumerate(zip(part.index, part.geometry, strict=True)):
-        payload, problem = run_item(Item("", Feature(position, index, geom)), job)
+        line, problem = run_item(Item("", Feature(position, index, geom)), job, finite_lines)
         if problem is not None:
             rows.append({"problem": problem[0], "detail": problem[1]})
             geometries.append(None)
             sources.append(index)
             continue
-        assert payload is not None
-        for feature in json.loads(payload)["result"]["features"]:
+        assert line is not None
+        for feature in line["result"]["features"]:
             if feature["geometry"]["type"] != "LineString":
                 continue  # the nodes: their places are the lines' ends
             props = feature["properties"]
@@ -135,17 +133,10 @@ def prune_geoparquet(
 
     from .run import _client, _workers
 
-    groups = split_options(keywords)
-    if groups[ReadOptions]:
+    options, read, raster, output = resolve_options(options, None, raster, output, keywords)
+    if read is not None:
         raise SkelpruneError("a GeoParquet holds polygons: read options do not apply")
-    job = Job(
-        options=options_value(PruneOptions, options, groups[PruneOptions]),
-        raster=None
-        if raster is None and not groups[RasterOptions]
-        else options_value(RasterOptions, raster, groups[RasterOptions]),
-        output=options_value(OutputOptions, output, groups[OutputOptions]),
-        budget=budget or Budget(),
-    )
+    job = Job(options, None, raster, output, budget=budget or Budget())
     fn = lines or branch_lines
     with _client(client, jobs, job.budget) as c:
         table = dask_geopandas.read_parquet(source)

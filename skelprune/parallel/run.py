@@ -19,8 +19,7 @@ from ..options import (
     PruneOptions,
     RasterOptions,
     ReadOptions,
-    options_value,
-    split_options,
+    resolve_options,
 )
 from .items import Item, expand
 from .store import Store
@@ -73,7 +72,9 @@ class Outcome:
     problem: dict[str, str] | None = None
 
 
-def _batches(todo: list[tuple[int, Item]], workers: int, size: int | None) -> list[list]:
+def _batches(
+    todo: list[tuple[int, Item]], workers: int, size: int | None
+) -> list[list[tuple[int, Item]]]:
     if size is None:  # some eight tasks a worker, so that the work spreads and streams
         size = max(1, min(MAX_BATCH, math.ceil(len(todo) / (8 * max(workers, 1)))))
     return [todo[i : i + size] for i in range(0, len(todo), size)]
@@ -141,18 +142,8 @@ def iter_prune_many(
             isinstance(value, bool) or not isinstance(value, int) or value < 1
         ):
             raise InvalidOptionError(f"{name} must be a whole number >= 1, got {shown(value)}")
-    groups = split_options(keywords)
-    job = Job(
-        options=options_value(PruneOptions, options, groups[PruneOptions]),
-        read=None
-        if read is None and not groups[ReadOptions]
-        else options_value(ReadOptions, read, groups[ReadOptions]),
-        raster=None
-        if raster is None and not groups[RasterOptions]
-        else options_value(RasterOptions, raster, groups[RasterOptions]),
-        output=options_value(OutputOptions, output, groups[OutputOptions]),
-        budget=budget or Budget(),
-    )
+    options, read, raster, output = resolve_options(options, read, raster, output, keywords)
+    job = Job(options, read, raster, output, budget=budget or Budget())
     # label images, once the read options know them: every object is its own shape
     items = expand(inputs, labels=bool(getattr(job.read, "labels", False)))
     store = None if out is None else Store(out)
@@ -165,6 +156,7 @@ def iter_prune_many(
             else store.has_document(item.name)
         )
         if done:
+            assert store is not None  # only a store says what is done
             yield Outcome(item.key, position, "skipped", path=_path(store, item))
         else:
             todo.append((position, item))

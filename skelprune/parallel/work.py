@@ -5,8 +5,11 @@ batch of items, each one's failure caught and named, so that one bad input fails
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
+
+import numpy as np
 
 from ..budget import check_budget, estimate, out_of_memory
 from ..errors import JobTooLargeError, SkelpruneError, problem_kind
@@ -21,7 +24,9 @@ __all__ = [
     "Done",
     "Job",
     "document_bytes",
+    "finite_lines",
     "run_batch",
+    "run_item",
 ]
 
 #: Problem kinds of failures that are not the input's own error (the service's names).
@@ -29,6 +34,13 @@ WORKER_CRASHED = "worker-crashed"
 INTERNAL_ERROR = "internal-error"
 #: A file that cannot be read at all (missing, no permission): the input's problem.
 UNREADABLE = SkelpruneError.kind
+#: An answer with a number JSON cannot write (an infinity from an overflow).
+OVERFLOW = (
+    "the answer would hold a number JSON cannot write (an overflow); scale the input "
+    "coordinates down"
+)
+
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -79,10 +91,22 @@ def document_bytes(doc: Any) -> bytes:
     try:
         return json.dumps(doc, separators=(",", ":"), allow_nan=False).encode() + b"\n"
     except ValueError:
-        raise SkelpruneError(
-            "the answer would hold a number JSON cannot write (an overflow); scale the "
-            "input coordinates down"
-        ) from None
+        raise SkelpruneError(OVERFLOW) from None
+
+
+def finite_lines(line: dict[str, Any]) -> dict[str, Any]:
+    """A feature's line (``{"row", "index", "result"}``) as it is, its coordinates all
+    finite: what :func:`document_bytes` would refuse is refused here too, unwritten.
+
+    >>> finite_lines({"result": {"features": [{"geometry": {"coordinates": [[0, 1e400]]}}]}})
+    Traceback (most recent call last):
+    ...
+    skelprune.errors.SkelpruneError: the answer would hold a number JSON cannot write ...
+    """
+    for feature in line["result"]["features"]:
+        if not np.isfinite(np.asarray(feature["geometry"]["coordinates"], float)).all():
+            raise SkelpruneError(OVERFLOW)
+    return line
 
 
 def _read(item: Item, job: Job) -> Any:
@@ -90,18 +114,30 @@ def _read(item: Item, job: Job) -> Any:
     from ..io.input import Input, read_input
 
     source = item.source
-    limits = {"max_pixels": job.budget.max_pixels, "max_vertices": job.budget.max_vertices}
+    most_pixels, most_vertices = job.budget.max_pixels, job.budget.max_vertices
     if isinstance(source, LabelObject):
         row, col = source.origin
         # the object's own crop, answered in the label image's pixel coordinates
         frame = PixelFrame(x0=float(col), y0=float(row))
         return Input(source.mask, frame=frame)
     if isinstance(source, Feature):
-        return read_input(source.geometry, kind="geojson", raster=job.raster, **limits)
-    return read_input(source, read=job.read, raster=job.raster, **limits)
+        return read_input(
+            source.geometry,
+            kind="geojson",
+            raster=job.raster,
+            max_pixels=most_pixels,
+            max_vertices=most_vertices,
+        )
+    return read_input(
+        source,
+        read=job.read,
+        raster=job.raster,
+        max_pixels=most_pixels,
+        max_vertices=most_vertices,
+    )
 
 
-def _result(item: Item, job: Job) -> bytes:
+def _answer(item: Item, job: Job) -> dict[str, Any]:
     from ..api import prune_input
 
     shape = _read(item, job)
@@ -112,8 +148,8 @@ def _result(item: Item, job: Job) -> bytes:
     if isinstance(item.source, Feature):
         line = {"row": item.source.row, "index": _plain(item.source.index)}
         line["result"] = res.to_geojson()
-        return document_bytes(line)
-    return document_bytes(res.to_dict())
+        return line
+    return res.to_dict()
 
 
 def _plain(value: Any) -> Any:
@@ -121,10 +157,14 @@ def _plain(value: Any) -> Any:
     return value.item() if hasattr(value, "item") else value
 
 
-def run_item(item: Item, job: Job) -> tuple[bytes | None, tuple[str, str] | None]:
-    """One item's serialised result, or its problem ``(kind, detail)``."""
+def run_item(
+    item: Item, job: Job, encode: Callable[[dict[str, Any]], T]
+) -> tuple[T | None, tuple[str, str] | None]:
+    """One item's result, serialised by ``encode`` (:func:`document_bytes`, or for a
+    caller that reads the result at once a check such as :func:`finite_lines`), or its
+    problem ``(kind, detail)``."""
     try:
-        return _result(item, job), None
+        return encode(_answer(item, job)), None
     except MemoryError:
         budget = job.budget.memory_mb
         err: JobTooLargeError = out_of_memory(None if budget is None else budget * 2**20)
@@ -141,6 +181,6 @@ def run_batch(batch: list[tuple[int, Item]], job: Job) -> list[Done]:
     """A task: every item of the batch, in order (what runs on a worker)."""
     out = []
     for position, item in batch:
-        payload, problem = run_item(item, job)
+        payload, problem = run_item(item, job, document_bytes)
         out.append(Done(position, payload, problem))
     return out

@@ -11,6 +11,7 @@ import numpy as np
 from PIL import Image
 
 import skelprune
+from skelprune.io.png import read_mask
 from testkit import DATA
 
 CLI = [sys.executable, "-m", "skelprune.cli"]
@@ -23,7 +24,7 @@ def test_match_prints_distance_and_correspondence():
         [*CLI, "match", a, b], capture_output=True, text=True, timeout=300, check=True
     )
     doc = json.loads(run.stdout)
-    lib = skelprune.match(*(skelprune.io.read_mask(p) for p in (a, b)))
+    lib = skelprune.match(*(read_mask(p) for p in (a, b)))
     assert doc["distance"] == lib.distance > 0
     assert len(doc["correspondence"]) == min(doc["endpoints"])
     same = json.loads(
@@ -71,7 +72,7 @@ def test_retrieve_folder_top_k_json_lines(tmp_path):
     assert [x["file"] for x in lines] == files
     by_name = {x["file"].rsplit("/", 1)[-1][:-4]: x for x in lines}
     assert "InvalidImageError" in by_name["bad"]["error"]
-    descs = {n: skelprune.describe(skelprune.io.read_mask(tmp_path / f"{n}.png")) for n in SHAPES}
+    descs = {n: skelprune.describe(read_mask(tmp_path / f"{n}.png")) for n in SHAPES}
     for n in SHAPES:
         top = by_name[n]["top"]
         assert len(top) == 2 and all(t["file"] != by_name[n]["file"] for t in top)

@@ -16,7 +16,7 @@ import skelprune
 from service.app import create_app
 from service.settings import Settings
 from skelprune.errors import InvalidOptionError
-from skelprune.io import read_mask, read_shape
+from skelprune.io.png import read_mask, read_shape
 from testkit.shapes import dataset
 
 CLI = [sys.executable, "-m", "skelprune.cli"]

@@ -153,10 +153,11 @@ def test_cli_writes_a_geopackage_of_mixed_polygons(tmp_path: Path) -> None:
     assert all(lake_with_island.covers(g) for g in lake_rows.geometry)
 
 
-def test_geotiff_mask_gives_lines_in_its_crs_and_map_coordinates(tmp_path: Path) -> None:
+def strip_geotiff(path: Path, crs: str, origin: tuple[float, float]) -> Path:
+    """A GeoTIFF mask of 200×60 pixels of 2 m, its top-left corner at ``origin``, in
+    ``crs``, holding a strip: rows 20-39, columns 10-189."""
     mask = np.zeros((60, 200), np.uint8)
-    mask[20:40, 10:190] = 1  # a strip 20 px = 40 m wide, 180 px = 360 m long
-    path = tmp_path / "mask.tif"
+    mask[20:40, 10:190] = 1
     with rasterio.open(
         path,
         "w",
@@ -165,10 +166,16 @@ def test_geotiff_mask_gives_lines_in_its_crs_and_map_coordinates(tmp_path: Path)
         height=60,
         count=1,
         dtype="uint8",
-        crs="EPSG:32633",
-        transform=from_origin(500_000, 6_600_000, 2, 2),
+        crs=crs,
+        transform=from_origin(*origin, 2, 2),
     ) as f:
         f.write(mask, 1)
+    return path
+
+
+def test_geotiff_mask_gives_lines_in_its_crs_and_map_coordinates(tmp_path: Path) -> None:
+    # a strip 20 px = 40 m wide, 180 px = 360 m long
+    path = strip_geotiff(tmp_path / "mask.tif", "EPSG:32633", (500_000, 6_600_000))
     geo = skelprune.prune(path).to_geojson()
     assert geo["crs"] == {"type": "name", "properties": {"name": "EPSG:32633"}}
     branches = [f for f in geo["features"] if f["properties"]["kind"] == "branch"]
@@ -192,3 +199,16 @@ def test_prune_takes_a_one_feature_table_with_its_crs_and_refuses_a_merge() -> N
     two = gpd.GeoDataFrame(geometry=[reach, box(2500, 0, 5500, 600)], crs="EPSG:32633")
     with pytest.raises(skelprune.InvalidPolygonError, match="each is its own shape"):
         skelprune.prune(two)
+
+
+def test_a_crs_with_no_epsg_code_is_named_by_its_authority(tmp_path: Path) -> None:
+    # ESRI:102003 (USA Contiguous Albers Equal Area) has no EPSG code: its name, not its
+    # WKT (which the CRS check refuses), goes with the lines
+    path = strip_geotiff(tmp_path / "albers.tif", "ESRI:102003", (1_000_000, 2_000_000))
+    geo = skelprune.prune(path).to_geojson()
+    assert geo["crs"] == {"type": "name", "properties": {"name": "ESRI:102003"}}
+    lakes = gpd.GeoDataFrame(geometry=[box(0, 0, 3000, 600)], crs="ESRI:102003")
+    out = centerlines(lakes)
+    assert out.crs == lakes.crs and out["length"].round().tolist() == [3000]
+    raster = skelprune.prune(lakes).to_dict()["raster"]
+    assert raster["crs"] == "ESRI:102003"

@@ -15,17 +15,9 @@ from hypothesis.extra.numpy import arrays
 from PIL import Image
 
 from skelprune.errors import ImageTooLargeError, InvalidImageError
-from skelprune.io import png_size, read_mask, read_shape
+from skelprune.io.png import png_size, read_mask, read_shape
 from testkit import DATA
-
-
-def _chunk(kind: bytes, payload: bytes) -> bytes:
-    return (
-        struct.pack(">I", len(payload))
-        + kind
-        + payload
-        + struct.pack(">I", zlib.crc32(kind + payload))
-    )
+from testkit.pngfile import chunk as _chunk
 
 
 def raw_png(samples: np.ndarray, colour_type: int, depth: int, *extra: bytes) -> bytes:

@@ -10,28 +10,7 @@ import pytest
 
 from skelprune.errors import InvalidImageError
 from skelprune.io.png import read_mask, read_shape
-
-SIGNATURE = b"\x89PNG\r\n\x1a\n"
-
-
-def chunk(kind: bytes, payload: bytes) -> bytes:
-    crc = struct.pack(">I", zlib.crc32(kind + payload))
-    return struct.pack(">I", len(payload)) + kind + payload + crc
-
-
-def png16(samples: np.ndarray, colour: int, trns: bytes | None = None) -> bytes:
-    """A 16-bit PNG of ``samples`` (H, W, channels) in colour type ``colour``."""
-    h, w = samples.shape[:2]
-    rows = b"".join(b"\x00" + samples[r].astype(">u2").tobytes() for r in range(h))
-    head = struct.pack(">IIBBBBB", w, h, 16, colour, 0, 0, 0)
-    extra = chunk(b"tRNS", trns) if trns is not None else b""
-    return (
-        SIGNATURE
-        + chunk(b"IHDR", head)
-        + extra
-        + chunk(b"IDAT", zlib.compress(rows))
-        + chunk(b"IEND", b"")
-    )
+from testkit.pngfile import SIGNATURE, chunk, png16
 
 
 def expected() -> np.ndarray:

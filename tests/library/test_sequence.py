@@ -11,7 +11,7 @@ import pytest
 
 import skelprune
 from skelprune.grid.reconstruction import reconstruction
-from skelprune.io import read_mask
+from skelprune.io.png import read_mask
 from testkit import DATA
 
 

@@ -124,7 +124,7 @@ def test_problem_kinds_are_the_services() -> None:
     assert {WORKER_CRASHED, INTERNAL_ERROR} <= slugs
     assert problem_kind(EmptyMaskError("x")) == "empty-mask"
     assert problem_kind(JobTooLargeError("x")) == "job-too-large"
-    from service.budget import JobTooLargeError as ServiceJobTooLarge
+    from skelprune.budget import JobTooLargeError as ServiceJobTooLarge
 
     assert ServiceJobTooLarge is JobTooLargeError
 

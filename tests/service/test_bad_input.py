@@ -20,7 +20,8 @@ import pytest
 from fastapi.testclient import TestClient
 from PIL import Image
 
-from service.schemas import Problem, PruneDocument
+from service.http.schemas import Problem, PruneDocument
+from testkit.pngfile import chunk
 
 pytestmark = pytest.mark.timeout(300)
 
@@ -31,15 +32,6 @@ BOW_TIE = [[0, 0], [10, 10], [10, 0], [0, 10], [0, 0]]
 
 
 # ----------------------------------------------------------------------- builders
-def chunk(kind: bytes, payload: bytes) -> bytes:
-    return (
-        struct.pack(">I", len(payload))
-        + kind
-        + payload
-        + struct.pack(">I", zlib.crc32(kind + payload))
-    )
-
-
 def header_only_png(width: int, height: int, depth: int = 8, colour: int = 0) -> bytes:
     """Signature + a valid IHDR claiming ``width`` × ``height``, then nothing useful."""
     ihdr = struct.pack(">IIBBBBB", width, height, depth, colour, 0, 0, 0)
@@ -562,7 +554,7 @@ def test_valid_odd_pngs_give_the_same_shape(client: TestClient) -> None:
 def test_a_number_json_cannot_write_is_the_callers_error() -> None:
     """Should a non-finite number still reach the encoder, the answer is a 4xx, not a 500."""
     from service.errors import lookup
-    from service.jobs import dumps as _dumps
+    from service.worker.jobs import dumps as _dumps
 
     for value in (float("inf"), float("nan")):
         with pytest.raises(ValueError, match="JSON cannot write") as info:

@@ -11,7 +11,7 @@ from fastapi.testclient import TestClient
 from PIL import Image
 
 from service.http.bodies import BATCH_MAX_ITEMS
-from service.schemas import Problem, PruneDocument
+from service.http.schemas import Problem, PruneDocument
 
 pytestmark = pytest.mark.timeout(300)
 
@@ -93,7 +93,7 @@ def test_a_bad_batch_is_refused_whole(client: TestClient, kwargs, status, fragme
 def slow(job):
     import time
 
-    from service.jobs import run_job
+    from service.worker.jobs import run_job
 
     time.sleep(0.5)
     return run_job(job)
@@ -106,7 +106,7 @@ def test_a_batch_never_starves_single_requests() -> None:
     import time
 
     from service.app import create_app
-    from service.routes.prune import job_function
+    from service.http.routes.prune import job_function
     from service.settings import Settings
 
     app = create_app(Settings(workers=2, queue_size=8))

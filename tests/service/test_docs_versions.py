@@ -9,7 +9,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 import skelprune
-from service.schemas import Health, PruneDocument, Version
+from service.http.schemas import Health, PruneDocument, Version
 
 pytestmark = pytest.mark.timeout(120)
 

@@ -36,6 +36,7 @@ from PIL import Image
 from skelprune.errors import SkelpruneError
 from skelprune.io.png import PNG_SIGNATURE, png_size, read_mask
 from skelprune.io.polygon import parse_geojson, polygon_mask
+from testkit.pngfile import chunk as _chunk
 
 pytestmark = pytest.mark.timeout(600)
 
@@ -51,15 +52,6 @@ FUZZ = settings(
 
 
 # ------------------------------------------------------------------- seed PNGs
-def _chunk(kind: bytes, payload: bytes) -> bytes:
-    return (
-        struct.pack(">I", len(payload))
-        + kind
-        + payload
-        + struct.pack(">I", zlib.crc32(kind + payload))
-    )
-
-
 def _save(im: Image.Image, **kw: Any) -> bytes:
     buf = io.BytesIO()
     im.save(buf, "PNG", **kw)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from fastapi.testclient import TestClient
 from shapely.geometry import box, mapping
 
-from service.schemas import PruneDocument, SkeletonGeoJSON
+from service.http.schemas import PruneDocument, SkeletonGeoJSON
 from testkit.rivers import on_earth
 
 GEO = {"accept": "application/geo+json"}

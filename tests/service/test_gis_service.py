@@ -9,7 +9,7 @@ from fastapi.testclient import TestClient
 from PIL import Image
 from shapely.geometry import box, mapping
 
-from service.schemas import PruneDocument, SkeletonGeoJSON
+from service.http.schemas import PruneDocument, SkeletonGeoJSON
 
 STRIP = mapping(box(0, 0, 10_000, 60))
 ISLANDS = {

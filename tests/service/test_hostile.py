@@ -19,16 +19,17 @@ from fastapi.testclient import TestClient
 from PIL import Image
 
 import skelprune
-from service.budget import (
+from service.http.schemas import Problem
+from service.worker.jobs import Job, run_job
+from skelprune.budget import (
     Estimate,
     JobTooLargeError,
     check_budget,
     estimate,
     shape_counts,
 )
-from service.jobs import Job, run_job
-from service.schemas import Problem
 from testkit.adversarial import CORPUS, checkerboard, dots, noise
+from testkit.pngfile import chunk
 
 pytestmark = pytest.mark.timeout(300)
 
@@ -43,11 +44,6 @@ def png(mask: np.ndarray) -> bytes:
     buf = io.BytesIO()
     Image.fromarray(mask.astype(np.uint8) * 255).save(buf, "PNG")
     return buf.getvalue()
-
-
-def chunk(kind: bytes, payload: bytes) -> bytes:
-    crc = struct.pack(">I", zlib.crc32(kind + payload))
-    return struct.pack(">I", len(payload)) + kind + payload + crc
 
 
 def problem(resp: Any, status: int, slug: str) -> dict[str, Any]:
@@ -119,7 +115,7 @@ def test_memory_error_in_a_job_is_the_budget_problem(monkeypatch: pytest.MonkeyP
         raise MemoryError
 
     monkeypatch.setattr(skelprune.api, "prune_input", exhausted)
-    job = Job(output="json", kind="image", data=png(dots(20)), memory_budget=2**31)
+    job = Job(media="json", kind="image", data=png(dots(20)), memory_budget=2**31)
     with pytest.raises(JobTooLargeError, match="more than the memory budget of 2,048 MiB"):
         run_job(job)
 

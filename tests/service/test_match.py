@@ -9,6 +9,7 @@ from fastapi.testclient import TestClient
 from PIL import Image
 
 import skelprune
+from skelprune.io.png import read_mask
 from testkit import DATA
 
 HAMMER = (DATA / "kimia216" / "hammer-1.png").read_bytes()
@@ -46,7 +47,7 @@ def test_same_png_is_distance_zero_with_identity(client: TestClient) -> None:
 
 def test_answer_agrees_with_the_library_and_the_prune_document(client: TestClient) -> None:
     doc = post_pngs(client, HAMMER, BIRD).json()
-    lib = skelprune.match(skelprune.io.read_mask(HAMMER), skelprune.io.read_mask(BIRD))
+    lib = skelprune.match(read_mask(HAMMER), read_mask(BIRD))
     assert doc["distance"] == lib.distance > 0
     nodes = client.post("/v1/prune", files={"file": ("a.png", HAMMER, "image/png")}).json()[
         "components"
@@ -84,8 +85,8 @@ def test_polygons_in_their_own_units(client: TestClient) -> None:
 def test_options_apply_to_both(client: TestClient) -> None:
     doc = post_pngs(client, HAMMER, BIRD, method="dce").json()
     lib = skelprune.match(
-        skelprune.prune(skelprune.io.read_mask(HAMMER), method="dce"),
-        skelprune.prune(skelprune.io.read_mask(BIRD), method="dce"),
+        skelprune.prune(read_mask(HAMMER), method="dce"),
+        skelprune.prune(read_mask(BIRD), method="dce"),
     )
     assert doc["distance"] == lib.distance
 

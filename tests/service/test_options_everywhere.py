@@ -12,7 +12,7 @@ import pytest
 from fastapi.testclient import TestClient
 from PIL import Image
 
-from service.schemas import SkeletonGeoJSON
+from service.http.schemas import SkeletonGeoJSON
 
 pytestmark = pytest.mark.timeout(300)
 

@@ -22,8 +22,8 @@ import pytest
 from PIL import Image
 
 import skelprune
-from service.schemas import PruneDocument
-from skelprune.io import read_mask
+from service.http.schemas import PruneDocument
+from skelprune.io.png import read_mask
 from testkit import DATA, REPO
 from testkit.browser import MISSING, chromium
 from testkit.browser import missing as browser_missing

@@ -5,44 +5,24 @@ from __future__ import annotations
 
 import asyncio
 import json
-import math
 import time
 from typing import Any
 
 import pytest
 from fastapi.testclient import TestClient
 
-from service.budget import polygon_estimate
 from service.http import bodies
 from service.http.bodies import BATCH_MAX_ITEMS
+from service.http.routes import prune
 from service.http.scan import count_polygon, split_batch
-from service.routes import prune
+from skelprune.budget import polygon_estimate
+from testkit.adversarial import circle_polygon, unit_squares
 
 pytestmark = pytest.mark.timeout(300)
 
 SETTINGS = {"workers": 1, "queue_size": 8, "max_vertices": 1000}
 JSON = {"content-type": "application/json"}
 SQUARE = {"type": "Polygon", "coordinates": [[[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]]]}
-
-
-def circle(vertices: int) -> dict[str, Any]:
-    ring = [
-        [
-            round(100 * math.cos(2 * math.pi * k / vertices), 6),
-            round(100 * math.sin(2 * math.pi * k / vertices), 6),
-        ]
-        for k in range(vertices)
-    ]
-    return {"type": "Polygon", "coordinates": [[*ring, ring[0]]]}
-
-
-def unit_squares(n: int) -> dict[str, Any]:
-    side = math.ceil(math.sqrt(n))
-    parts = []
-    for i in range(n):
-        x, y = 2 * (i % side), 2 * (i // side)
-        parts.append([[[x, y], [x + 1, y], [x + 1, y + 1], [x, y + 1], [x, y]]])
-    return {"type": "MultiPolygon", "coordinates": parts}
 
 
 def problem(resp: Any, status: int, slug: str) -> str:
@@ -71,7 +51,9 @@ def test_too_many_vertices_are_refused_before_any_object_is_built(
         raise AssertionError("the body was decoded")
 
     monkeypatch.setattr(prune, "parse_polygon", never)
-    detail = problem(client.post("/v1/prune", json=circle(1500)), 422, "invalid-polygon")
+    detail = problem(
+        client.post("/v1/prune", json=circle_polygon(1500, radius=100)), 422, "invalid-polygon"
+    )
     assert "1501 positions, more than 1000 allowed" in detail
 
 
@@ -136,7 +118,7 @@ def test_a_batch_item_over_the_vertex_limit_is_its_own_problem_undecoded(
         return real(item)
 
     monkeypatch.setattr(prune, "polygon_item", spy)
-    resp = client.post("/v1/prune/batch", json=[circle(1500), SQUARE])
+    resp = client.post("/v1/prune/batch", json=[circle_polygon(1500, radius=100), SQUARE])
     assert resp.status_code == 200
     lines = [json.loads(line) for line in resp.text.splitlines()]
     assert "more than 1000 allowed" in lines[0]["problem"]["detail"]
@@ -145,7 +127,10 @@ def test_a_batch_item_over_the_vertex_limit_is_its_own_problem_undecoded(
 
 
 def test_a_match_body_counts_both_shapes(client: TestClient) -> None:
-    resp = client.post("/v1/match", json={"a": circle(900), "b": circle(1200)})
+    resp = client.post(
+        "/v1/match",
+        json={"a": circle_polygon(900, radius=100), "b": circle_polygon(1200, radius=100)},
+    )
     detail = problem(resp, 422, "invalid-polygon")
     assert "more than 2000 allowed" in detail
 

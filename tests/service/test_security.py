@@ -25,13 +25,13 @@ import httpx
 import pytest
 from fastapi.testclient import TestClient
 
-import service.security
+import service.http.api_key
 from service.app import create_app
-from service.jobs import Job, run_job
+from service.http.routes.prune import job_function
+from service.http.schemas import PolygonJob, Problem, PruneQuery
 from service.logs import JsonFormatter
-from service.routes.prune import job_function
-from service.schemas import PolygonJob, Problem, PruneQuery
 from service.settings import Settings
+from service.worker.jobs import Job, run_job
 from skelprune.errors import InvalidImageError, InvalidOptionError
 from skelprune.options import RasterOptions
 from testkit import DATA, REPO
@@ -161,13 +161,13 @@ def test_key_is_compared_in_constant_time(
     locked: TestClient, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     calls: list[tuple[bytes, bytes]] = []
-    real = service.security.hmac.compare_digest
+    real = service.http.api_key.hmac.compare_digest
 
     def spy(a: bytes, b: bytes) -> bool:
         calls.append((a, b))
         return real(a, b)
 
-    monkeypatch.setattr(service.security.hmac, "compare_digest", spy)
+    monkeypatch.setattr(service.http.api_key.hmac, "compare_digest", spy)
     assert locked.get("/metrics", headers={"x-api-key": "guess"}).status_code == 401
     assert locked.get("/metrics", headers=auth()).status_code == 200
     assert calls and all(isinstance(a, bytes) and isinstance(b, bytes) for a, b in calls)
@@ -267,7 +267,7 @@ def test_worker_refuses_a_path_in_place_of_bytes() -> None:
     """Even a route bug handing over a str could not make the worker open a file."""
     readme = str(REPO / "README.md")
     with pytest.raises(InvalidImageError, match="bytes"):
-        run_job(Job(output="json", kind="image", data=readme))  # type: ignore[arg-type]
+        run_job(Job(media="json", kind="image", data=readme))  # type: ignore[arg-type]
 
 
 # -------------------------------------------------------------------- request IDs

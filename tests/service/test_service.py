@@ -16,8 +16,8 @@ from fastapi.testclient import TestClient
 from PIL import Image
 
 import skelprune
-from service.schemas import Problem, PruneDocument, Readiness, SkeletonGeoJSON
-from skelprune.io import read_mask
+from service.http.schemas import Problem, PruneDocument, Readiness, SkeletonGeoJSON
+from skelprune.io.png import read_mask
 from testkit import DATA
 
 pytestmark = pytest.mark.timeout(300)

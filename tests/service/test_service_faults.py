@@ -18,10 +18,10 @@ import pytest
 from fastapi.testclient import TestClient
 
 from service.app import create_app
-from service.jobs import Job, JobResult, run_job
+from service.http.routes.prune import job_function
 from service.logs import JsonFormatter
-from service.routes.prune import job_function
 from service.settings import Settings
+from service.worker.jobs import Job, JobResult, run_job
 from testkit import DATA
 
 pytestmark = pytest.mark.timeout(300)

@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from service.pool import (
+from service.worker.pool import (
     JobFailedError,
     JobOverMemoryError,
     JobTimeoutError,

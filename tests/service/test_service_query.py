@@ -21,7 +21,7 @@ from starlette.datastructures import QueryParams
 
 from service.app import create_app
 from service.http.query import parse_query
-from service.schemas import PruneQuery
+from service.http.schemas import PruneQuery
 from service.settings import Settings
 from skelprune.errors import InvalidOptionError
 from skelprune.options import PruneOptions

@@ -14,8 +14,8 @@ from schemathesis.specs.openapi.checks import (
     status_code_conformance,
 )
 
+from service.apidocs.openapi_md import render
 from service.app import create_app
-from service.openapi_md import render
 from service.settings import Settings
 from testkit import REPO
 

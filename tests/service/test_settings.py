@@ -122,7 +122,7 @@ def test_deploy_files_bound_the_drain_below_their_grace_periods() -> None:
 
 
 def test_numba_cache_seed_is_copied_once_into_an_empty_cache(tmp_path) -> None:
-    from service.numba_seed import seed_numba_cache
+    from service.worker.numba_seed import seed_numba_cache
 
     seed = tmp_path / "seed" / "skelprune"
     seed.mkdir(parents=True)

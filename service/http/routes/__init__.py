@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
-from service.routes import match, ops, prune, viewer
+from service.http.routes import match, ops, prune, viewer
 
 __all__ = ["ROUTERS"]
 

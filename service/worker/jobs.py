@@ -14,7 +14,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from service.budget import check_budget, estimate, out_of_memory
+from skelprune.budget import check_budget, estimate, out_of_memory
 from skelprune.errors import ImageTooLargeError, SkelpruneError
 from skelprune.io.input import Input, Kind, read_input
 from skelprune.options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
@@ -32,7 +32,8 @@ __all__ = [
     "warmup",
 ]
 
-Output = Literal["json", "png", "geojson", "csv", "graphml"]
+#: The answers a job makes (its media type: :data:`MEDIA_TYPES`).
+Media = Literal["json", "png", "geojson", "csv", "graphml"]
 
 MEDIA_TYPES: dict[str, str] = {
     "json": "application/json",
@@ -53,13 +54,13 @@ class Job:
     name) and prunes it with :func:`skelprune.api.prune_input`, the library's pipeline.
     """
 
-    output: Output
+    media: Media
     kind: Kind
     data: bytes | dict[str, Any]
     options: PruneOptions = field(default_factory=PruneOptions)
     read: ReadOptions = field(default_factory=ReadOptions)
     raster: RasterOptions = field(default_factory=RasterOptions)
-    shown: OutputOptions = field(default_factory=OutputOptions)
+    output: OutputOptions = field(default_factory=OutputOptions)
     max_pixels: int | None = None
     max_vertices: int | None = None
     memory_budget: int | None = None  # bytes a worker may hold for the job
@@ -166,9 +167,9 @@ def answer_pixels(job: Job, shape: tuple[int, int]) -> int:
     ImageTooLargeError
         When ``overlay_scale`` makes the overlay larger than ``max_pixels``.
     """
-    if job.output != "png" and not job.shown.overlay:
+    if job.media != "png" and not job.output.overlay:
         return 0
-    scale = auto_scale(shape) if job.shown.overlay_scale is None else job.shown.overlay_scale
+    scale = auto_scale(shape) if job.output.overlay_scale is None else job.output.overlay_scale
     height, width = shape[0] * scale, shape[1] * scale
     if job.max_pixels is not None and width * height > job.max_pixels:
         raise ImageTooLargeError(
@@ -183,7 +184,7 @@ def run_job(job: Job) -> JobResult:
     """Decode the input, check its memory estimate, prune it and serialise the answer.
 
     A ``MemoryError`` anywhere is the input's size: the same 413 as an estimate over
-    the budget (:class:`~service.budget.JobTooLargeError`), not an internal error.
+    the budget (:class:`~skelprune.errors.JobTooLargeError`), not an internal error.
     """
     try:
         return _run_job(job)
@@ -198,10 +199,10 @@ def _run_job(job: Job) -> JobResult:
     cost = estimate(shape.mask, answer_pixels(job, shape.mask.shape))
     check_budget(cost, job.memory_budget, job.time_budget)
     t0 = time.perf_counter()
-    res = prune_input(shape, job.options, job.shown)
+    res = prune_input(shape, job.options, job.output)
     elapsed = time.perf_counter() - t0
     headers: dict[str, str] = {}
-    if job.output == "png":
+    if job.media == "png":
         body = res.overlay_png()
         headers = {"X-Skelprune-Components": str(len(res.components))}
         if len(res.components) <= PNG_HEADER_COMPONENTS:
@@ -213,16 +214,16 @@ def _run_job(job: Job) -> JobResult:
             )
         if res.warnings:  # a polygon the raster does not hold as it is
             headers["X-Skelprune-Warnings"] = str(len(res.warnings))
-    elif job.output == "geojson":
+    elif job.media == "geojson":
         body = dumps(res.to_geojson())
-    elif job.output == "csv":  # the tables (docs/tables.md)
-        body = res.to_csv(job.shown.table).encode()
-    elif job.output == "graphml":
+    elif job.media == "csv":  # the tables (docs/tables.md)
+        body = res.to_csv(job.output.table).encode()
+    elif job.media == "graphml":
         body = res.to_graphml().encode()
     else:
         body = dumps(res.to_dict())
     return JobResult(
-        body=body, media_type=MEDIA_TYPES[job.output], prune_seconds=elapsed, headers=headers
+        body=body, media_type=MEDIA_TYPES[job.media], prune_seconds=elapsed, headers=headers
     )
 
 

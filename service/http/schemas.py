@@ -46,6 +46,8 @@ __all__ = [
     "FiniteFloat",
     "GeoJSONInput",
     "Health",
+    "MatchDocument",
+    "MatchPolygons",
     "PolygonJob",
     "PolygonRequest",
     "Problem",
@@ -73,7 +75,7 @@ def _option_models() -> tuple[type[BaseModel], dict[str, Any]]:
 
     Only the wire types are declared here (a number, a flag, one of the choices); the
     values are checked once, by the library's option classes, when the request builder
-    makes them (:mod:`service.builder`), which locates each error where it was given.
+    makes them (:mod:`service.http.builder`), which locates each error where it was given.
     The checks' bounds are shown in the schema.
     """
     fields: dict[str, Any] = {}
@@ -350,3 +352,47 @@ class Readiness(BaseModel):
     busy: int = Field(description="Workers running a job.")
     queued: int = Field(description="Jobs waiting for a worker.")
     queue_size: int = Field(description="Most jobs that may wait.")
+
+
+# --- POST /v1/match ------------------------------------------------------------------
+
+
+class MatchPolygons(BaseModel):
+    """Two GeoJSON shapes to match (options go in the query)."""
+
+    model_config = ConfigDict(strict=True, extra="forbid")
+    a: GeoJSONInput
+    b: GeoJSONInput
+
+
+class MatchedEndpoint(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    component: int = Field(
+        description="Component of the shape whose skeleton is matched (the largest)."
+    )
+    node: int = Field(
+        description="Node id in that component's skeleton, as `POST /v1/prune` numbers them."
+    )
+    x: float
+    y: float
+
+
+class MatchedPair(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    a: MatchedEndpoint
+    b: MatchedEndpoint
+
+
+class MatchDocument(BaseModel):
+    """Path similarity of two skeletons (see docs/matching.md)."""
+
+    model_config = ConfigDict(extra="forbid")
+    distance: float = Field(ge=0, description="0 for the same skeleton; symmetric.")
+    mirrored: bool = Field(
+        description="The correspondence runs along b's boundary in the "
+        "opposite sense (as for a mirror image)."
+    )
+    endpoints: list[int] = Field(
+        min_length=2, max_length=2, description="Endpoint counts of a and b."
+    )
+    correspondence: list[MatchedPair]

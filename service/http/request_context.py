@@ -1,19 +1,16 @@
-"""Request context, access log and API key: the outer ASGI middlewares.
+"""Each request's context: its ID and its access-log line, the outermost middleware.
 
-- :class:`RequestContextMiddleware` (outermost): gives every request an ID (the
+:class:`RequestContextMiddleware` gives every request an ID (the
   client's ``X-Request-ID`` when it is sane, else a fresh one), echoes it in the
   response, makes it available to problem bodies (:data:`request_id_var`), writes the
   request's one access-log line (method, path, status, duration, request id) and turns
-  any exception that escaped everything else into a 500 problem without internals.
-- :class:`ApiKeyMiddleware`: with ``SKELPRUNE_API_KEY`` set, every path but
-  :data:`OPEN_PATHS` needs ``Authorization: Bearer <key>`` or ``X-API-Key: <key>``,
-  compared with :func:`hmac.compare_digest`; otherwise 401 with ``WWW-Authenticate``.
+any exception that escaped everything else into a 500 problem without internals (503 for
+one cut short by a shutdown).
 """
 
 from __future__ import annotations
 
 import asyncio
-import hmac
 import logging
 import re
 import time
@@ -21,27 +18,21 @@ import uuid
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from service.errors import InternalError, UnauthorizedError, problem
+from service.errors import InternalError, problem
 from service.logs import request_id_var
-from service.pool import PoolClosedError
+from service.worker.pool import PoolClosedError
 
-__all__ = [
-    "OPEN_PATHS",
-    "REQUEST_ID_HEADER",
-    "ApiKeyMiddleware",
-    "RequestContextMiddleware",
-]
+__all__ = ["REQUEST_ID_HEADER", "RequestContextMiddleware", "header"]
 
 access_log = logging.getLogger("service.access")
 log = logging.getLogger("service.errors")
 
 REQUEST_ID_HEADER = "X-Request-ID"
-#: Paths open without the API key: probes carry no credentials, and say nothing secret.
-OPEN_PATHS = frozenset({"/healthz", "/readyz"})
 _SANE_ID = re.compile(rb"^[A-Za-z0-9._:\-]{1,128}$")
 
 
-def _header(scope: Scope, name: bytes) -> bytes | None:
+def header(scope: Scope, name: bytes) -> bytes | None:
+    """A request header's raw value (the first of that name), or None."""
     for key, value in scope["headers"]:
         if key == name:
             return value
@@ -59,7 +50,7 @@ class RequestContextMiddleware:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
-        given = _header(scope, b"x-request-id")
+        given = header(scope, b"x-request-id")
         rid = given.decode("ascii") if given and _SANE_ID.match(given) else uuid.uuid4().hex
         request_id_var.set(rid)
         scope.setdefault("state", {})["request_id"] = rid
@@ -133,47 +124,3 @@ class RequestContextMiddleware:
                         "client": client[0] if client else None,
                     },
                 )
-
-
-class ApiKeyMiddleware:
-    """Refuse requests without the right API key (401 problem+json)."""
-
-    def __init__(self, app: ASGIApp, *, key: str) -> None:
-        self.app = app
-        self.key = key.encode("utf-8")
-
-    def _presented(self, scope: Scope) -> list[bytes]:
-        keys = []
-        auth = _header(scope, b"authorization")
-        if auth is not None:
-            scheme, _, token = auth.strip().partition(b" ")
-            if scheme.lower() == b"bearer" and token.strip():
-                keys.append(token.strip())
-        api_key = _header(scope, b"x-api-key")
-        if api_key is not None and api_key.strip():
-            keys.append(api_key.strip())
-        return keys
-
-    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] != "http" or scope["path"] in OPEN_PATHS:
-            await self.app(scope, receive, send)
-            return
-        presented = self._presented(scope)
-        # compare against every presented key (no early exit) in constant time
-        matches = [hmac.compare_digest(k, self.key) for k in presented]
-        if any(matches):
-            await self.app(scope, receive, send)
-            return
-
-        challenge = 'Bearer realm="skelprune"'
-        if presented:
-            challenge += ', error="invalid_token"'
-            detail = "invalid API key"
-        else:
-            detail = "API key required: send 'Authorization: Bearer <key>' or 'X-API-Key: <key>'"
-        response = problem(
-            UnauthorizedError(detail),
-            instance=scope["path"],
-            headers={"WWW-Authenticate": challenge},
-        )
-        await response(scope, receive, send)

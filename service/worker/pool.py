@@ -30,14 +30,12 @@ import multiprocessing as mp
 import signal
 import threading
 import time
-import traceback
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from multiprocessing.connection import Connection
 from typing import Any
 
-from skelprune.budget import resident_bytes
-from skelprune.errors import SkelpruneError
+from service.worker.process import worker_main
+from skelprune.budget import mib, resident_bytes
 
 __all__ = [
     "JobFailedError",
@@ -55,17 +53,6 @@ log = logging.getLogger("service.pool")
 
 #: Seconds between two samples of a running job's resident set.
 MEMORY_SAMPLE_SECONDS = 0.02
-
-
-def _trim_heap() -> None:
-    """Give the C heap's free pages back to the system (glibc), so that the resident
-    set after a job is what the worker still uses."""
-    try:
-        import ctypes
-
-        ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except (OSError, AttributeError):
-        pass
 
 
 class PoolError(Exception):
@@ -100,42 +87,6 @@ class JobFailedError(PoolError):
     """The job raised an unexpected exception inside the worker (a bug, not bad input)."""
 
 
-def _worker_main(conn: Connection, initializer: Callable[[], object] | None) -> None:
-    """Worker process: warm up, say ready (with what the initializer returned, for the
-    log), then run ``(fn, args)`` jobs until told to stop."""
-    # Ctrl-C in a terminal reaches the whole process group; the parent decides when we stop.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    info = None
-    try:
-        if initializer is not None:
-            info = initializer()
-    except BaseException as exc:  # report, then exit: the parent replaces us
-        conn.send(("init-failed", f"{type(exc).__name__}: {exc}"))
-        return
-    conn.send(("ready", None if info is None else str(info)))
-    while True:
-        try:
-            msg = conn.recv()
-        except (EOFError, OSError):
-            return
-        if msg is None:
-            return
-        fn, args = msg
-        try:
-            reply: tuple[str, Any] = ("ok", fn(*args))
-        except SkelpruneError as exc:  # the caller's fault: travels back as itself
-            reply = ("error", exc)
-        except Exception as exc:
-            reply = ("failed", (f"{type(exc).__name__}: {exc}", traceback.format_exc()))
-        del msg, fn, args  # the job's input is freed before the heap is trimmed
-        try:
-            conn.send(reply)
-        except Exception as exc:  # unpicklable result or exception
-            conn.send(("failed", (f"cannot send result: {exc}", traceback.format_exc())))
-        del reply
-        _trim_heap()
-
-
 def _exit_reason(code: int | None) -> str:
     if code is None:
         return "did not exit"
@@ -153,7 +104,7 @@ class _Worker:
     def __init__(self, ctx: Any, initializer: Callable[[], object] | None) -> None:
         self.conn, child = ctx.Pipe(duplex=True)
         self.proc = ctx.Process(
-            target=_worker_main, args=(child, initializer), daemon=True, name="skelprune-worker"
+            target=worker_main, args=(child, initializer), daemon=True, name="skelprune-worker"
         )
         self.proc.start()
         child.close()
@@ -213,26 +164,22 @@ class _Worker:
 
     def _wait(self, timeout: float, memory_limit: int | None) -> None:
         """Wait for the job's answer; its resident set is sampled meanwhile."""
+        timed_out = JobTimeoutError(f"job exceeded the time limit of {timeout:g} s and was stopped")
         if memory_limit is None:
             if not self.conn.poll(timeout):
-                raise JobTimeoutError(
-                    f"job exceeded the time limit of {timeout:g} s and was stopped"
-                )
+                raise timed_out
             return
         deadline = time.monotonic() + timeout
         while not self.conn.poll(MEMORY_SAMPLE_SECONDS):
             held = self.resident()
             if held > memory_limit:
                 raise JobOverMemoryError(
-                    f"this input needed more than the memory budget of "
-                    f"{memory_limit / 2**20:,.0f} MiB a job (its worker held "
-                    f"{held / 2**20:,.0f} MiB) and was stopped: send fewer pixels or a "
-                    "cleaner mask"
+                    f"this input needed more than the memory budget of {mib(memory_limit)} "
+                    f"a job (its worker held {mib(held)}) and was stopped: send fewer pixels "
+                    "or a cleaner mask"
                 )
             if time.monotonic() > deadline:
-                raise JobTimeoutError(
-                    f"job exceeded the time limit of {timeout:g} s and was stopped"
-                )
+                raise timed_out
 
     def stop(self, grace: float = 1.0) -> None:
         with contextlib.suppress(OSError):
@@ -303,7 +250,7 @@ class WorkerPool:
         self._ctx = mp.get_context(context)
         if context == "forkserver":
             # Only takes effect before the (process-wide) fork server first starts.
-            self._ctx.set_forkserver_preload(["service.pool", *preload])
+            self._ctx.set_forkserver_preload(["service.worker.pool", *preload])
         self._idle: asyncio.Queue[_Worker | None] | None = None  # None: "pool closed"
         self._workers: set[_Worker] = set()
         self._lock = threading.Lock()
@@ -463,8 +410,7 @@ class WorkerPool:
         self.recycled += 1
         return self._replace(
             worker,
-            f"it held {held / 2**20:,.0f} MiB after a job, "
-            f"{(held - worker.warm_bytes) / 2**20:,.0f} MiB more than when warm",
+            f"it held {mib(held)} after a job, {mib(held - worker.warm_bytes)} more than when warm",
         )
 
     def _release(self, worker: _Worker) -> None:

@@ -4,7 +4,7 @@ Every endpoint that prunes (``POST /v1/prune``, each shape of ``POST /v1/prune/b
 both shapes of ``POST /v1/match``) goes through :func:`job_builder`: it gathers the
 options from the query and the body, refuses an option where it does not apply, has the
 library's option classes check the values, and :meth:`JobBuilder.job` makes the
-:class:`~service.jobs.Job` of each shape. A :class:`~service.jobs.Job` is made nowhere
+:class:`~service.worker.jobs.Job` of each shape. A :class:`~service.worker.jobs.Job` is made nowhere
 else.
 """
 
@@ -16,10 +16,10 @@ from typing import Any
 from fastapi.exceptions import RequestValidationError
 from pydantic import BaseModel
 
-from service.jobs import MEDIA_TYPES, Job, Output
-from service.match_job import MatchJob
-from service.schemas import POLYGON_ONLY, PruneQuery
+from service.http.schemas import POLYGON_ONLY, PruneQuery
 from service.settings import Settings
+from service.worker.jobs import MEDIA_TYPES, Job, Media
+from service.worker.match_job import MatchJob
 from skelprune.errors import InvalidOptionError
 from skelprune.options import GROUPS, OutputOptions, PruneOptions, RasterOptions, ReadOptions
 
@@ -38,7 +38,7 @@ TABLE_OUTPUTS = ("csv", "graphml")
 
 
 def _gather(
-    query: PruneQuery, body: BaseModel | None, polygon: bool, output: Output
+    query: PruneQuery, body: BaseModel | None, polygon: bool, media: Media
 ) -> dict[str, Any]:
     """The request's options: the query's and the body's (JSON envelope or multipart
     fields), each given once, each where it applies."""
@@ -50,33 +50,33 @@ def _gather(
             if key in opts:
                 raise InvalidOptionError(f"option {key!r} is given both in the query and the body")
             opts[key] = value
-    if output != "json":
+    if media != "json":
         misplaced = [k for k in JSON_ONLY if k in opts]
         if misplaced:
             raise InvalidOptionError(
                 f"option(s) {', '.join(misplaced)} only apply to the JSON document "
-                f"(Accept: application/json), not to the {MEDIA_TYPES[output]} answer"
+                f"(Accept: application/json), not to the {MEDIA_TYPES[media]} answer"
             )
-    if output != "geojson":
+    if media != "geojson":
         misplaced = [k for k in GEOJSON_ONLY if k in opts]
         if misplaced:
             raise InvalidOptionError(
                 f"option(s) {', '.join(misplaced)} only apply to the GeoJSON answer "
                 "(Accept: application/geo+json)"
             )
-    if output == "geojson" or (output == "json" and not opts.get("overlay")):
+    if media == "geojson" or (media == "json" and not opts.get("overlay")):
         misplaced = [k for k in OVERLAY_ONLY if k in opts]
         if misplaced:
             raise InvalidOptionError(
                 f"option(s) {', '.join(misplaced)} only apply to the overlay image "
                 "(Accept: image/png, or overlay=true)"
             )
-    if any(k in opts for k in TABLE_ONLY) and output != "csv":
+    if any(k in opts for k in TABLE_ONLY) and media != "csv":
         raise InvalidOptionError(
             f"option(s) {', '.join(k for k in TABLE_ONLY if k in opts)} only apply to the "
             "tables' answer (Accept: text/csv)"
         )
-    if not polygon and "pixel_size" in opts and output not in TABLE_OUTPUTS:
+    if not polygon and "pixel_size" in opts and media not in TABLE_OUTPUTS:
         raise InvalidOptionError(
             "option(s) pixel_size only apply to polygon input, or to an image's tables "
             "(Accept: text/csv or application/graphml+xml), whose unit it sets"
@@ -137,10 +137,10 @@ class JobBuilder:
     """A request's checked options and the service's limits: makes the job of each of
     its shapes."""
 
-    output: Output
+    media: Media
     settings: Settings
-    prune: PruneOptions
-    out: OutputOptions
+    options: PruneOptions
+    output: OutputOptions
     read: ReadOptions
     raster: RasterOptions
 
@@ -149,13 +149,13 @@ class JobBuilder:
         settings = self.settings
         kind, data = ("image", png) if png is not None else ("geojson", geojson or {})
         return Job(
-            output=self.output,
+            media=self.media,
             kind=kind,
             data=data,
-            options=self.prune,
+            options=self.options,
             read=self.read,
             raster=self.raster,
-            shown=self.out,
+            output=self.output,
             max_pixels=settings.max_pixels,
             max_vertices=settings.max_vertices,
             memory_budget=settings.job_memory_mb * 2**20,
@@ -173,7 +173,7 @@ def job_builder(
     settings: Settings,
     *,
     polygon: bool,
-    output: Output,
+    media: Media,
     match: bool = False,
 ) -> JobBuilder:
     """The builder of a request's jobs.
@@ -188,7 +188,7 @@ def job_builder(
         The service's limits, which every job carries.
     polygon : bool
         The input is GeoJSON (else PNG): the raster options apply, ``foreground`` not.
-    output : {"json", "png", "geojson"}
+    media : {"json", "png", "geojson", "csv", "graphml"}
         The negotiated answer: the output options apply where they shape it.
     match : bool
         A match: no output option applies.
@@ -200,7 +200,7 @@ def job_builder(
     RequestValidationError
         An option with a bad value, located where it was given (query or body).
     """
-    opts = _gather(query, body, polygon, output)
+    opts = _gather(query, body, polygon, media)
     if match:
         unused = list(_group(opts, OutputOptions))
         if unused:
@@ -214,7 +214,7 @@ def job_builder(
         opts["longest_side"] = settings.polygon_longest_side  # the server's default
     values = dict(zip(GROUPS, _values(opts, _where(query, body)), strict=True))
     return JobBuilder(
-        output,
+        media,
         settings,
         values[PruneOptions],
         values[OutputOptions],

@@ -10,7 +10,7 @@ from fastapi.responses import FileResponse
 
 __all__ = ["STATIC", "router"]
 
-STATIC = Path(__file__).parent.parent / "static"
+STATIC = Path(__file__).parents[2] / "static"
 #: Revalidate on every load (the ETag makes that cheap): a new version shows at once.
 HEADERS = {"Cache-Control": "no-cache"}
 

@@ -1,5 +1,5 @@
 """Each endpoint's OpenAPI documentation: description, parameters, request body and
-responses, built from the examples of :mod:`service.examples`.
+responses, built from the examples of :mod:`service.apidocs.examples`.
 
 Kept static, as those are, so that ``openapi.md`` only changes when the API does.
 """
@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import fields
 from typing import Any
 
-from service.examples import (
+from service.apidocs.examples import (
     METRICS_EXAMPLE,
     PRUNE_REQUEST_BODY,
     PRUNE_RESPONSES,
@@ -19,7 +19,7 @@ from service.examples import (
 )
 from service.http.bodies import BATCH_MAX_ITEMS
 from service.http.negotiation import NDJSON
-from service.schemas import PruneQuery, query_parameters
+from service.http.schemas import PruneQuery, query_parameters
 from skelprune import ALGORITHM_VERSION, __version__
 from skelprune.options import OutputOptions
 

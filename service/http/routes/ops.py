@@ -5,9 +5,9 @@ from __future__ import annotations
 from fastapi import APIRouter, Request, Response
 from prometheus_client import CONTENT_TYPE_LATEST, generate_latest
 
-from service import openapi
-from service.pool import PoolClosedError, PoolStartingError, QueueFullError, WorkerPool
-from service.schemas import Health, Readiness, Version
+from service.apidocs import openapi
+from service.http.schemas import Health, Readiness, Version
+from service.worker.pool import PoolClosedError, PoolStartingError, QueueFullError, WorkerPool
 from skelprune import ALGORITHM_VERSION, __version__
 
 __all__ = ["router"]

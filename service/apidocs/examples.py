@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from service.jobs import PNG_HEADER_COMPONENTS
+from service.worker.jobs import PNG_HEADER_COMPONENTS
 from skelprune import ALGORITHM_VERSION, __version__
 
 __all__ = [

@@ -8,33 +8,29 @@ import logging
 from collections.abc import AsyncIterator, Callable
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Depends, Request, Response
+from fastapi import APIRouter, Depends, Response
 from fastapi.responses import StreamingResponse
 
-from service import openapi
-from service.budget import check_polygon
-from service.builder import JobBuilder, job_builder
-from service.errors import InternalError, UnsupportedMediaTypeError, lookup, problem
-from service.examples import PRUNE_RESPONSES
+from service.apidocs import openapi
+from service.apidocs.examples import PRUNE_RESPONSES
+from service.errors import InternalError, lookup, problem
 from service.http.bodies import (
     BATCH_MAX_ITEMS,
-    JSON_TYPES,
     batch_size,
     check_polygon_body,
-    content_type,
     parse_batch,
     parse_polygon,
     polygon_item,
-    read_form,
-    refuse_encoding,
     validate_json,
 )
+from service.http.builder import JobBuilder, job_builder
 from service.http.negotiation import NDJSON, accept_ndjson, negotiate
-from service.http.query import parse_query
 from service.http.scan import BatchItem
-from service.jobs import Job, run_job
-from service.pool import PoolError, WorkerPool
+from service.http.shape_request import ShapeRequest, ShapeRequests
 from service.settings import Settings
+from service.worker.jobs import Job, run_job
+from service.worker.pool import PoolError
+from skelprune.budget import check_polygon
 from skelprune.errors import InvalidPolygonError, SkelpruneError
 from skelprune.io.input import check_image_size
 
@@ -53,6 +49,20 @@ async def job_function() -> Callable[[Job], Any]:
     return run_job
 
 
+#: ``POST /v1/prune`` takes a PNG or TIFF (as the body or a form's file) or GeoJSON.
+PRUNE = ShapeRequests(
+    negotiate,
+    ("image", "form", "json"),
+    "image/png, image/tiff, multipart/form-data (field 'file') or application/json (GeoJSON)",
+)
+#: ``POST /v1/prune/batch`` takes a form of files or a JSON list; it answers NDJSON.
+BATCH = ShapeRequests(
+    lambda accept: accept_ndjson(accept or ""),
+    ("form", "json"),
+    "multipart/form-data (fields 'file') or application/json (a list of GeoJSON objects)",
+)
+
+
 @router.post(
     "/v1/prune",
     summary="Prune the skeleton of a PNG mask or a GeoJSON polygon",
@@ -63,43 +73,30 @@ async def job_function() -> Callable[[Job], Any]:
     tags=["prune"],
 )
 async def prune(
-    request: Request,
+    call: Annotated[ShapeRequest, Depends(PRUNE)],
     fn: Annotated[Callable[[Job], Any], Depends(job_function)],
 ) -> Response:
-    query = parse_query(request.query_params)  # first: bad options are refused before all
-    settings: Settings = request.app.state.settings
-    pool: WorkerPool = request.app.state.pool
-    output = negotiate(request.headers.get("accept"))
-    ctype = content_type(request)
-    refuse_encoding(request)
-    body = await request.body()  # size-limited by BodyLimitMiddleware
-    if ctype in ("image/png", "image/tiff", "multipart/form-data"):
-        envelope = None
-        if ctype in ("image/png", "image/tiff"):
-            png = body
-        else:
-            form = await read_form(request, max_files=1)
-            (png,) = form.uploads(("file",), "the PNG")
-            envelope = form.options(files="file")
-        check_image_size(png, settings.max_pixels)  # refused before it is queued
-        geojson = None
-    elif ctype in JSON_TYPES:
+    settings = call.settings
+    png, geojson, envelope = None, None, None
+    if call.kind == "image":
+        png = call.body
+    elif call.kind == "form":
+        form = await call.form(max_files=1)
+        (png,) = form.uploads(("file",), "the PNG")
+        envelope = form.options(files="file")
+    else:
         envelope, geojson = await validate_json(
             parse_polygon,
-            body,
+            call.body,
             check_polygon_body(settings.max_vertices, settings.estimate_seconds),
         )
-        png = None
-    else:
-        shown = ctype or "none"
-        raise UnsupportedMediaTypeError(
-            f"Content-Type {shown!r} is not supported; send image/png, image/tiff, "
-            "multipart/form-data "
-            "(field 'file') or application/json (GeoJSON)"
-        )
-    build = job_builder(query, envelope, settings, polygon=geojson is not None, output=output)
-    result = await pool.run(fn, build.job(png=png, geojson=geojson))
-    request.app.state.metrics.prune_seconds.observe(result.prune_seconds)
+    if png is not None:
+        check_image_size(png, settings.max_pixels)  # refused before it is queued
+    assert call.media is not None  # negotiate always names one
+    build = job_builder(
+        call.query, envelope, settings, polygon=geojson is not None, media=call.media
+    )
+    result = await call.run(fn, build.job(png=png, geojson=geojson))
     # The same URL answers in three formats: caches must key on Accept.
     return Response(
         result.body, media_type=result.media_type, headers={"Vary": "Accept", **result.headers}
@@ -154,37 +151,25 @@ def _batch_jobs(
     tags=["prune"],
 )
 async def prune_batch(
-    request: Request,
+    call: Annotated[ShapeRequest, Depends(BATCH)],
     fn: Annotated[Callable[[Job], Any], Depends(job_function)],
 ) -> Response:
-    query = parse_query(request.query_params)
-    settings: Settings = request.app.state.settings
-    pool: WorkerPool = request.app.state.pool
-    accept_ndjson(request.headers.get("accept", ""))
-    ctype = content_type(request)
-    refuse_encoding(request)
-    body = await request.body()  # size-limited by BodyLimitMiddleware
-    png = ctype == "multipart/form-data"
+    settings = call.settings
     items: list[bytes] | list[BatchItem]
-    if png:
-        form = await read_form(request, max_files=BATCH_MAX_ITEMS + 1)
+    if call.kind == "form":
+        form = await call.form(max_files=BATCH_MAX_ITEMS + 1)
         items = list(form.files("file"))
         batch_size(items)
         # the options are checked first, once: a bad option is the batch's problem
         build = job_builder(
-            query, form.options(files="file"), settings, polygon=False, output="json"
+            call.query, form.options(files="file"), settings, polygon=False, media="json"
         )
         jobs = _batch_jobs(items, build, settings)
-    elif ctype in JSON_TYPES:
-        # split, measured and validated off the event loop, item by item
-        items = await asyncio.to_thread(parse_batch, body)
-        build = job_builder(query, None, settings, polygon=True, output="json")
-        jobs = await asyncio.to_thread(_batch_jobs, items, build, settings)
     else:
-        raise UnsupportedMediaTypeError(
-            f"Content-Type {ctype or 'none'!r} is not supported; send multipart/form-data "
-            "(fields 'file') or application/json (a list of GeoJSON objects)"
-        )
+        # split, measured and validated off the event loop, item by item
+        items = await asyncio.to_thread(parse_batch, call.body)
+        build = job_builder(call.query, None, settings, polygon=True, media="json")
+        jobs = await asyncio.to_thread(_batch_jobs, items, build, settings)
 
     async def lines() -> AsyncIterator[bytes]:
         for index, job in enumerate(jobs):
@@ -192,8 +177,7 @@ async def prune_batch(
                 line = job
             else:
                 try:  # one job at a time: a batch never holds more than one worker
-                    result = await pool.run(fn, job)
-                    request.app.state.metrics.prune_seconds.observe(result.prune_seconds)
+                    result = await call.run(fn, job)
                     yield b'{"index":%d,"result":' % index + result.body + b"}\n"
                     continue
                 except Exception as exc:  # this shape's failure, not the batch's

@@ -1,0 +1,96 @@
+"""The start every endpoint that prunes shares, as one FastAPI dependency (in the manner
+of titiler's option dependencies): the query's options parsed first (a bad option is
+refused before anything else), the ``Accept`` header negotiated, a compressed body
+refused, the body read (size- and time-limited by
+:class:`~service.http.middleware.BodyLimitMiddleware`) and its ``Content-Type`` sorted
+into the kinds the endpoint takes, with the application's settings and worker pool.
+
+An endpoint declares what it takes once, as a :class:`ShapeRequests`, and receives a
+:class:`ShapeRequest`; it runs its jobs through :meth:`ShapeRequest.run`, which records
+each job's time in the metrics.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Literal
+
+from fastapi import Request
+
+from service.errors import UnsupportedMediaTypeError
+from service.http.bodies import JSON_TYPES, Form, content_type, read_form, refuse_encoding
+from service.http.query import parse_query
+from service.http.schemas import PruneQuery
+from service.settings import Settings
+from service.worker.jobs import Media
+from service.worker.pool import WorkerPool
+
+if TYPE_CHECKING:
+    from service.app import Metrics
+
+__all__ = ["BodyKind", "ShapeRequest", "ShapeRequests"]
+
+#: What a body holds, by its ``Content-Type``: an image as the body itself (PNG or
+#: TIFF), a multipart form, or JSON (GeoJSON).
+BodyKind = Literal["image", "form", "json"]
+KINDS: dict[str, BodyKind] = {
+    "image/png": "image",
+    "image/tiff": "image",
+    "multipart/form-data": "form",
+    **dict.fromkeys(JSON_TYPES, "json"),
+}
+
+
+@dataclass(frozen=True)
+class ShapeRequest:
+    """A request to an endpoint that prunes, its shared part read and checked."""
+
+    request: Request
+    query: PruneQuery
+    settings: Settings
+    pool: WorkerPool
+    metrics: Metrics
+    media: Media | None  # the answer the Accept header asks for (None: the endpoint has one)
+    kind: BodyKind
+    body: bytes
+
+    async def form(self, max_files: int) -> Form:
+        """The body as a multipart form (:func:`~service.http.bodies.read_form`)."""
+        return await read_form(self.request, max_files=max_files)
+
+    async def run(self, fn: Callable[[Any], Any], job: Any) -> Any:
+        """``fn(job)`` on a worker; its time in the library goes to the metrics."""
+        result = await self.pool.run(fn, job)
+        self.metrics.prune_seconds.observe(result.prune_seconds)
+        return result
+
+
+@dataclass(frozen=True)
+class ShapeRequests:
+    """The dependency of an endpoint that prunes: ``Depends(ShapeRequests(...))``.
+
+    ``accept`` reads the ``Accept`` header (raising ``NotAcceptableError``) into the
+    answer's media, ``kinds`` are the bodies taken, and ``send`` completes the refusal of
+    any other: "Content-Type … is not supported; send {send}".
+    """
+
+    accept: Callable[[str | None], Media | None]
+    kinds: tuple[BodyKind, ...]
+    send: str
+
+    async def __call__(self, request: Request) -> ShapeRequest:
+        query = parse_query(request.query_params)  # first: bad options are refused before all
+        state = request.app.state
+        media = self.accept(request.headers.get("accept"))
+        ctype = content_type(request)
+        refuse_encoding(request)
+        body = await request.body()  # size-limited by BodyLimitMiddleware
+        kind = KINDS.get(ctype)
+        if kind is None or kind not in self.kinds:
+            raise UnsupportedMediaTypeError(
+                f"Content-Type {ctype or 'none'!r} is not supported; send {self.send}"
+            )
+        return ShapeRequest(
+            request, query, state.settings, state.pool, state.metrics, media, kind, body
+        )

@@ -42,7 +42,7 @@ from .errors import (
     InvalidPolygonError,
     SkelpruneError,
 )
-from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
+from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions, VolumeOptions
 
 if TYPE_CHECKING:
     from .api import components, prune
@@ -101,6 +101,7 @@ __all__ = [
     "SkeletonDescriptor",
     "SkelpruneError",
     "UnmatchableShapeError",
+    "VolumeOptions",
     "components",
     "describe",
     "match",

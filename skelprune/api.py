@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import Any
+from dataclasses import fields
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -16,6 +17,7 @@ from .options import (
     PruneOptions,
     RasterOptions,
     ReadOptions,
+    VolumeOptions,
     options_value,
     split_options,
 )
@@ -30,7 +32,11 @@ from .pruning.dce import (
 from .pruning.floor import floor_step
 from .pruning.margin import Margins, branch_margins
 from .pruning.tips import trim_tips
+
+if TYPE_CHECKING:
+    from .output.volume import VolumeResult
 from .skeleton import Skeleton
+from .volume import is_volume, prune_volume
 
 __all__ = ["METHODS", "components", "prune", "prune_component", "prune_input"]
 
@@ -134,8 +140,9 @@ def prune(
     read: ReadOptions | None = None,
     raster: RasterOptions | None = None,
     output: OutputOptions | None = None,
+    volume: VolumeOptions | None = None,
     **keywords: Any,
-) -> PruneResult:
+) -> PruneResult | VolumeResult:
     """Pruned skeleton of every 8-connected component of a shape: a mask, an image or a
     polygon.
 
@@ -161,8 +168,12 @@ def prune(
     output : OutputOptions, optional
         What the result's outputs hold by default (``curve``, ``sequence``, ``overlay``,
         ``overlay_scale``, ``overlay_legend``, ``simplify``, ``cut_ends``).
+    volume : VolumeOptions, optional
+        Volume input (a 3-D array or a ``.npy`` path): the voxel ``spacing``
+        ``(dz, dy, dx)``. A volume is pruned as docs/volumes.md says, and answers with a
+        :class:`~skelprune.output.volume.VolumeResult`.
     **keywords
-        Any field of those four classes by name, instead of the class's value (never
+        Any field of those five classes by name, instead of the class's value (never
         both for one class): ``prune(mask, beta=3.0)`` is
         ``prune(mask, PruneOptions(beta=3.0))``.
 
@@ -203,9 +214,14 @@ def prune(
     >>> line["type"], all(0 <= x <= 1000 and 0 <= y <= 20 for x, y in line["coordinates"])
     ('LineString', True)
     """
+    given = {f.name: keywords.pop(f.name) for f in fields(VolumeOptions) if f.name in keywords}
     groups = split_options(keywords)
     options = options_value(PruneOptions, options, groups[PruneOptions])
     output = options_value(OutputOptions, output, groups[OutputOptions])
+    if volume is not None or given or is_volume(source):
+        if read is not None or raster is not None or groups[ReadOptions] or groups[RasterOptions]:
+            raise TypeError("read and raster options apply to images and polygons, not volumes")
+        return prune_volume(source, options, options_value(VolumeOptions, volume, given), output)
     if isinstance(source, Input):
         if read is not None or raster is not None or groups[ReadOptions] or groups[RasterOptions]:
             raise TypeError("read and raster options apply to reading; this input is read")

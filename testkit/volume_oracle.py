@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["ball_counts", "lost_volume", "squared_distance"]
+__all__ = ["ball_counts", "lost_volume", "naive_sequence", "squared_distance"]
 
 
 def _squared(offsets: np.ndarray, spacing) -> np.ndarray:
@@ -43,3 +43,79 @@ def lost_volume(volume, z, y, x, r2, spacing=(1.0, 1.0, 1.0)) -> int:
     """Voxels inside that no ball covers, from :func:`ball_counts`."""
     volume = np.asarray(volume) != 0
     return int((volume & (ball_counts(volume.shape, z, y, x, r2, spacing) == 0)).sum())
+
+
+def naive_sequence(graph, volume, z, y, x, r2, spacing, alpha: float, lbar: float):
+    """The greedy pruning on a volume, every candidate's lost volume repainted from
+    scratch at every step: the removal order and ``λ`` of every skeleton ``S(0..n)``.
+
+    Topology comes from the same :class:`~skelprune.grid3d.branches.VolumeBranchGraph` as
+    the fast code (its rules are the model); ``λ``, the length (steps of each kind times
+    their physical length, summed in the kinds' order) and the tie order (``λ``, lost
+    volume, length, free end's ``(z, y, x)``) are written here again from
+    docs/algorithm.md.
+    """
+    import math
+
+    volume = np.asarray(volume) != 0
+    area = int(volume.sum())
+    sp = np.asarray(spacing, float)
+    kinds = [((k + 1) >> 2 & 1, (k + 1) >> 1 & 1, (k + 1) & 1) for k in range(7)]
+    weights = [math.sqrt(float(((np.array(k) * sp) ** 2).sum())) for k in kinds]
+
+    def length(steps) -> float:
+        total = 0.0
+        for c, w in zip(steps, weights, strict=True):
+            total += c * w
+        return total
+
+    def lam(lost: int, steps) -> float:
+        return alpha * lost / area + math.log(length(steps) / lbar + 1.0)
+
+    def lost_without(skip=None) -> int:
+        pts = []
+        for b, br in enumerate(graph.branches):
+            if br.alive and b != skip:
+                pts.extend(br.points)
+        for j in graph.junctions:
+            if j.alive:
+                pts.extend(j.points)
+        pts = np.asarray(sorted(pts), np.int64)
+        return lost_volume(volume, z[pts], y[pts], x[pts], r2[pts], spacing)
+
+    def total(skip=None):
+        out = [0] * 7
+        for b, br in enumerate(graph.branches):
+            if br.alive and b != skip:
+                out = [u + v for u, v in zip(out, br.steps, strict=True)]
+        return out
+
+    lost = lost_without()
+    lams = [lam(lost, graph.total_steps())]
+    order = []
+    while True:
+        ends = [b for b in range(len(graph.branches)) if graph.is_end_branch(b)]
+        if not ends:
+            break
+        keys = []
+        for b in ends:
+            lost_b = lost_without(skip=b)
+            rest = [u - v for u, v in zip(total(), graph.branches[b].steps, strict=True)]
+            p = graph.endpoint(b)
+            keys.append(
+                (
+                    lam(lost_b, rest),
+                    lost_b - lost,
+                    length(graph.branches[b].steps),
+                    int(z[p]),
+                    int(y[p]),
+                    int(x[p]),
+                    b,
+                )
+            )
+        pick = min(keys)[-1]
+        graph.remove_end_branch(pick)
+        order.append(pick)
+        lost = lost_without()
+        lams.append(lam(lost, graph.total_steps()))
+    return order, lams

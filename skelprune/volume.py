@@ -1,0 +1,150 @@
+"""Pruning volumes: a 3-D array or ``.npy`` file to a pruned curve skeleton per component.
+
+The same pruning as for images (docs/algorithm.md), through the grid interface of
+:mod:`skelprune.pruning.grid`: the curve skeleton of each 26-connected component
+(:mod:`skelprune.grid3d`), end branches removed in the order that trades length against
+lost volume, the answer chosen by ``argmin λ`` and its end branches of margin below
+``min_margin`` dropped. What the image pipeline has and a volume does not (docs/volumes.md):
+the coarse DCE stage and ``method="dce"`` (both follow a contour), the noise-floor choice,
+the tips' cuts, and the limbs' test.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import EmptyMaskError, InvalidImageError, InvalidOptionError
+from .grid3d.skeleton import VolumeSkeleton
+from .options import OutputOptions, PruneOptions, VolumeOptions
+from .output.volume import VolumeComponent, VolumeResult
+from .pruning.bayesian import choose_step, pruning_sequence
+from .pruning.margin import branch_margins
+
+__all__ = ["is_volume", "prune_volume", "read_volume", "volume_components"]
+
+
+def is_volume(source: Any) -> bool:
+    """Whether ``source`` is a volume: a 3-D array, or the path of a ``.npy`` file."""
+    if isinstance(source, np.ndarray):
+        return source.ndim == 3
+    return isinstance(source, str | os.PathLike) and str(source).lower().endswith(".npy")
+
+
+def read_volume(source: Any) -> np.ndarray:
+    """A volume as an array: ``source`` itself, or a ``.npy`` file loaded (no pickles).
+
+    Raises
+    ------
+    InvalidImageError
+        Not a 3-D array of booleans or integers, or an unreadable file.
+    """
+    if isinstance(source, str | os.PathLike):
+        try:
+            arr = np.load(Path(source), allow_pickle=False)
+        except (OSError, ValueError) as exc:
+            raise InvalidImageError(
+                f"cannot read {os.fspath(source)!r} as a .npy array: {exc}"
+            ) from None
+    else:
+        arr = np.asarray(source)
+    if arr.ndim != 3:
+        raise InvalidImageError(f"a volume is a 3-D array; this one has {arr.ndim} dimensions")
+    if not (arr.dtype == np.bool_ or np.issubdtype(arr.dtype, np.integer)):
+        raise InvalidImageError(
+            f"a volume holds booleans or integer labels, not {arr.dtype} values"
+        )
+    return arr
+
+
+def volume_components(
+    volume: np.ndarray,
+) -> list[tuple[np.ndarray, tuple[int, int, int], int | None]]:
+    """26-connected components as padded crops, with the crop's origin in the volume
+    and the label (``None`` for a boolean or 0/1 volume, else each non-zero value is a
+    shape of its own)."""
+    from scipy import ndimage
+
+    values = np.unique(volume)
+    binary = volume.dtype == np.bool_ or set(values.tolist()) <= {0, 1}
+    out = []
+    for value in [None] if binary else [v for v in values.tolist() if v != 0]:
+        mask = volume != 0 if value is None else volume == value
+        lab, _ = ndimage.label(mask, structure=np.ones((3, 3, 3), bool))
+        for i, box in enumerate(ndimage.find_objects(lab), start=1):
+            if box is None:
+                continue
+            crop = np.pad(lab[box] == i, 1)
+            origin = (box[0].start - 1, box[1].start - 1, box[2].start - 1)
+            out.append((crop, origin, value))
+    return out
+
+
+def prune_volume_component(
+    crop: np.ndarray,
+    origin: tuple[int, int, int],
+    options: PruneOptions,
+    spacing: tuple[float, float, float],
+) -> VolumeComponent:
+    """The curve skeleton of one padded component crop and its pruning."""
+    axis = VolumeSkeleton.curve_skeleton(crop, spacing, origin)
+    norm = axis.normalisation(options.beta)
+    seq = pruning_sequence(axis, norm.alpha, norm.lbar)
+    chosen = choose_step(seq.objective)
+    min_margin = options.min_margin or 0.0
+    if min_margin > 0 and seq.alpha is not None:
+        # As for images: the cheapest end branch is the sequence's next removal, and its
+        # margin that step's rise of λ.
+        lam = seq.objective
+        while chosen < len(seq.removed) and lam[chosen + 1] - lam[chosen] < min_margin:
+            chosen += 1
+    answer = seq.skeleton_at(chosen)
+    margins = branch_margins(answer.graph, seq, chosen)
+    return VolumeComponent(axis, answer, seq, chosen, margins)  # type: ignore[arg-type]
+
+
+def prune_volume(
+    source: Any,
+    options: PruneOptions,
+    volume_options: VolumeOptions,
+    output: OutputOptions | None = None,
+) -> VolumeResult:
+    """Prune every 26-connected component of a volume (what :func:`skelprune.prune` runs
+    for a 3-D array or a ``.npy`` path).
+
+    Raises
+    ------
+    EmptyMaskError
+        No voxel inside.
+    InvalidOptionError
+        An option that holds for images only (``method="dce"``, ``choice="noise-floor"``).
+    """
+    applied = options.resolved()
+    if applied.method != "bayesian":
+        raise InvalidOptionError(
+            "method='dce' follows a contour and holds for images only; a volume is pruned "
+            "with method='bayesian'"
+        )
+    if applied.choice != "argmin":
+        raise InvalidOptionError(
+            f"choice={applied.choice!r} holds for images only; a volume's answer is the argmin"
+        )
+    volume = read_volume(source)
+    if not volume.any():
+        raise EmptyMaskError("the volume has no voxel inside")
+    spacing = volume_options.spacing
+    result = VolumeResult(
+        shape=(int(volume.shape[0]), int(volume.shape[1]), int(volume.shape[2])),
+        spacing=spacing,
+        options=applied,
+        output=OutputOptions() if output is None else output,
+        volume=volume != 0,
+    )
+    for crop, origin, label in volume_components(volume):
+        component = prune_volume_component(crop, origin, applied, spacing)
+        component.label = label
+        result.components.append(component)
+    return result

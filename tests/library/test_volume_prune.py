@@ -1,0 +1,138 @@
+"""Pruning volumes: the sequence against a naive oracle that repaints from scratch, and
+the 3-D document, table, networkx, SWC and overlay (docs/volumes.md)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+import skelprune
+from skelprune.errors import InvalidImageError, InvalidOptionError
+from skelprune.grid3d.skeleton import VolumeSkeleton
+from skelprune.pruning.bayesian import pruning_sequence
+from testkit import volume_oracle as oracle
+from testkit.volumes import random_tree, tube
+
+SPACINGS = [(1.0, 1.0, 1.0), (3.0, 1.0, 1.0), (0.7, 1.3, 0.4)]
+
+
+def largest(v: np.ndarray) -> np.ndarray:
+    lab, _ = ndimage.label(v, np.ones((3, 3, 3)))
+    return lab == np.argmax(np.bincount(lab.ravel())[1:]) + 1
+
+
+def cases() -> list[tuple[str, np.ndarray]]:
+    out = []
+    for seed in range(2):
+        out.append((f"tree{seed}", random_tree(seed, size=48, depth=2).volume(0.7, seed)))
+        noise = np.random.default_rng(seed).random((9, 10, 11)) < 0.55
+        out.append((f"noise{seed}", largest(noise)))
+    return out
+
+
+CASES = cases()
+
+
+@pytest.mark.parametrize("spacing", SPACINGS)
+@pytest.mark.parametrize("name", [name for name, _ in CASES])
+def test_sequence_matches_the_oracle_that_repaints(name, spacing) -> None:
+    volume = dict(CASES)[name]
+    sk = VolumeSkeleton.curve_skeleton(volume, spacing)
+    norm = sk.normalisation(9.0)
+    assert norm.alpha is not None
+    seq = pruning_sequence(sk, norm.alpha, norm.lbar)
+    order, lams = oracle.naive_sequence(
+        sk.working_graph(), sk.volume, sk.z, sk.y, sk.x, sk.r2, spacing, norm.alpha, norm.lbar
+    )
+    assert seq.removed == order
+    assert seq.objective.tolist() == lams
+    # the lost volume of every step, painted from scratch
+    for k in (0, len(seq.removed) // 2, len(seq.removed)):
+        at = seq.skeleton_at(k)
+        idx = at.points()
+        lost = oracle.lost_volume(sk.volume, sk.z[idx], sk.y[idx], sk.x[idx], sk.r2[idx], spacing)
+        assert seq.lost[k] == lost
+
+
+def test_some_cases_remove_branches_and_merge() -> None:
+    """The oracle comparison above is not vacuous: branches go, junctions dissolve."""
+    removed = merges = 0
+    for _, volume in CASES:
+        sk = VolumeSkeleton.curve_skeleton(volume)
+        norm = sk.normalisation(9.0)
+        seq = pruning_sequence(sk, norm.alpha, norm.lbar)
+        removed += len(seq.removed)
+        merges += sum(m is not None for m in seq.merges)
+    assert removed >= 6 and merges >= 3
+
+
+def test_document_has_z_spacing_and_physical_lengths() -> None:
+    bar = tube(length=30.0, radius=3.0).volume()  # along x, the last axis
+    doc = skelprune.prune(bar).to_dict()
+    assert doc["dimensions"] == 3 and doc["spacing"] == [1.0, 1.0, 1.0]
+    assert (doc["depth"], doc["height"], doc["width"]) == bar.shape
+    comp = doc["components"][0]
+    (branch,) = comp["skeleton"]["branches"]
+    pts = np.array(branch["points"])
+    assert pts.shape[1] == 4
+    assert np.ptp(pts[:, 0]) > 20 and np.ptp(pts[:, 1]) <= 1 and np.ptp(pts[:, 2]) <= 1
+    assert {"x", "y", "z", "radius"} <= set(comp["skeleton"]["nodes"][0])
+    # the same bar along z, slices twice as thick: the same physical length
+    along_z = np.ascontiguousarray(np.transpose(bar, (2, 1, 0))[::2])
+    doc2 = skelprune.prune(along_z, spacing=(2.0, 1.0, 1.0)).to_dict()
+    (branch2,) = doc2["components"][0]["skeleton"]["branches"]
+    assert doc2["spacing"] == [2.0, 1.0, 1.0]
+    assert branch2["length"] == pytest.approx(branch["length"], abs=2.5)
+    assert np.ptp(np.array(branch2["points"])[:, 2]) > 10  # z varies: the first axis
+
+
+def test_npy_path_labels_table_networkx_swc_and_overlay(tmp_path) -> None:
+    vol = np.zeros((20, 20, 40), np.uint8)
+    vol[3:9, 3:9, 3:37] = 2
+    vol[12:18, 12:18, 3:37] = 5
+    path = tmp_path / "vol.npy"
+    np.save(path, vol)
+    res = skelprune.prune(str(path), spacing=(1.0, 1.0, 0.5))
+    doc = res.to_dict()
+    assert [c["label"] for c in doc["components"]] == [2, 5]
+    table = res.summary()
+    assert list(table["label"]) == [2, 5]
+    lengths = [c["skeleton"]["branches"][0]["length"] for c in doc["components"]]
+    assert table["length"].tolist() == lengths
+    assert all(12 < v < 17 for v in lengths)  # about 30 voxels of 0.5
+    assert table["max_width"].max() <= 6.0 + 1e-9
+    g = res.to_networkx()
+    assert g.number_of_nodes() == 4 and g.number_of_edges() == 2
+    swc = [line.split() for line in res.to_swc().splitlines() if not line.startswith("#")]
+    n_points = sum(c.skeleton.n_points for c in res.components)
+    assert len(swc) == n_points
+    ids = [int(r[0]) for r in swc]
+    parents = [int(r[6]) for r in swc]
+    assert ids == list(range(1, n_points + 1))
+    assert parents.count(-1) == 2 and all(p < i for i, p in zip(ids, parents, strict=True))
+    img = res.render_overlay()
+    # voxels drawn in their physical proportions: z and y twice as long as x
+    assert img.shape == (2 * 20 + 4 + 2 * 20, 40 + 4 + 2 * 20, 3)
+    assert ((img == (210, 20, 20)).all(-1)).any()
+
+
+def test_volume_refusals(tmp_path) -> None:
+    bar = tube(length=20.0, radius=2.0).volume()
+    res = skelprune.prune(bar)
+    with pytest.raises(InvalidOptionError, match="GeoJSON"):
+        res.to_geojson()
+    with pytest.raises(InvalidOptionError, match="images only"):
+        skelprune.prune(bar, method="dce")
+    with pytest.raises(InvalidOptionError, match="spacing"):
+        skelprune.prune(bar, spacing=(1.0, -1.0, 1.0))
+    with pytest.raises(InvalidImageError, match="3-D"):
+        skelprune.prune(np.zeros((3, 3)), spacing=(1, 1, 1))
+    with pytest.raises(InvalidImageError, match="booleans or integer"):
+        skelprune.prune(bar.astype(float))
+    bad = tmp_path / "bad.npy"
+    bad.write_bytes(b"not an array")
+    with pytest.raises(InvalidImageError, match="npy"):
+        skelprune.prune(str(bad))
+    with pytest.raises(TypeError, match="volumes"):
+        skelprune.prune(bar, foreground="zero")

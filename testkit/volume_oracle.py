@@ -90,11 +90,38 @@ def naive_sequence(graph, volume, z, y, x, r2, spacing, alpha: float, lbar: floa
                 out = [u + v for u, v in zip(out, br.steps, strict=True)]
         return out
 
+    balls = [
+        ball_counts(volume.shape, [z[p]], [y[p]], [x[p]], [r2[p]], spacing) > 0
+        for p in range(len(z))
+    ]
+    rim = float(sp[0] ** 2 + sp[1] ** 2 + sp[2] ** 2)
+
+    def is_limb(b: int) -> bool:
+        # docs/volumes.md, "Limbs": at least 2·r / h voxels deeper than the rim whose
+        # whole ball no other voxel's ball touches, r the largest of them.
+        others = np.zeros(volume.shape, bool)
+        for c, br in enumerate(graph.branches):
+            if br.alive and c != b:
+                for p in br.points:
+                    others |= balls[p]
+        for j in graph.junctions:
+            if j.alive:
+                for p in j.points:
+                    others |= balls[p]
+        whole = [
+            float(r2[p])
+            for p in graph.branches[b].points
+            if r2[p] > rim and not (others & balls[p]).any()
+        ]
+        return bool(whole) and len(whole) * float(sp.min()) >= 2.0 * math.sqrt(max(whole))
+
     lost = lost_without()
     lams = [lam(lost, graph.total_steps())]
     order = []
+    limbs: set[int] = set()  # found once, kept for good
     while True:
         ends = [b for b in range(len(graph.branches)) if graph.is_end_branch(b)]
+        ends = [b for b in ends if b not in limbs]
         if not ends:
             break
         keys = []
@@ -113,8 +140,18 @@ def naive_sequence(graph, volume, z, y, x, r2, spacing, alpha: float, lbar: floa
                     b,
                 )
             )
-        pick = min(keys)[-1]
-        graph.remove_end_branch(pick)
+        pick = None
+        for key in sorted(keys):  # the best that is not a limb
+            if is_limb(key[-1]):
+                limbs.add(key[-1])
+                continue
+            pick = key[-1]
+            break
+        if pick is None:
+            break
+        merged = graph.remove_end_branch(pick)
+        if merged is not None and merged[1] in limbs:
+            limbs.add(merged[0])
         order.append(pick)
         lost = lost_without()
         lams.append(lam(lost, graph.total_steps()))

@@ -21,6 +21,7 @@ from ._topology import OFFSETS, step_lengths
 from .balls import reconstruction
 from .branches import VolumeBranchGraph
 from .coverage import VolumeCoverage
+from .limbs import VolumeLimbs
 from .medial_axis import curve_skeleton
 
 __all__ = ["VolumeSkeleton"]
@@ -107,9 +108,9 @@ class VolumeSkeleton:
             self.spacing,
         )
 
-    def limb_test(self, graph: VolumeBranchGraph) -> None:
-        """No limb test on the volume grid yet: every end branch is a candidate."""
-        return None
+    def limb_test(self, graph: VolumeBranchGraph) -> VolumeLimbs:
+        """The limbs of ``graph`` (docs/volumes.md, "Limbs")."""
+        return VolumeLimbs(graph, self.volume, self.z, self.y, self.x, self.r2, self.spacing)
 
     # -- what the pipeline and the outputs ask ------------------------------------------
     @property

@@ -136,3 +136,29 @@ def test_volume_refusals(tmp_path) -> None:
         skelprune.prune(str(bad))
     with pytest.raises(TypeError, match="volumes"):
         skelprune.prune(bar, foreground="zero")
+
+
+def body_with_arms(spacing) -> np.ndarray:
+    """A ball of radius 7 with three thin arms (radius 2) reaching far out of it."""
+    shape = tuple(round(e / s) for e, s in zip((18, 44, 44), spacing, strict=True))
+    zz, yy, xx = (g * s for g, s in zip(np.indices(shape).astype(float), spacing, strict=True))
+    v = (zz - 9) ** 2 + (yy - 20) ** 2 + (xx - 22) ** 2 < 7**2
+    v |= ((zz - 9) ** 2 + (yy - 20) ** 2 < 4) & (xx > 2) & (xx < 42)
+    v |= ((zz - 9) ** 2 + (xx - 22) ** 2 < 4) & (yy > 20) & (yy < 42)
+    return v
+
+
+@pytest.mark.parametrize("spacing", [(1.0, 1.0, 1.0), (0.7, 1.3, 0.4)])
+def test_limbs_are_kept_and_the_oracle_agrees(spacing, monkeypatch) -> None:
+    sk = VolumeSkeleton.curve_skeleton(body_with_arms(spacing), spacing)
+    norm = sk.normalisation(9.0)
+    assert len(sk.end_branches()) == 3
+    seq = pruning_sequence(sk, norm.alpha, norm.lbar)
+    order, lams = oracle.naive_sequence(
+        sk.working_graph(), sk.volume, sk.z, sk.y, sk.x, sk.r2, spacing, norm.alpha, norm.lbar
+    )
+    assert seq.removed == order == []  # every arm is a limb
+    assert seq.objective.tolist() == lams
+    # without the limb test, the trade-off alone removes arms
+    monkeypatch.setattr(VolumeSkeleton, "limb_test", lambda self, graph: None)
+    assert pruning_sequence(sk, norm.alpha, norm.lbar).removed

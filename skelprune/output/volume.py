@@ -234,6 +234,15 @@ class VolumeResult:
                 )
         return pd.DataFrame(rows)
 
+    @property
+    def warnings(self) -> list[dict[str, Any]]:
+        """None for a volume (the image result's warnings come from rasterising)."""
+        return []
+
+    def to_csv(self) -> str:
+        """:meth:`summary` as CSV."""
+        return str(self.summary().to_csv(index=False))
+
     def to_networkx(self) -> Any:
         """The skeleton as a ``networkx.MultiGraph``: nodes ``(component, node id)`` with
         the document's node fields, one edge per branch keyed by its id (a loop: a
@@ -307,7 +316,10 @@ class VolumeResult:
         """RGB image of the three maximum-intensity projections (along ``z`` top left,
         along ``y`` below it, along ``x`` to its right, as orthogonal views are laid out),
         the volume grey, the curve skeleton's removed voxels orange, the answer red and
-        its end points blue; voxels stretched to their physical proportions."""
+        its end points blue (three voxels a side); voxels stretched to their physical
+        proportions."""
+        from scipy.ndimage import binary_dilation
+
         dz, dy, dx = self.spacing
         unit = min(self.spacing)
         fz, fy, fx = (max(1, round(d / unit)) * scale for d in (dz, dy, dx))
@@ -332,8 +344,11 @@ class VolumeResult:
             img[mip(self.volume)] = (205, 205, 205)
             img[mip(axis_m)] = (245, 160, 60)
             img[mip(kept)] = (210, 20, 20)
-            img[mip(ends)] = (20, 60, 220)
-            return np.repeat(np.repeat(img, f0, axis=0), f1, axis=1)
+            img = np.repeat(np.repeat(img, f0, axis=0), f1, axis=1)
+            # end points as blocks of three voxels a side, to be seen at any scale
+            big = np.repeat(np.repeat(binary_dilation(mip(ends), np.ones((3, 3))), f0, 0), f1, 1)
+            img[big] = (20, 60, 220)
+            return img
 
         top = view(0, fy, fx)  # rows y, columns x
         front = view(1, fz, fx)  # rows z, columns x

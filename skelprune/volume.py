@@ -24,13 +24,20 @@ from .output.volume import VolumeComponent, VolumeResult
 from .pruning.bayesian import choose_step, pruning_sequence
 from .pruning.margin import branch_margins
 
-__all__ = ["is_volume", "prune_volume", "read_volume", "volume_components"]
+__all__ = ["IMAGE_CHANNELS", "is_volume", "prune_volume", "read_volume", "volume_components"]
+
+
+#: The most channels an image array has (RGBA): a 3-D array whose last axis is no longer
+#: is an image, read as one, unless volume options are given.
+IMAGE_CHANNELS = 4
 
 
 def is_volume(source: Any) -> bool:
-    """Whether ``source`` is a volume: a 3-D array, or the path of a ``.npy`` file."""
+    """Whether ``source`` is a volume without being told: the path of a ``.npy`` file, or
+    a 3-D array whose last axis is longer than an image's channels (:data:`IMAGE_CHANNELS`;
+    a ``(Z, Y, X)`` volume with ``X ≤ 4`` is read as a volume when ``spacing`` is given)."""
     if isinstance(source, np.ndarray):
-        return source.ndim == 3
+        return source.ndim == 3 and source.shape[-1] > IMAGE_CHANNELS
     return isinstance(source, str | os.PathLike) and str(source).lower().endswith(".npy")
 
 

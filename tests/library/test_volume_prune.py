@@ -162,3 +162,42 @@ def test_limbs_are_kept_and_the_oracle_agrees(spacing, monkeypatch) -> None:
     # without the limb test, the trade-off alone removes arms
     monkeypatch.setattr(VolumeSkeleton, "limb_test", lambda self, graph: None)
     assert pruning_sequence(sk, norm.alpha, norm.lbar).removed
+
+
+def test_a_voxel_a_torus_and_a_hollow_ball_give_documents() -> None:
+    from testkit.volumes import ball, torus
+
+    voxel = np.zeros((3, 3, 3), bool)
+    voxel[1, 1, 1] = True
+    (comp,) = skelprune.prune(voxel).to_dict()["components"]
+    assert comp["skeleton"]["endpoints"] == 1 and comp["steps"] == 0
+    assert comp["skeleton"]["branches"][0]["points"] == [[1.0, 1.0, 1.0, 1.0]]
+
+    res = skelprune.prune(torus().volume())
+    (comp,) = res.to_dict()["components"]
+    (loop,) = comp["skeleton"]["branches"]  # one tunnel: one cycle, nothing to prune
+    assert loop["source"] is None and comp["skeleton"]["endpoints"] == 0
+    g = res.to_networkx()
+    assert g.number_of_edges() == 1 and nx_self_loops(g) == 1
+    swc = [line.split() for line in res.to_swc().splitlines()[1:]]
+    assert [r[6] for r in swc].count("-1") == 1  # a tree: of the cycle one step left out
+
+    shell = ball(8.0).volume() & ~ndimage.binary_erosion(ball(8.0).volume(), iterations=3)
+    doc = skelprune.prune(shell).to_dict()  # a cavity: a closed shell, one branch
+    assert len(doc["components"][0]["skeleton"]["branches"]) == 1
+
+
+def nx_self_loops(g) -> int:
+    import networkx as nx
+
+    return nx.number_of_selfloops(g)
+
+
+def test_colour_image_arrays_stay_images_unless_spacing_is_given() -> None:
+    rgb = np.zeros((20, 30, 3), np.uint8)
+    rgb[5:15, 5:25] = 255
+    assert type(skelprune.prune(rgb)).__name__ == "PruneResult"
+    thin = np.zeros((20, 30, 3), bool)
+    thin[5:15, 5:25, 1] = True
+    res = skelprune.prune(thin, spacing=(1, 1, 1))
+    assert res.to_dict()["dimensions"] == 3

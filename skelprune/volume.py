@@ -3,10 +3,10 @@
 The same pruning as for images (docs/algorithm.md), through the grid interface of
 :mod:`skelprune.pruning.grid`: the curve skeleton of each 26-connected component
 (:mod:`skelprune.grid3d`), end branches removed in the order that trades length against
-lost volume, the answer chosen by ``argmin λ`` and its end branches of margin below
-``min_margin`` dropped. What the image pipeline has and a volume does not (docs/volumes.md):
-the coarse DCE stage and ``method="dce"`` (both follow a contour), the noise-floor choice,
-the tips' cuts, and the limbs' test.
+lost volume (limbs kept), the answer chosen by ``argmin λ``, its end branches of margin
+below ``min_margin`` dropped and its tips cut (``trim``). What the image pipeline has
+and a volume does not (docs/volumes.md): the coarse DCE stage and ``method="dce"`` (both
+follow a contour), and the noise-floor choice.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ import numpy as np
 
 from .errors import EmptyMaskError, InvalidImageError, InvalidOptionError
 from .grid3d.skeleton import VolumeSkeleton
+from .grid3d.tips import trim_volume_tips
 from .options import OutputOptions, PruneOptions, VolumeOptions
 from .output.volume import VolumeComponent, VolumeResult
 from .pruning.bayesian import choose_step, pruning_sequence
@@ -109,8 +110,12 @@ def prune_volume_component(
         while chosen < len(seq.removed) and lam[chosen + 1] - lam[chosen] < min_margin:
             chosen += 1
     answer = seq.skeleton_at(chosen)
-    margins = branch_margins(answer.graph, seq, chosen)
-    return VolumeComponent(axis, answer, seq, chosen, margins)  # type: ignore[arg-type]
+    trim = None
+    if options.trim and seq.alpha is not None:
+        trim = trim_volume_tips(answer, seq.lost[chosen], seq.alpha, seq.lbar)  # type: ignore[arg-type]
+        answer = trim.skeleton
+    margins = branch_margins(answer.graph, seq, chosen, trim)  # type: ignore[arg-type]
+    return VolumeComponent(axis, answer, seq, chosen, margins, trim)  # type: ignore[arg-type]
 
 
 def prune_volume(

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["ball_counts", "lost_volume", "naive_sequence", "squared_distance"]
+__all__ = ["ball_counts", "lost_volume", "naive_sequence", "naive_trim", "squared_distance"]
 
 
 def _squared(offsets: np.ndarray, spacing) -> np.ndarray:
@@ -156,3 +156,103 @@ def naive_sequence(graph, volume, z, y, x, r2, spacing, alpha: float, lbar: floa
         lost = lost_without()
         lams.append(lam(lost, graph.total_steps()))
     return order, lams
+
+
+def naive_trim(graph, volume, z, y, x, r2, spacing, alpha: float, lbar: float):
+    """The tips' cuts of docs/volumes.md ("Tips"), every candidate repainted from
+    scratch: the cuts ``(branch, end, k)`` in the order made, the lost voxels after them
+    and ``λ``. ``graph`` (a copy of the answer's graph) is cut in place; which points a
+    cut drops comes from its ``tip`` (the model), everything else is written again here.
+    """
+    import math
+
+    volume = np.asarray(volume) != 0
+    area = int(volume.sum())
+    sp = [float(s) for s in spacing]
+    h = min(sp)
+    kinds = [((k + 1) >> 2 & 1, (k + 1) >> 1 & 1, (k + 1) & 1) for k in range(7)]
+    weights = [math.sqrt(float(((np.array(k) * np.array(sp)) ** 2).sum())) for k in kinds]
+    balls = {}
+
+    def ball(p: int) -> np.ndarray:
+        if p not in balls:
+            balls[p] = ball_counts(volume.shape, [z[p]], [y[p]], [x[p]], [r2[p]], spacing) > 0
+        return balls[p]
+
+    def points_now() -> set[int]:
+        pts = set()
+        for br in graph.branches:
+            if br.alive:
+                pts.update(br.points)
+        for j in graph.junctions:
+            if j.alive:
+                pts.update(j.points)
+        return pts
+
+    def lost_of(pts) -> int:
+        covered = np.zeros(volume.shape, bool)
+        for p in pts:
+            covered |= ball(p)
+        return int((volume & ~covered).sum())
+
+    def length(steps) -> float:
+        total = 0.0
+        for c, w in zip(steps, weights, strict=True):
+            total += c * w
+        return total
+
+    def distance(p: int, s: int) -> float:
+        a = float(z[p] - z[s]) * sp[0]
+        b = float(y[p] - y[s]) * sp[1]
+        c = float(x[p] - x[s]) * sp[2]
+        return math.sqrt(a * a + b * b + c * c)
+
+    def candidates(b: int, e: int):
+        points, drop, steps = graph.tip(b, e)
+        m = len(steps) + (0 if graph.branches[b].node[1 - e] is None else 1)
+        now = points_now()
+        base = lost_of(now)
+        out = []
+        dropped = [0] * 7
+        for k in range(m):
+            if k:
+                dropped[steps[k - 1]] += 1
+            gone = {p for p, d in zip(points, drop, strict=True) if d < k}
+            lost_k = lost_of(now - gone) - base
+            s = points[k]
+            remnant = k == 0 or (
+                lost_k <= k and all(distance(p, s) < math.sqrt(float(r2[s])) + h for p in gone)
+            )
+            out.append((lost_k, tuple(dropped), remnant, gone))
+        return out
+
+    def best(cands, lost0: int) -> int:
+        total = graph.total_steps()
+        pick, pick_lam = 0, math.inf
+        for k, (lost_k, st, remnant, _) in enumerate(cands):
+            if not remnant:
+                continue
+            rest = [u - v for u, v in zip(total, st, strict=True)]
+            lam = alpha * (lost0 + lost_k) / area + math.log(length(rest) / lbar + 1.0)
+            if lam <= pick_lam:  # ties to the shorter tip
+                pick, pick_lam = k, lam
+        return pick
+
+    lost = lost_of(points_now())
+    keyed = []
+    for b, e in graph.free_ends():
+        cands = candidates(b, e)
+        k = best(cands, lost)
+        p = graph.free_end_point(b, e)
+        keyed.append((-length(cands[k][1]), int(z[p]), int(y[p]), int(x[p]), b, e))
+    cuts = []
+    for *_, b, e in sorted(keyed):
+        cands = candidates(b, e)
+        k = best(cands, lost)
+        cuts.append((b, e, k))
+        if k:
+            lost_k, st, _, gone = cands[k]
+            graph.cut_tip(b, e, sorted(gone), st)
+            lost += lost_k
+    lam = alpha * lost / area + math.log(length(graph.total_steps()) / lbar + 1.0)
+    return cuts, lost, lam

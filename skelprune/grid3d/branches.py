@@ -14,6 +14,7 @@ pruning weighs are all the skeleton's.
 from __future__ import annotations
 
 import heapq
+import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -210,7 +211,62 @@ class VolumeBranchGraph:
             steps = _add(steps, st)
         return steps
 
+    def free_ends(self) -> list[tuple[int, int]]:
+        """``(branch, end)`` of every free end a tip cut may shorten: the free end of each
+        end branch and both ends of a single path of two voxels or more."""
+        out = []
+        for b, br in enumerate(self.branches):
+            if not br.alive or br.loop:
+                continue
+            free = [e for e in (0, 1) if br.node[e] is None]
+            if len(free) == 1 or (len(free) == 2 and len(self.path(b)) > 1):
+                out.extend((b, e) for e in free)
+        return out
+
+    def free_end_point(self, b: int, e: int) -> int:
+        path = self.path(b)
+        return path[0] if e == 0 else path[-1]
+
+    def tip(self, b: int, e: int) -> tuple[list[int], list[int], list[int]]:
+        """Branch ``b`` seen from its free end ``e``: its points, the drop index of each
+        (a cut of ``k`` drops those below ``k``; the path's ``i``-th point from the end
+        has ``i``, a voxel beside the path goes with the last path point it touches,
+        directly or through other such voxels) and the step kind of each step of the
+        path from the end."""
+        path = self.path(b)
+        if e == 1:
+            path = path[::-1]
+        kinds = [self._step(p, q) for p, q in itertools.pairwise(path)]
+        index = {p: i for i, p in enumerate(path)}
+        side = [p for p in self.branches[b].points if p not in index]
+        drop: dict[int, int] = {}
+        pending = list(side)
+        while pending:
+            left = []
+            for p in pending:
+                near = [index.get(int(q), drop.get(int(q), -1)) for q in self.nbr[p] if q >= 0]
+                best = max(near, default=-1)
+                if best < 0:
+                    left.append(p)
+                else:
+                    drop[p] = best
+            if len(left) == len(pending):  # touches nothing placed: never dropped
+                for p in left:
+                    drop[p] = len(path) - 1
+                break
+            pending = left
+        return path + side, list(range(len(path))) + [drop[p] for p in side], kinds
+
     # -- mutation ------------------------------------------------------------------
+    def cut_tip(self, b: int, e: int, gone: list[int], steps: Steps) -> None:
+        """Drop voxels ``gone`` from the free end ``e`` of branch ``b``, with ``steps``."""
+        br = self.branches[b]
+        out = set(gone)
+        br.points = [p for p in br.points if p not in out]
+        br.side = [p for p in br.side if p not in out]
+        br.steps = _add(br.steps, steps, -1)
+        self.steps = _add(self.steps, steps, -1)
+
     def remove_end_branch(self, b: int) -> tuple[int, int, int] | None:
         """Remove end branch ``b``; ``(kept, absorbed, junction)`` when its junction was
         dissolved and branch ``absorbed`` and the junction's voxels joined ``kept``."""

@@ -9,6 +9,7 @@ counted in voxels.
 from __future__ import annotations
 
 import io
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -16,8 +17,9 @@ import numpy as np
 
 from ..errors import InvalidOptionError
 from ..grid3d.skeleton import VolumeSkeleton
+from ..grid3d.tips import VolumeTrim
 from ..options import OutputOptions, PruneOptions
-from ..pruning.bayesian import PruningSequence
+from ..pruning.bayesian import PruningSequence, target
 from ..pruning.margin import Margins
 
 __all__ = ["VolumeComponent", "VolumeResult"]
@@ -32,6 +34,7 @@ class VolumeComponent:
     sequence: PruningSequence
     chosen_step: int
     margins: Margins
+    trim: VolumeTrim | None = None
     label: int | None = None
 
     @property
@@ -42,7 +45,20 @@ class VolumeComponent:
     @property
     def rer(self) -> float:
         """Share of the component's voxels the answer's balls miss."""
-        return self.sequence.lost[self.chosen_step] / self.volume
+        return self.lost / self.volume
+
+    @property
+    def lost(self) -> int:
+        """Voxels of the component the answer's balls miss."""
+        return self.sequence.lost[self.chosen_step] if self.trim is None else self.trim.lost
+
+    @property
+    def objective(self) -> float:
+        """``λ`` of the answer (its tips cut, if they were)."""
+        seq = self.sequence
+        if self.trim is None or seq.alpha is None:
+            return float(seq.objective[self.chosen_step])
+        return target(self.lost, seq.area, self.skeleton.length, seq.alpha, seq.lbar)
 
     def _where(self, p: int) -> list[float]:
         s, (oz, oy, ox) = self.skeleton, self.skeleton.origin
@@ -123,18 +139,20 @@ class VolumeComponent:
     def to_dict(self) -> dict[str, Any]:
         seq = self.sequence
         nodes, branches = self.graph_doc()
-        lam = seq.objective
+        ss = float(seq.ss[self.chosen_step])
+        if self.trim is not None and seq.lbar > 0:
+            ss = math.log(self.skeleton.length / seq.lbar + 1.0)
         return {
             "label": self.label,
             "volume": self.volume,
             "alpha": seq.alpha,
             "lbar": seq.lbar,
             "rer": self.rer,
-            "ss": float(seq.ss[self.chosen_step]),
-            "objective": float(lam[self.chosen_step]),
+            "ss": ss,
+            "objective": self.objective,
             "chosen_step": self.chosen_step,
             "steps": len(seq.removed),
-            "tips_trimmed": False,
+            "tips_trimmed": self.trim is not None,
             "medial_axis": {
                 "rer": seq.lost[0] / self.volume,
                 "length": self.axis.length,
@@ -187,7 +205,7 @@ class VolumeResult:
             "beta": opts.beta,
             "coarse": None,
             "choice": opts.choice,
-            "trim": False,
+            "trim": opts.trim,
             "min_margin": opts.min_margin,
             "components": [c.to_dict() for c in self.components],
         }
@@ -327,10 +345,10 @@ class VolumeResult:
         kept = np.zeros(self.shape, bool)
         ends = np.zeros(self.shape, bool)
         for comp in self.components:
-            for sk, target in ((comp.axis, axis_m), (comp.skeleton, kept)):
+            for sk, drawn in ((comp.axis, axis_m), (comp.skeleton, kept)):
                 idx = sk.points()
                 oz, oy, ox = sk.origin
-                target[sk.z[idx] + oz, sk.y[idx] + oy, sk.x[idx] + ox] = True
+                drawn[sk.z[idx] + oz, sk.y[idx] + oy, sk.x[idx] + ox] = True
             for node in comp.graph_doc()[0]:
                 if node["kind"] == "endpoint":
                     ends[int(node["z"]), int(node["y"]), int(node["x"])] = True

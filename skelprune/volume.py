@@ -17,7 +17,13 @@ from typing import Any
 
 import numpy as np
 
-from .errors import EmptyMaskError, InvalidImageError, InvalidOptionError
+from .errors import (
+    EmptyMaskError,
+    ImageTooLargeError,
+    InvalidImageError,
+    InvalidOptionError,
+    SkelpruneError,
+)
 from .grid3d.skeleton import VolumeSkeleton
 from .grid3d.tips import trim_volume_tips
 from .options import OutputOptions, PruneOptions, VolumeOptions
@@ -25,7 +31,14 @@ from .output.volume import VolumeComponent, VolumeResult
 from .pruning.bayesian import choose_step, pruning_sequence
 from .pruning.margin import branch_margins
 
-__all__ = ["IMAGE_CHANNELS", "is_volume", "prune_volume", "read_volume", "volume_components"]
+__all__ = [
+    "IMAGE_CHANNELS",
+    "MAX_VOLUME_VOXELS",
+    "is_volume",
+    "prune_volume",
+    "read_volume",
+    "volume_components",
+]
 
 
 #: The most channels an image array has (RGBA): a 3-D array whose last axis is no longer
@@ -33,30 +46,92 @@ __all__ = ["IMAGE_CHANNELS", "is_volume", "prune_volume", "read_volume", "volume
 IMAGE_CHANNELS = 4
 
 
+#: The most voxels a volume read from a file may declare (a 1024³ stack): checked from
+#: the header, before anything is decoded.
+MAX_VOLUME_VOXELS = 1 << 30
+TIFF_SUFFIXES = (".tif", ".tiff")
+
+
 def is_volume(source: Any) -> bool:
-    """Whether ``source`` is a volume without being told: the path of a ``.npy`` file, or
-    a 3-D array whose last axis is longer than an image's channels (:data:`IMAGE_CHANNELS`;
-    a ``(Z, Y, X)`` volume with ``X ≤ 4`` is read as a volume when ``spacing`` is given)."""
+    """Whether ``source`` is a volume without being told: the path of a ``.npy`` file or
+    of a multi-page TIFF (a stack), or a 3-D array whose last axis is longer than an
+    image's channels (:data:`IMAGE_CHANNELS`; a ``(Z, Y, X)`` volume with ``X ≤ 4`` is read
+    as a volume when ``spacing`` is given)."""
     if isinstance(source, np.ndarray):
         return source.ndim == 3 and source.shape[-1] > IMAGE_CHANNELS
-    return isinstance(source, str | os.PathLike) and str(source).lower().endswith(".npy")
+    if not isinstance(source, str | os.PathLike):
+        return False
+    name = str(source).lower()
+    if name.endswith(".npy"):
+        return True
+    if name.endswith(TIFF_SUFFIXES):
+        try:
+            return _stack_pages(source) > 1
+        except Exception:  # not a readable TIFF: the image reader says what is wrong
+            return False
+    return False
+
+
+def _stack_pages(path: Any) -> int:
+    """Pages of a TIFF, or slices of a single 3-D page (the header only)."""
+    import tifffile
+
+    with tifffile.TiffFile(path) as tif:
+        n = len(tif.pages)
+        return n if n > 1 else int(getattr(tif.pages.first, "imagedepth", 1))
+
+
+def _read_stack(path: Any) -> np.ndarray:
+    """A multi-page TIFF as a ``(pages, height, width)`` array: one-channel pages of one
+    size, at most :data:`MAX_VOLUME_VOXELS` voxels by the header, before decoding."""
+    import tifffile
+
+    try:
+        with tifffile.TiffFile(path) as tif:
+            series = tif.series[0]
+            shape = tuple(int(v) for v in series.shape)
+            if len(shape) != 3:
+                raise InvalidImageError(
+                    f"a TIFF stack holds one-channel pages of one size; this one reads as "
+                    f"{'x'.join(map(str, shape))}"
+                )
+            voxels = shape[0] * shape[1] * shape[2]
+            if voxels > MAX_VOLUME_VOXELS:
+                raise ImageTooLargeError(
+                    f"the stack has {voxels} voxels, more than the {MAX_VOLUME_VOXELS} read"
+                )
+            return np.asarray(series.asarray())
+    except SkelpruneError:
+        raise
+    except Exception as exc:  # tifffile raises many kinds on a broken file
+        raise InvalidImageError(f"cannot read {os.fspath(path)!r} as a TIFF stack: {exc}") from None
 
 
 def read_volume(source: Any) -> np.ndarray:
-    """A volume as an array: ``source`` itself, or a ``.npy`` file loaded (no pickles).
+    """A volume as an array: ``source`` itself, a ``.npy`` file (no pickles) or a
+    multi-page TIFF (its pages along ``z``).
 
     Raises
     ------
     InvalidImageError
         Not a 3-D array of booleans or integers, or an unreadable file.
+    ImageTooLargeError
+        A file declaring more than :data:`MAX_VOLUME_VOXELS` voxels.
     """
-    if isinstance(source, str | os.PathLike):
+    if isinstance(source, str | os.PathLike) and str(source).lower().endswith(TIFF_SUFFIXES):
+        arr = _read_stack(source)
+    elif isinstance(source, str | os.PathLike):
         try:
-            arr = np.load(Path(source), allow_pickle=False)
+            # mapped, not read: the header's size is checked before the voxels are touched
+            arr = np.load(Path(source), mmap_mode="r", allow_pickle=False)
         except (OSError, ValueError) as exc:
             raise InvalidImageError(
                 f"cannot read {os.fspath(source)!r} as a .npy array: {exc}"
             ) from None
+        if arr.size > MAX_VOLUME_VOXELS:
+            raise ImageTooLargeError(
+                f"the array has {arr.size} voxels, more than the {MAX_VOLUME_VOXELS} read"
+            )
     else:
         arr = np.asarray(source)
     if arr.ndim != 3:

@@ -225,3 +225,31 @@ def test_tips_cuts_match_the_oracle_that_repaints() -> None:
             assert fast.skeleton.n_endpoints == answer.n_endpoints
             made += sum(k > 0 for *_, k in cuts)
     assert made >= 3  # not vacuous: some tips are cut
+
+
+def test_multi_page_tiff_stacks_are_volumes(tmp_path) -> None:
+    import tifffile
+
+    vol = np.zeros((12, 14, 40), np.uint8)
+    vol[3:9, 4:10, 3:37] = 255
+    path = tmp_path / "stack.tif"
+    tifffile.imwrite(path, vol)  # twelve pages
+    from_tiff = skelprune.prune(str(path), spacing=(2.0, 1.0, 1.0)).to_dict()
+    from_array = skelprune.prune(vol, spacing=(2.0, 1.0, 1.0)).to_dict()
+    assert from_tiff == from_array and from_tiff["depth"] == 12
+    rgb = tmp_path / "rgb.tif"
+    tifffile.imwrite(rgb, np.zeros((3, 8, 9, 3), np.uint8), photometric="rgb")
+    with pytest.raises(InvalidImageError, match="one-channel pages"):
+        skelprune.prune(str(rgb))
+
+
+def test_a_volume_file_declaring_too_many_voxels_is_refused_unread(tmp_path, monkeypatch) -> None:
+    from skelprune import volume as volume_module
+    from skelprune.errors import ImageTooLargeError
+
+    vol = np.zeros((10, 10, 10), bool)
+    vol[2:8, 2:8, 2:8] = True
+    np.save(tmp_path / "v.npy", vol)
+    monkeypatch.setattr(volume_module, "MAX_VOLUME_VOXELS", 999)
+    with pytest.raises(ImageTooLargeError, match="1000 voxels"):
+        skelprune.prune(str(tmp_path / "v.npy"))

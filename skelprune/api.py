@@ -144,11 +144,14 @@ def prune(
     **keywords: Any,
 ) -> PruneResult | VolumeResult:
     """Pruned skeleton of every 8-connected component of a shape: a mask, an image or a
-    polygon.
+    polygon; or of every 26-connected component of a volume (a 3-D array, a ``.npy``
+    file or a TIFF stack, docs/volumes.md).
 
     Parameters
     ----------
     source : array, Input, GeoJSON mapping or text, shapely geometry, bytes or path
+        (A 3-D array whose last axis is longer than 4, a ``.npy`` path or a multi-page
+        TIFF's path is a volume; so is any 3-D array when ``spacing`` is given.)
         What :func:`skelprune.io.read_input` reads: a mask (its non-zero pixels are the
         shape unless ``foreground`` says otherwise), PNG bytes or a file's path, or a
         polygon (``Polygon``, ``MultiPolygon``, ``Feature`` or ``FeatureCollection``, or
@@ -179,9 +182,10 @@ def prune(
 
     Returns
     -------
-    PruneResult
+    PruneResult or VolumeResult
         The components' answers, the input (mask, frame, foreground) and every option:
-        its outputs need no further argument.
+        its outputs need no further argument. A volume answers with a
+        :class:`~skelprune.output.volume.VolumeResult` (docs/volumes.md).
 
     Raises
     ------

@@ -5,8 +5,9 @@ centre lines and tips, radii from up to 12 down to 1.5 voxels (3 on the 1:1:3 gr
 where thinner tubes fall apart), on an isotropic grid and on one three times coarser
 along ``z`` (``spacing = (3, 1, 1)``), with smooth surfaces and with surface noise (a
 smooth random field of standard deviation ``SKELPRUNE_BENCH_NOISE`` voxels, 0.7 by
-default, that moves the surface). The methods: :mod:`benchmarks.volume_methods`; the
-medial axis is unpruned here, so its spurs are what a pruning has to remove.
+default, that moves the surface). The methods: :mod:`benchmarks.volume_methods`: the
+curve skeleton unpruned and pruned by :func:`skelprune.prune` at its default options,
+kimimaro, and skan at two length thresholds.
 
 Three tables:
 

@@ -5,6 +5,8 @@ answers a bool volume of skeleton voxels. Lengths and tolerances are physical, i
 of the finest voxel side (1 here).
 
 - ``medial axis``: :func:`skelprune.grid3d.curve_skeleton`, unpruned;
+- ``skelprune (pruned)``: :func:`skelprune.prune` at its default options (the same curve
+  skeleton, pruned by the trade-off between length and lost volume);
 - ``kimimaro``: TEASAR with its README's parameters (listing 1: ``scale`` 1.5,
   ``const`` 300, somas 750/3500/300/2, ``pdrf`` 100000 and 4, ``max_paths`` 300,
   ``dust_threshold`` 1000, ``fix_branching``, ``fix_borders``), physical ones converted to
@@ -38,6 +40,20 @@ def medial_axis(volume: np.ndarray, spacing) -> np.ndarray:
     from skelprune.grid3d import curve_skeleton
 
     return curve_skeleton(volume, spacing).mask()
+
+
+def pruned(volume: np.ndarray, spacing) -> np.ndarray:
+    """:func:`skelprune.prune` at its default options: the curve skeleton pruned."""
+    import skelprune
+
+    res = skelprune.prune(volume, spacing=tuple(spacing))
+    out = np.zeros(volume.shape, dtype=bool)
+    for comp in res.components:
+        sk = comp.skeleton
+        idx = sk.points()
+        oz, oy, ox = sk.origin
+        out[sk.z[idx] + oz, sk.y[idx] + oy, sk.x[idx] + ox] = True
+    return out
 
 
 def kimimaro_teasar(volume: np.ndarray, spacing) -> np.ndarray:
@@ -86,6 +102,7 @@ def skan10(volume: np.ndarray, spacing) -> np.ndarray:
 
 METHODS = {
     "medial axis (unpruned)": medial_axis,
+    "skelprune (pruned)": pruned,
     "kimimaro": kimimaro_teasar,
     "skan 5": skan5,
     "skan 10": skan10,

@@ -50,7 +50,7 @@ from .errors import (
     JobTooLargeError,
     SkelpruneError,
 )
-from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
+from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions, VolumeOptions
 
 if TYPE_CHECKING:
     from .api import prune
@@ -108,6 +108,7 @@ __all__ = [
     "SkeletonDescriptor",
     "SkelpruneError",
     "UnmatchableShapeError",
+    "VolumeOptions",
     "describe",
     "match",
     "medial_axis",

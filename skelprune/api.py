@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import Any
+from dataclasses import fields
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -16,6 +17,8 @@ from .options import (
     PruneOptions,
     RasterOptions,
     ReadOptions,
+    VolumeOptions,
+    options_value,
     resolve_options,
 )
 from .output.document import ComponentResult, GraphSummary, PruneResult
@@ -29,7 +32,11 @@ from .pruning.dce import (
 from .pruning.floor import floor_step
 from .pruning.margin import Margins, branch_margins
 from .pruning.tips import trim_tips
+
+if TYPE_CHECKING:
+    from .output.volume import VolumeResult
 from .skeleton import Skeleton
+from .volume import is_volume, prune_volume
 
 __all__ = ["METHODS", "components", "prune", "prune_component", "prune_input"]
 
@@ -133,14 +140,18 @@ def prune(
     read: ReadOptions | None = None,
     raster: RasterOptions | None = None,
     output: OutputOptions | None = None,
+    volume: VolumeOptions | None = None,
     **keywords: Any,
-) -> PruneResult:
+) -> PruneResult | VolumeResult:
     """Pruned skeleton of every 8-connected component of a shape: a mask, an image or a
-    polygon.
+    polygon; or of every 26-connected component of a volume (a 3-D array, a ``.npy``
+    file or a TIFF stack, docs/volumes.md).
 
     Parameters
     ----------
     source : array, Input, GeoJSON mapping or text, shapely geometry, bytes or path
+        (A 3-D array whose last axis is longer than 4, a ``.npy`` path or a multi-page
+        TIFF's path is a volume; so is any 3-D array when ``spacing`` is given.)
         What :func:`skelprune.io.read_input` reads: a mask (its non-zero pixels are the
         shape unless ``foreground`` says otherwise), PNG bytes or a file's path, or a
         polygon (``Polygon``, ``MultiPolygon``, ``Feature`` or ``FeatureCollection``, or
@@ -160,16 +171,21 @@ def prune(
     output : OutputOptions, optional
         What the result's outputs hold by default (``curve``, ``sequence``, ``overlay``,
         ``overlay_scale``, ``overlay_legend``, ``simplify``, ``cut_ends``).
+    volume : VolumeOptions, optional
+        Volume input (a 3-D array or a ``.npy`` path): the voxel ``spacing``
+        ``(dz, dy, dx)``. A volume is pruned as docs/volumes.md says, and answers with a
+        :class:`~skelprune.output.volume.VolumeResult`.
     **keywords
-        Any field of those four classes by name, instead of the class's value (never
+        Any field of those five classes by name, instead of the class's value (never
         both for one class): ``prune(mask, beta=3.0)`` is
         ``prune(mask, PruneOptions(beta=3.0))``.
 
     Returns
     -------
-    PruneResult
+    PruneResult or VolumeResult
         The components' answers, the input (mask, frame, foreground) and every option:
-        its outputs need no further argument.
+        its outputs need no further argument. A volume answers with a
+        :class:`~skelprune.output.volume.VolumeResult` (docs/volumes.md).
 
     Raises
     ------
@@ -202,7 +218,12 @@ def prune(
     >>> line["type"], all(0 <= x <= 1000 and 0 <= y <= 20 for x, y in line["coordinates"])
     ('LineString', True)
     """
+    given = {f.name: keywords.pop(f.name) for f in fields(VolumeOptions) if f.name in keywords}
     options, read, raster, output = resolve_options(options, read, raster, output, keywords)
+    if volume is not None or given or is_volume(source):
+        if read is not None or raster is not None:
+            raise TypeError("read and raster options apply to images and polygons, not volumes")
+        return prune_volume(source, options, options_value(VolumeOptions, volume, given), output)
     if isinstance(source, Input):
         if read is not None or raster is not None:
             raise TypeError("read and raster options apply to reading; this input is read")

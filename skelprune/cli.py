@@ -22,7 +22,7 @@ import sys
 from collections.abc import Callable
 from dataclasses import fields
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import Annotated, Any
 
 import typer
 import typer.core
@@ -39,11 +39,9 @@ from .options import (
     PruneOptions,
     RasterOptions,
     ReadOptions,
+    VolumeOptions,
     option_fields,
 )
-
-if TYPE_CHECKING:
-    from .output.document import PruneResult
 
 # A command imports what it uses, in its own body: `--help` and `--version` load typer and
 # the option definitions only (numpy, numba and the pipeline come with `prune` and co.).
@@ -78,7 +76,7 @@ def _main(
 
 
 #: What a folder is searched for (any case).
-FOLDER_SUFFIXES = (".png", ".geojson", ".tif", ".tiff")
+FOLDER_SUFFIXES = (".png", ".geojson", ".tif", ".tiff", ".npy")
 
 
 def _prune(
@@ -88,12 +86,18 @@ def _prune(
     raster: RasterOptions,
     output: OutputOptions,
     geojson: bool = False,
-) -> tuple[PruneResult, dict[str, Any]]:
+    volume: VolumeOptions | None = None,
+) -> tuple[Any, dict[str, Any]]:
     """The result and its document (a polygon's in the polygon's own coordinates), or its
-    GeoJSON: the library's one pipeline (``.geojson``/``.json`` files are polygons)."""
+    GeoJSON: the library's one pipeline (``.geojson``/``.json`` files are polygons,
+    ``.npy`` files volumes, pruned with ``volume``'s spacing)."""
     from .api import prune
+    from .volume import is_volume
 
-    res = prune(Path(path), options, read=read, raster=raster, output=output)
+    if is_volume(path):
+        res: Any = prune(Path(path), options, output=output, volume=volume or VolumeOptions())
+    else:
+        res = prune(Path(path), options, read=read, raster=raster, output=output)
     return res, res.to_geojson() if geojson else res.to_dict()
 
 
@@ -104,9 +108,10 @@ def _prune_file(
     raster: RasterOptions,
     output: OutputOptions,
     geojson: bool = False,
+    volume: VolumeOptions | None = None,
 ) -> dict[str, Any]:
     try:
-        res, doc = _prune(path, options, read, raster, output, geojson)
+        res, doc = _prune(path, options, read, raster, output, geojson, volume)
         line = {"file": path, "result": doc}
         if res.warnings:
             line["warnings"] = [w["message"] for w in res.warnings]
@@ -164,7 +169,9 @@ class _CleanCommand(typer.core.TyperCommand):
 
 HELP = {
     name: text
-    for name, _, text, _ in option_fields(PruneOptions, OutputOptions, ReadOptions, RasterOptions)
+    for name, _, text, _ in option_fields(
+        PruneOptions, OutputOptions, ReadOptions, RasterOptions, VolumeOptions
+    )
 }
 
 
@@ -258,8 +265,12 @@ def prune_command(
     workers: Annotated[
         int, typer.Option(help="Worker processes for several files, >= 0 (0: one a CPU core).")
     ] = 0,
+    spacing: Annotated[
+        str | None, typer.Option(help=HELP["spacing"] + " Written DZ,DY,DX.")
+    ] = None,
 ) -> None:
-    """Prune the skeleton of each shape and print the result as JSON."""
+    """Prune the skeleton of each shape (or volume, from a .npy file) and print the result
+    as JSON."""
     # checked once, before any file is read; the JSON document holds no overlay image
     options, read, raster, output = _options_or_exit(
         {**locals(), "overlay": False, "csv": None},
@@ -268,6 +279,7 @@ def prune_command(
         RasterOptions,
         OutputOptions,
     )
+    volume = _volume_or_exit(spacing)
     if workers < 0:
         raise _usage(f"--workers must be >= 0 (0: one a CPU core), got {workers}")
     for flag, out in (("--overlay", overlay), ("--csv", csv)):
@@ -275,10 +287,10 @@ def prune_command(
             raise _usage(f"{flag}: folder {str(out.parent)!r} does not exist")
     inputs = _expand(files)
     if not inputs:
-        raise _usage("no PNG, TIFF or GeoJSON file given")
+        raise _usage("no PNG, TIFF, GeoJSON or .npy file given")
     if len(inputs) == 1 and not files[0].is_dir():
         try:
-            res, doc = _prune(str(inputs[0]), options, read, raster, output, geojson)
+            res, doc = _prune(str(inputs[0]), options, read, raster, output, geojson, volume)
         except (SkelpruneError, OSError) as exc:
             typer.echo(f"error: {inputs[0]}: {exc}", err=True)
             raise typer.Exit(1) from None
@@ -317,6 +329,7 @@ def prune_command(
             [raster] * k,
             [output] * k,
             [geojson] * k,
+            [volume] * k,
         )
         for line in tqdm(jobs, total=len(inputs), file=sys.stderr, unit="shape"):
             failed += "error" in line
@@ -332,6 +345,20 @@ def _describe_file(path: str, options: PruneOptions, read: ReadOptions) -> Any:
         return describe(_prune(path, options, read, RasterOptions(), OutputOptions())[0])
     except (SkelpruneError, OSError) as exc:
         return f"{type(exc).__name__}: {exc}"
+
+
+def _volume_or_exit(spacing: str | None) -> VolumeOptions:
+    """``--spacing DZ,DY,DX`` as volume options (checked by their class)."""
+    if spacing is None:
+        return VolumeOptions()
+    try:
+        values = tuple(float(v) for v in spacing.split(","))
+    except ValueError:
+        raise _usage(f"--spacing is three numbers DZ,DY,DX, got {spacing!r}") from None
+    try:
+        return VolumeOptions(spacing=values)  # type: ignore[arg-type]
+    except SkelpruneError as exc:
+        raise _usage(str(exc)) from None
 
 
 def _options_or_exit(params: dict[str, Any], *groups: type) -> tuple[Any, ...]:

@@ -40,6 +40,7 @@ __all__ = [
     "PruneOptions",
     "RasterOptions",
     "ReadOptions",
+    "VolumeOptions",
     "check_option",
     "option_fields",
     "options_value",
@@ -421,6 +422,56 @@ class RasterOptions:
         _check_fields(self)
         if self.pixel_size is not None and self.longest_side is not None:
             raise InvalidOptionError("give pixel_size or longest_side, not both")
+
+
+def _spacing(name: str, value: Any) -> tuple[float, float, float]:
+    try:
+        values = tuple(value)
+    except TypeError:
+        values = ()
+    if len(values) != 3 or not all(
+        not isinstance(v, bool) and isinstance(v, int | float) and math.isfinite(v) and v > 0
+        for v in values
+    ):
+        raise InvalidOptionError(
+            f"{name} must be three finite numbers > 0 (dz, dy, dx), got {shown(value)}"
+        )
+    return (float(values[0]), float(values[1]), float(values[2]))
+
+
+_with_schema(
+    _spacing,
+    type="array",
+    items={"type": "number", "exclusiveMinimum": 0},
+    minItems=3,
+    maxItems=3,
+)
+
+
+@dataclass(frozen=True)
+class VolumeOptions:
+    """How a 3-D volume's voxels measure (volume input only: a 3-D array or ``.npy``).
+
+    Examples
+    --------
+    >>> VolumeOptions(spacing=(3, 1, 1)).spacing
+    (3.0, 1.0, 1.0)
+    >>> VolumeOptions(spacing=(1, 0, 1))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    skelprune.errors.InvalidOptionError: spacing must be three finite numbers > 0 ...
+    """
+
+    spacing: tuple[float, float, float] = _option(
+        (1.0, 1.0, 1.0),
+        "Volume input: the physical size of a voxel along z, y and x (the array's first, "
+        "second and last axis), three numbers > 0 (default 1, 1, 1). Distances, radii, "
+        "lengths and widths are in its units; volumes are counted in voxels.",
+        _spacing,
+    )
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "spacing", _spacing("spacing", self.spacing))
 
 
 GROUPS: tuple[type, ...] = (PruneOptions, OutputOptions, ReadOptions, RasterOptions)

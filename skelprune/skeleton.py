@@ -18,11 +18,16 @@ import heapq
 import math
 from dataclasses import dataclass, replace
 from functools import cached_property
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 from numba import njit
 
+if TYPE_CHECKING:
+    from .pruning.limbs import LimbGuard
+
 from .grid import IDENTITY_ORIENTATION, Orientation, oriented
+from .grid.coverage import Coverage
 from .grid.graph import SQRT2, BranchGraph, step_length
 from .grid.medial_axis import oriented_medial_axis, squared_distance
 from .grid.reconstruction import reconstruction
@@ -130,6 +135,23 @@ class Skeleton:
         axis = oriented_medial_axis(shape, squared_distance(shape))
         graph = BranchGraph(axis.rows, axis.cols, shape.shape)
         return cls(shape, axis.rows, axis.cols, axis.r2, graph, orientation, origin)
+
+    # -- the grid interface (skelprune.pruning.grid) ------------------------------------
+    #: Axial and diagonal steps: 1 and √2.
+    step_weights: ClassVar[np.ndarray] = np.array([1.0, SQRT2])
+
+    def coverage(self, graph: BranchGraph, labels: np.ndarray, n_labels: int) -> Coverage:
+        """The incremental coverage of the shape by the disks of ``graph``'s points."""
+        alive = graph.alive_points()
+        return Coverage(
+            self.mask, self.rows[alive], self.cols[alive], self.r2[alive], labels[alive], n_labels
+        )
+
+    def limb_test(self, graph: BranchGraph) -> LimbGuard:
+        """The limbs of ``graph`` (docs/algorithm.md, "Limbs")."""
+        from .pruning.limbs import LimbGuard
+
+        return LimbGuard(graph, self.mask, self.r2)
 
     def with_graph(self, graph: BranchGraph) -> Skeleton:
         """The same shape and pixels with another graph over them (a stage's answer)."""

@@ -357,6 +357,20 @@ class BranchGraph:
                 n += 1 if free == 2 and len(br.points) == 1 else free
         return n
 
+    @property
+    def coords(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(rows, cols)``: the points' coordinates, in the order that breaks ties."""
+        return self.rows, self.cols
+
+    def branch_steps(self, b: int) -> tuple[int, int]:
+        """Branch ``b``'s (axial, diagonal) steps."""
+        br = self.branches[b]
+        return br.na, br.nd
+
+    def total_steps(self) -> tuple[int, int]:
+        """The skeleton's (axial, diagonal) steps."""
+        return self.na, self.nd
+
     def length_counts(self) -> tuple[int, int]:
         """Total (axial, diagonal) step counts of the current skeleton."""
         return self.na, self.nd

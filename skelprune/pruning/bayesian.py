@@ -22,10 +22,8 @@ from functools import cached_property
 import numpy as np
 from numba import njit
 
-from ..grid.coverage import Coverage
 from ..grid.graph import BranchGraph, step_length
-from ..skeleton import Skeleton
-from .limbs import LimbGuard
+from .grid import GridAxis, GridGraph, compiled_length, path_lengths
 
 __all__ = [
     "PruningSequence",
@@ -33,33 +31,40 @@ __all__ = [
     "objective",
     "pruning_sequence",
     "remove_unsupported",
+    "target",
 ]
 
 
+def target(lost: int, area: int, length: float, alpha: float, lbar: float) -> float:
+    """``λ(S) = α·AR(S) + log(Γ(S) + 1)`` with ``Γ = length / ℓ̄`` (eq. 7), on any grid."""
+    return alpha * lost / area + math.log(length / lbar + 1.0)
+
+
 def objective(lost: int, area: int, na: int, nd: int, alpha: float, lbar: float) -> float:
-    """``λ(S) = α·AR(S) + log(Γ(S) + 1)`` with ``Γ = length / ℓ̄`` (eq. 7)."""
-    return alpha * lost / area + math.log(step_length(na, nd) / lbar + 1.0)
+    """``λ(S)`` on the pixel grid, the length given as ``na`` axial and ``nd`` diagonal steps."""
+    return target(lost, area, step_length(na, nd), alpha, lbar)
 
 
 @dataclass
 class PruningSequence:
-    """The greedy removal sequence of one component.
+    """The greedy removal sequence of one component, on any grid (:mod:`.grid`).
 
-    ``removed[i]`` is the branch removed at step ``i + 1``; the per-step arrays have
+    ``removed[i]`` is the branch removed at step ``i + 1``; the per-step lists have
     one entry per skeleton ``S(0)``, …, ``S(n)``, ``S(0)`` being ``start``.
     """
 
-    start: Skeleton
+    start: GridAxis
     removed: list[int]
     lost: list[int]
-    na: list[int]
-    nd: list[int]
+    #: Per skeleton: its steps of each kind (the grid's :attr:`~.grid.GridAxis.step_weights`
+    #: turn them into its length).
+    steps: list[tuple[int, ...]]
     area: int
     alpha: float | None
     lbar: float
     #: The graph of ``S(n)``, the last skeleton of the sequence.
-    end: BranchGraph
-    #: Flat indices (into the mask) of the pixels of ``D`` that ``S(0)`` misses; recorded
+    end: GridGraph
+    #: Flat indices (into the shape) of the elements of ``D`` that ``S(0)`` misses; recorded
     #: only when asked for (``pruning_sequence(..., uncovered=True)``).
     uncovered: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     #: Per step ``i`` before the last: the end branches of ``S(i)`` and the area each alone
@@ -70,7 +75,7 @@ class PruningSequence:
 
     @cached_property
     def length(self) -> np.ndarray:
-        return step_length(np.asarray(self.na, float), np.asarray(self.nd, float))
+        return path_lengths(np.asarray(self.steps, np.int64), self.start.step_weights)
 
     @cached_property
     def rer(self) -> np.ndarray:
@@ -88,12 +93,12 @@ class PruningSequence:
             return self.ss
         return np.array(
             [
-                objective(lo, self.area, a, d, self.alpha, self.lbar)
-                for lo, a, d in zip(self.lost, self.na, self.nd, strict=True)
+                target(lo, self.area, length, self.alpha, self.lbar)
+                for lo, length in zip(self.lost, self.length.tolist(), strict=True)
             ]
         )
 
-    def skeleton_at(self, step: int) -> Skeleton:
+    def skeleton_at(self, step: int) -> GridAxis:
         """``S(step)``: the start with the first ``step`` removals made (on a copy)."""
         if step == len(self.removed):
             return self.start.with_graph(self.end)
@@ -113,7 +118,7 @@ def choose_step(objectives: np.ndarray) -> int:
 
 
 def pruning_sequence(
-    start: Skeleton,
+    start: GridAxis,
     alpha: float | None,
     lbar: float,
     order: list[int] | None = None,
@@ -121,9 +126,12 @@ def pruning_sequence(
 ) -> PruningSequence:
     """Remove end branches until none is left; record every step.
 
+    Speaks to the grid only through :mod:`.grid`'s interface, so that one sequence serves
+    the pixel and the volume grid.
+
     Parameters
     ----------
-    start : Skeleton
+    start : GridAxis
         The skeleton to prune, ``S(0)`` (left as it is: the sequence works on a copy).
     alpha, lbar : float
         ``α`` and ``ℓ̄`` of the medial axis. Bayesian order (eqs. 9–11); with
@@ -133,10 +141,12 @@ def pruning_sequence(
         (e.g. :func:`remove_unsupported` run on a twin graph, for ``method="dce"``),
         recording every step the same way.
     uncovered : bool
-        Also record which pixels ``S(0)`` misses (``PruningSequence.uncovered``).
+        Also record which elements ``S(0)`` misses (``PruningSequence.uncovered``).
     """
-    graph, mask, r2 = start.working_graph(), start.mask, start.r2
+    graph = start.working_graph()
     area = start.area
+    coords = graph.coords
+    weights = np.ascontiguousarray(start.step_weights, np.float64)
     nb = len(graph.branches)
     # Labels: branch b + 1, junction nb + 1 + j; written in one assignment (one per
     # branch cost more than the rest of the set-up on small shapes).
@@ -153,21 +163,13 @@ def pruning_sequence(
             owned += junc.points
             label_of.append(nb + 1 + j)
             size.append(len(junc.points))
-    labels = np.zeros(graph.rows.size, np.int64)
+    labels = np.zeros(coords[0].size, np.int64)
     labels[np.fromiter(owned, np.int64, len(owned))] = np.repeat(
         np.asarray(label_of, np.int64), np.asarray(size, np.int64)
     )
-    alive = graph.alive_points()
-    cov = Coverage(
-        mask,
-        graph.rows[alive],
-        graph.cols[alive],
-        r2[alive],
-        labels[alive],
-        nb + len(graph.junctions) + 1,
-    )
+    cov = start.coverage(graph, labels, nb + len(graph.junctions) + 1)
     seq = PruningSequence(
-        start, [], [cov.lost], [graph.na], [graph.nd], area, alpha, lbar, end=graph
+        start, [], [cov.lost], [graph.total_steps()], area, alpha, lbar, end=graph
     )
     if uncovered:
         seq.uncovered = cov.uncovered()
@@ -175,19 +177,20 @@ def pruning_sequence(
         return seq
     # Per-branch arrays, so that one compiled call ranks all candidates of a step.
     is_end = np.zeros(nb, np.bool_)
-    bna = np.array([br.na for br in graph.branches], np.int64)
-    bnd = np.array([br.nd for br in graph.branches], np.int64)
-    ep = np.zeros((nb, 2), np.int64)
+    bsteps = np.array([graph.branch_steps(b) for b in range(nb)], np.int64).reshape(
+        nb, weights.size
+    )
+    ep = np.zeros((nb, len(coords)), np.int64)
 
     # Limbs are never candidates (docs/algorithm.md, "Limbs"); only the greedy order
     # looks for them.
-    guard = LimbGuard(graph, mask, r2) if order is None else None
+    guard = start.limb_test(graph) if order is None else None
 
     def mark_end(b: int) -> None:
         is_end[b] = graph.is_end_branch(b) and not (guard is not None and guard.limb[b])
         if is_end[b]:
             p = graph.endpoint(b)
-            ep[b] = graph.rows[p], graph.cols[p]
+            ep[b] = [c[p] for c in coords]
 
     for b in graph.ends:
         mark_end(b)
@@ -195,22 +198,18 @@ def pruning_sequence(
         ends = np.flatnonzero(is_end)
         seq.end_areas.append((ends, cov.exclusive[ends + 1]))
         if order is None:
+            assert alpha is not None
             # The best end branch that is not a limb; a limb found is kept for good.
+            total = np.asarray(graph.total_steps(), np.int64)
             while True:
                 pick = _pick(
-                    is_end,
-                    cov.exclusive,
-                    bna,
-                    bnd,
-                    ep,
-                    cov.lost,
-                    area,
-                    graph.na,
-                    graph.nd,
-                    alpha,
-                    lbar,
+                    is_end, cov.exclusive, bsteps, ep, cov.lost, area, total, weights, alpha, lbar
                 )
-                if pick < 0 or not guard.is_limb(pick, int(cov.exclusive[pick + 1])):
+                if (
+                    pick < 0
+                    or guard is None
+                    or not guard.is_limb(pick, int(cov.exclusive[pick + 1]))
+                ):
                     break
                 is_end[pick] = False
             if pick < 0:  # only limbs are left
@@ -218,7 +217,8 @@ def pruning_sequence(
                 break
             ends = np.flatnonzero(is_end)
             seq.end_areas[-1] = (ends, cov.exclusive[ends + 1])
-            guard.removed(pick)
+            if guard is not None:
+                guard.removed(pick)
         elif len(seq.removed) < len(order):
             pick = order[len(seq.removed)]
         else:
@@ -236,12 +236,11 @@ def pruning_sequence(
             cov.merge_label(nb + 1 + jid, kept + 1)
             cov.merge_label(absorbed + 1, kept + 1)
             is_end[absorbed] = False
-            bna[kept], bnd[kept] = graph.branches[kept].na, graph.branches[kept].nd
+            bsteps[kept] = graph.branch_steps(kept)
             mark_end(kept)
         seq.removed.append(pick)
         seq.lost.append(cov.lost)
-        seq.na.append(graph.na)
-        seq.nd.append(graph.nd)
+        seq.steps.append(graph.total_steps())
     return seq
 
 
@@ -290,23 +289,37 @@ def remove_unsupported(
 
 
 @njit(cache=True)
-def _pick(is_end, exclusive, bna, bnd, ep, lost, area, na, nd, alpha, lbar):
-    """The end branch to remove: smallest (λ, lost area, length, endpoint row, col).
+def _pick(is_end, exclusive, bsteps, ep, lost, area, total, weights, alpha, lbar):
+    """The end branch to remove: smallest (λ, lost area, length, endpoint coordinates).
 
-    λ is computed with exactly the operations of :func:`objective`, so that the
-    choice is bit-identical to the oracle's.
+    λ is computed with exactly the operations of :func:`target` and lengths with those
+    of :func:`~.grid.path_length`, so that the choice is bit-identical to the oracle's.
     """
     best = -1
     b_lam = b_len = 0.0
-    b_d = b_r = b_c = 0
+    b_d = 0
+    rest = np.empty_like(total)
     for b in range(is_end.size):
         if not is_end[b]:
             continue
         d = exclusive[b + 1]
-        lam = alpha * (lost + d) / area + math.log(
-            step_length(na - bna[b], nd - bnd[b]) / lbar + 1.0
-        )
-        length = step_length(bna[b], bnd[b])
-        if best < 0 or (lam, d, length, ep[b, 0], ep[b, 1]) < (b_lam, b_d, b_len, b_r, b_c):
-            best, b_lam, b_d, b_len, b_r, b_c = b, lam, d, length, ep[b, 0], ep[b, 1]
+        for k in range(total.size):
+            rest[k] = total[k] - bsteps[b, k]
+        lam = alpha * (lost + d) / area + math.log(compiled_length(rest, weights) / lbar + 1.0)
+        length = compiled_length(bsteps[b], weights)
+        better = best < 0
+        if not better:
+            if lam != b_lam:
+                better = lam < b_lam
+            elif d != b_d:
+                better = d < b_d
+            elif length != b_len:
+                better = length < b_len
+            else:
+                for k in range(ep.shape[1]):
+                    if ep[b, k] != ep[best, k]:
+                        better = ep[b, k] < ep[best, k]
+                        break
+        if better:
+            best, b_lam, b_d, b_len = b, lam, d, length
     return best

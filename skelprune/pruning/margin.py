@@ -24,8 +24,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from ..grid.graph import BranchGraph
-from .bayesian import PruningSequence, objective
+from .bayesian import PruningSequence, target
+from .grid import GridGraph, path_length
 
 if TYPE_CHECKING:
     from .tips import Trim
@@ -42,7 +42,7 @@ class Margins:
 
 
 def branch_margins(
-    graph: BranchGraph, seq: PruningSequence, chosen: int, trim: Trim | None = None
+    graph: GridGraph, seq: PruningSequence, chosen: int, trim: Trim | None = None
 ) -> Margins:
     """Margins of the branches of ``graph``, which is ``S(chosen)`` of ``seq``, or its
     tips cut (``trim``): then ``λ(Ŝ)`` and the end branches' areas are the trimmed
@@ -50,7 +50,7 @@ def branch_margins(
 
     Parameters
     ----------
-    graph : BranchGraph
+    graph : GridGraph
         The answer's graph (not modified).
     seq : PruningSequence
         The sequence ``graph`` is step ``chosen`` of; its recorded end-branch areas and
@@ -66,8 +66,15 @@ def branch_margins(
         return Margins({b: None for b in alive}, removed_at)
     lam = seq.objective
     base = float(lam[chosen])
+    weights = seq.start.step_weights
+
+    def without(lost: int, b: int) -> float:
+        length = path_length(graph.counts_without(b), weights)
+        return target(lost, seq.area, length, seq.alpha, seq.lbar) - base
+
     if trim is not None:
-        base = objective(trim.lost, seq.area, trim.na, trim.nd, seq.alpha, seq.lbar)
+        length = path_length(trim.steps, weights)
+        base = target(trim.lost, seq.area, length, seq.alpha, seq.lbar)
     margin: dict[int, float | None] = {}
     for b in alive:
         j = removed_at[b]
@@ -76,16 +83,14 @@ def branch_margins(
         for b, d in trim.exclusive.items():
             if removed_at.get(b, 0) is None:  # a limb: never removed
                 continue
-            na, nd = graph.counts_without(b)
-            margin[b] = objective(trim.lost + d, seq.area, na, nd, seq.alpha, seq.lbar) - base
+            margin[b] = without(trim.lost + d, b)
     elif chosen < len(seq.end_areas):
         lost = seq.lost[chosen]
         ends, areas = seq.end_areas[chosen]
         for b, d in zip(ends.tolist(), areas.tolist(), strict=True):
             if removed_at.get(b, 0) is None:  # a limb found later: never removed
                 continue
-            na, nd = graph.counts_without(b)
-            margin[b] = objective(lost + d, seq.area, na, nd, seq.alpha, seq.lbar) - base
+            margin[b] = without(lost + d, b)
     return Margins(margin, removed_at)
 
 

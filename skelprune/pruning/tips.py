@@ -69,6 +69,11 @@ class Trim:
     #: removing it whole would lose), for its margin.
     exclusive: dict[int, int]
 
+    @property
+    def steps(self) -> tuple[int, int]:
+        """The trimmed skeleton's steps of each kind (the grid interface's counts)."""
+        return self.na, self.nd
+
 
 class _Tips:
     """The disk counts the cuts share (``c``: per pixel, how many disks of the skeleton

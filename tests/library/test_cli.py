@@ -74,7 +74,7 @@ def test_usage_errors_are_one_line_before_any_file_is_read(tmp_path):
     one_line_usage_error(cli("prune", folder, "--beta", "-1"), "beta must be")
     one_line_usage_error(cli("prune", png, "--beta", "-1"), "beta must be")
     one_line_usage_error(cli("prune", png, "--longest-side", "4"), "longest_side")
-    one_line_usage_error(cli("prune", str(tmp_path)), "no PNG, TIFF or GeoJSON file")
+    one_line_usage_error(cli("prune", str(tmp_path)), "no PNG, TIFF, GeoJSON or .npy file")
 
 
 def test_version_and_clean_help():
@@ -123,3 +123,36 @@ def test_a_geojson_file_is_pruned_in_its_own_coordinates(tmp_path):
     run = cli("prune", str(bad))
     assert run.returncode == 1 and "not a GeoJSON file" in run.stderr
     assert len(run.stderr.strip().splitlines()) == 1
+
+
+def test_prune_a_volume_from_npy(tmp_path):
+    import numpy as np
+
+    vol = np.zeros((12, 14, 40), bool)
+    vol[3:9, 4:10, 3:37] = True
+    path = tmp_path / "bar.npy"
+    np.save(path, vol)
+    out, csv = tmp_path / "mip.png", tmp_path / "branches.csv"
+    run = subprocess.run(
+        [*CLI, "prune", str(path), "--spacing", "2,1,1", "--overlay", str(out), "--csv", str(csv)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=True,
+    )
+    doc = json.loads(run.stdout)
+    assert doc["dimensions"] == 3 and doc["spacing"] == [2.0, 1.0, 1.0]
+    assert len(doc["components"][0]["skeleton"]["branches"][0]["points"][0]) == 4
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert csv.read_text().splitlines()[0].startswith("component,label,branch,kind,length")
+    refused = subprocess.run(
+        [*CLI, "prune", str(path), "--geojson"], capture_output=True, text=True, timeout=300
+    )
+    assert refused.returncode == 1 and "GeoJSON holds 2-D geometry" in refused.stderr
+    bad = subprocess.run(
+        [*CLI, "prune", str(path), "--spacing", "1,0,1"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert bad.returncode == 2 and bad.stderr.startswith("error: spacing must be")

@@ -1,0 +1,127 @@
+"""Limbs the greedy pruning never removes, on the volume grid (docs/volumes.md, "Limbs").
+
+The rule of the image grid (docs/algorithm.md, "Limbs") with balls for disks: an end
+branch is a **limb** when at least ``2·r / h`` of its voxels (``h`` the finest voxel side,
+``r`` the largest ball radius among them) have their whole ball ``|p − s|² < r2(s)``
+covered by that branch alone, counting only voxels deeper than the boundary's one-voxel
+rim (``r2(s)`` above the squared length of the longest step between 26-neighbours,
+``dz² + dy² + dx²``: the image grid's ``r² > 2``). No constant is fitted: ``2·r`` is the
+limb's own width, ``h`` and the rim the grid's resolution.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .balls import _paint, ball_counts
+from .branches import VolumeBranchGraph
+from .distance import squared_distance
+
+__all__ = ["VolumeLimbs", "limb_rule"]
+
+
+def limb_rule(whole_r2: list[float], spacing: tuple[float, float, float]) -> bool:
+    """Whether the squared radii of a branch's whole-ball voxels deeper than the rim make
+    it a limb: at least ``2·r / h`` of them."""
+    return bool(whole_r2) and len(whole_r2) * min(spacing) >= 2.0 * math.sqrt(max(whole_r2))
+
+
+def rim(spacing: tuple[float, float, float]) -> float:
+    """Squared radius up to which a ball lies in the boundary's one-voxel rim."""
+    dz, dy, dx = spacing
+    return dz * dz + dy * dy + dx * dx
+
+
+class VolumeLimbs:
+    """The ball counts of the sequence's current skeleton and the limbs found so far
+    (the volume grid's :class:`~skelprune.pruning.grid.LimbTest`).
+
+    Parameters
+    ----------
+    graph : VolumeBranchGraph
+        The sequence's working graph (read, never changed here).
+    volume : (Z, Y, X) bool array
+    z, y, x, r2 : arrays
+        Every skeleton voxel and its squared radius.
+    spacing : (dz, dy, dx)
+    """
+
+    def __init__(
+        self,
+        graph: VolumeBranchGraph,
+        volume: np.ndarray,
+        z: np.ndarray,
+        y: np.ndarray,
+        x: np.ndarray,
+        r2: np.ndarray,
+        spacing: tuple[float, float, float],
+    ) -> None:
+        self.graph, self.volume = graph, volume
+        self.z, self.y, self.x, self.r2 = z, y, x, r2
+        self.spacing = spacing
+        self.counts: np.ndarray | None = None  # made when first needed
+        self.limb = np.zeros(len(graph.branches), np.bool_)
+
+    def _points(self, b: int) -> np.ndarray:
+        return np.asarray(self.graph.branches[b].points, np.int64)
+
+    def is_limb(self, b: int, exclusive: int) -> bool:
+        """Whether end branch ``b`` (alone covering ``exclusive`` voxels) is a limb on the
+        current skeleton; a limb is remembered (:attr:`limb`)."""
+        if self.limb[b]:
+            return True
+        if exclusive == 0:  # a whole ball holds its centre voxel at least
+            return False
+        pts = self._points(b)
+        r2 = self.r2[pts]
+        deep = r2 > rim(self.spacing)
+        if not deep.any():
+            return False
+        if self.counts is None:
+            alive = self.graph.alive_points()
+            self.counts = ball_counts(
+                self.volume.shape,
+                self.z[alive],
+                self.y[alive],
+                self.x[alive],
+                self.r2[alive],
+                self.spacing,
+            )
+        z, y, x = self.z[pts], self.y[pts], self.x[pts]
+        root = np.sqrt(r2)
+        lo, hi = [], []
+        for c, s, n in zip((z, y, x), self.spacing, self.volume.shape, strict=True):
+            reach = (root / s).astype(np.int64) + 2  # the balls' reach and one voxel more
+            lo.append(max(int((c - reach).min()), 0))
+            hi.append(min(int((c + reach).max()) + 1, n))
+        box = tuple(slice(a, b_) for a, b_ in zip(lo, hi, strict=True))
+        before = self.counts[box]
+        after = before.copy()
+        _paint(after, z - lo[0], y - lo[1], x - lo[2], r2, np.array(self.spacing), -1)
+        only = (after == 0) & (before > 0)
+        d2 = squared_distance(only, self.spacing)
+        whole = d2[z[deep] - lo[0], y[deep] - lo[1], x[deep] - lo[2]] >= r2[deep]
+        found = limb_rule(r2[deep][whole].tolist(), self.spacing)
+        self.limb[b] = found
+        return found
+
+    def removed(self, b: int) -> None:
+        """Branch ``b`` leaves the skeleton (call before the graph removes it)."""
+        if self.counts is None:
+            return
+        pts = self._points(b)
+        _paint(
+            self.counts,
+            self.z[pts],
+            self.y[pts],
+            self.x[pts],
+            self.r2[pts],
+            np.array(self.spacing),
+            -1,
+        )
+
+    def merged(self, kept: int, absorbed: int) -> None:
+        """``absorbed`` became part of ``kept``: a limb in it keeps ``kept`` a limb."""
+        self.limb[kept] |= self.limb[absorbed]

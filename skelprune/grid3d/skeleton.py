@@ -1,0 +1,178 @@
+"""The skeleton of one volume component: the volume grid's side of the pruning interface.
+
+:class:`VolumeSkeleton` is what :func:`skelprune.pruning.bayesian.pruning_sequence` starts
+from on a volume (a :class:`~skelprune.pruning.grid.GridAxis`): the component's voxels,
+its curve skeleton with ball radii, and the branch graph saying which skeleton voxels are
+still in it. Like the image :class:`~skelprune.skeleton.Skeleton`, stages never change a
+skeleton they are given: they take :meth:`VolumeSkeleton.working_graph` and answer with
+:meth:`VolumeSkeleton.with_graph`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from functools import cached_property
+
+import numpy as np
+
+from ..skeleton import Normalisation
+from ._topology import OFFSETS, step_lengths
+from .balls import reconstruction
+from .branches import VolumeBranchGraph
+from .coverage import VolumeCoverage
+from .limbs import VolumeLimbs
+from .medial_axis import curve_skeleton
+
+__all__ = ["VolumeSkeleton"]
+
+
+@dataclass(frozen=True, eq=False)
+class VolumeSkeleton:
+    """A curve skeleton of one component, in the frame of its padded crop.
+
+    Attributes
+    ----------
+    volume : (Z, Y, X) bool array
+        The component's padded crop.
+    z, y, x : (n,) int64 arrays
+        Every curve-skeleton voxel and ...
+    r2 : (n,) float64 array
+        ... its squared ball radius, in physical units.
+    spacing : (dz, dy, dx)
+    graph : VolumeBranchGraph
+        Which of those voxels are in this skeleton. Read it; never change it.
+    origin : (int, int, int)
+        ``(z, y, x)`` of the crop's corner in the whole volume.
+
+    Examples
+    --------
+    >>> v = np.zeros((12, 12, 30), bool); v[2:10, 2:10, 2:28] = True
+    >>> s = VolumeSkeleton.curve_skeleton(v)
+    >>> s.area, s.n_endpoints, round(s.length, 2)
+    (1664, 2, 22.46)
+    """
+
+    volume: np.ndarray
+    z: np.ndarray
+    y: np.ndarray
+    x: np.ndarray
+    r2: np.ndarray
+    spacing: tuple[float, float, float]
+    graph: VolumeBranchGraph
+    origin: tuple[int, int, int] = (0, 0, 0)
+
+    @classmethod
+    def curve_skeleton(
+        cls,
+        crop: np.ndarray,
+        spacing: tuple[float, float, float] = (1.0, 1.0, 1.0),
+        origin: tuple[int, int, int] = (0, 0, 0),
+    ) -> VolumeSkeleton:
+        """The curve skeleton of a one-component crop (:func:`~.medial_axis.curve_skeleton`)
+        and its branch graph."""
+        sk = curve_skeleton(crop, spacing)
+        graph = VolumeBranchGraph(sk.z, sk.y, sk.x, sk.spacing)
+        volume = np.asarray(crop) != 0
+        return cls(volume, sk.z, sk.y, sk.x, sk.r2, sk.spacing, graph, origin)
+
+    # -- the grid interface (skelprune.pruning.grid) ------------------------------------
+    @cached_property
+    def area(self) -> int:
+        """Voxels inside."""
+        return int(np.count_nonzero(self.volume))
+
+    @cached_property
+    def step_weights(self) -> np.ndarray:
+        """The seven step kinds' physical lengths."""
+        return step_lengths(self.spacing)
+
+    def working_graph(self) -> VolumeBranchGraph:
+        return self.graph.copy()
+
+    def with_graph(self, graph: VolumeBranchGraph) -> VolumeSkeleton:  # type: ignore[override]
+        return replace(self, graph=graph)
+
+    def coverage(
+        self, graph: VolumeBranchGraph, labels: np.ndarray, n_labels: int
+    ) -> VolumeCoverage:
+        alive = graph.alive_points()
+        return VolumeCoverage(
+            self.volume,
+            self.z[alive],
+            self.y[alive],
+            self.x[alive],
+            self.r2[alive],
+            labels[alive],
+            n_labels,
+            self.spacing,
+        )
+
+    def limb_test(self, graph: VolumeBranchGraph) -> VolumeLimbs:
+        """The limbs of ``graph`` (docs/volumes.md, "Limbs")."""
+        return VolumeLimbs(graph, self.volume, self.z, self.y, self.x, self.r2, self.spacing)
+
+    # -- what the pipeline and the outputs ask ------------------------------------------
+    @property
+    def length(self) -> float:
+        """Total physical length of the branches."""
+        total = 0.0
+        for c, w in zip(self.graph.total_steps(), self.step_weights.tolist(), strict=True):
+            total += c * w
+        return total
+
+    @property
+    def n_endpoints(self) -> int:
+        return self.graph.n_endpoints()
+
+    @property
+    def n_points(self) -> int:
+        return int(self.graph.alive_points().size)
+
+    def points(self) -> np.ndarray:
+        """Indices of the voxels in this skeleton."""
+        return self.graph.alive_points()
+
+    def end_branches(self) -> list[int]:
+        return self.graph.end_branches()
+
+    def reconstruction(self) -> np.ndarray:
+        """``R(S)``: the union of the skeleton's balls, in the crop's frame."""
+        idx = self.points()
+        return reconstruction(
+            self.volume.shape, self.z[idx], self.y[idx], self.x[idx], self.r2[idx], self.spacing
+        )
+
+    def normalisation(self, beta: float) -> Normalisation:
+        """Seed voxel (largest radius; ties: smallest ``(z, y, x)``), mean end-path length
+        ``ℓ̄`` and ``α = β·log(L/ℓ̄)``, as on the image grid (docs/algorithm.md)."""
+        g = self.graph
+        seed = int(np.lexsort((self.x, self.y, self.z, -self.r2))[0])
+        ends = sorted({g.endpoint(b) for b in g.end_branches()})
+        if not ends:
+            for b, br in enumerate(g.branches):
+                path = g.path(b) if br.alive and not br.loop else []
+                if len(path) > 1 and br.node == [None, None]:
+                    ends += [path[0], path[-1]]
+            ends = sorted(set(ends))
+        if not ends:
+            return Normalisation(seed, 0.0, None)
+        dist = self._path_lengths(seed)
+        lbar = float(np.mean(dist[ends]))
+        length = self.length
+        if not lbar > 0 or not length > 0:
+            return Normalisation(seed, lbar, None)
+        return Normalisation(seed, lbar, beta * math.log(length / lbar))
+
+    def _path_lengths(self, seed: int) -> np.ndarray:
+        """Shortest physical path lengths along the skeleton from ``seed``."""
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import dijkstra
+
+        nbr = self.graph.nbr
+        n = nbr.shape[0]
+        rows, slots = np.nonzero(nbr >= 0)
+        off = np.abs(OFFSETS[slots])
+        kind = 4 * off[:, 0] + 2 * off[:, 1] + off[:, 2] - 1
+        adj = coo_matrix((self.step_weights[kind], (rows, nbr[rows, slots])), shape=(n, n))
+        return dijkstra(adj.tocsr(), indices=seed)

@@ -1,0 +1,392 @@
+"""The answer for a volume: the document with ``z``, the branch table, networkx, SWC and
+the overlay of the three maximum-intensity projections (docs/volumes.md, "Outputs").
+
+Points are ``[x, y, z, radius]``: ``x`` the array's last axis, ``z`` its first, as voxel
+indices of the whole volume; radii, lengths and widths are physical (``spacing``), volumes
+counted in voxels.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..errors import InvalidOptionError
+from ..grid3d.skeleton import VolumeSkeleton
+from ..grid3d.tips import VolumeTrim
+from ..options import OutputOptions, PruneOptions
+from ..pruning.bayesian import PruningSequence, target
+from ..pruning.margin import Margins
+
+__all__ = ["VolumeComponent", "VolumeResult"]
+
+
+@dataclass
+class VolumeComponent:
+    """One component's curve skeleton (``axis``), its sequence and the answer."""
+
+    axis: VolumeSkeleton
+    skeleton: VolumeSkeleton
+    sequence: PruningSequence
+    chosen_step: int
+    margins: Margins
+    trim: VolumeTrim | None = None
+    label: int | None = None
+
+    @property
+    def volume(self) -> int:
+        """Voxels of the component."""
+        return self.axis.area
+
+    @property
+    def rer(self) -> float:
+        """Share of the component's voxels the answer's balls miss."""
+        return self.lost / self.volume
+
+    @property
+    def lost(self) -> int:
+        """Voxels of the component the answer's balls miss."""
+        return self.sequence.lost[self.chosen_step] if self.trim is None else self.trim.lost
+
+    @property
+    def objective(self) -> float:
+        """``λ`` of the answer (its tips cut, if they were)."""
+        seq = self.sequence
+        if self.trim is None or seq.alpha is None:
+            return float(seq.objective[self.chosen_step])
+        return target(self.lost, seq.area, self.skeleton.length, seq.alpha, seq.lbar)
+
+    def _where(self, p: int) -> list[float]:
+        s, (oz, oy, ox) = self.skeleton, self.skeleton.origin
+        return [
+            float(s.x[p] + ox),
+            float(s.y[p] + oy),
+            float(s.z[p] + oz),
+            float(np.sqrt(s.r2[p])),
+        ]
+
+    def graph_doc(self) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+        """The answer's nodes (junction clusters and free ends) and branches."""
+        g, r2 = self.skeleton.graph, self.skeleton.r2
+        nodes: list[dict[str, Any]] = []
+        of_junction: dict[int, int] = {}
+        for j, junc in enumerate(g.junctions):
+            if not junc.alive:
+                continue
+            centre = max(junc.points, key=lambda p: (r2[p], -p))
+            x, y, z, radius = self._where(centre)
+            of_junction[j] = len(nodes)
+            nodes.append(
+                {
+                    "id": len(nodes),
+                    "x": x,
+                    "y": y,
+                    "z": z,
+                    "radius": radius,
+                    "kind": "junction",
+                    "points": [self._where(p) for p in sorted(junc.points)],
+                }
+            )
+        branches = []
+        for b, br in enumerate(g.branches):
+            if not br.alive:
+                continue
+            path = g.path(b)
+            ends: list[int | None] = []
+            for e in (0, 1):
+                node = br.node[e]
+                if br.loop:
+                    ends.append(None)
+                elif node is not None:
+                    ends.append(of_junction[node])
+                elif e == 1 and len(path) == 1 and br.node[0] is None:
+                    ends.append(ends[0])  # a lone voxel: one end point
+                else:
+                    x, y, z, radius = self._where(path[0] if e == 0 else path[-1])
+                    ends.append(len(nodes))
+                    nodes.append(
+                        {
+                            "id": len(nodes),
+                            "x": x,
+                            "y": y,
+                            "z": z,
+                            "radius": radius,
+                            "kind": "endpoint",
+                            "points": [],
+                        }
+                    )
+            length = 0.0
+            for c, w in zip(br.steps, self.skeleton.step_weights.tolist(), strict=True):
+                length += c * w
+            branches.append(
+                {
+                    "id": b,
+                    "source": ends[0],
+                    "target": ends[1],
+                    "length": length,
+                    "points": [self._where(p) for p in path],
+                    "off_path": [self._where(p) for p in br.side],
+                    "margin": self.margins.margin.get(b),
+                    "removed_at": self.margins.removed_at.get(b),
+                }
+            )
+        return nodes, branches
+
+    def to_dict(self) -> dict[str, Any]:
+        seq = self.sequence
+        nodes, branches = self.graph_doc()
+        ss = float(seq.ss[self.chosen_step])
+        if self.trim is not None and seq.lbar > 0:
+            ss = math.log(self.skeleton.length / seq.lbar + 1.0)
+        return {
+            "label": self.label,
+            "volume": self.volume,
+            "alpha": seq.alpha,
+            "lbar": seq.lbar,
+            "rer": self.rer,
+            "ss": ss,
+            "objective": self.objective,
+            "chosen_step": self.chosen_step,
+            "steps": len(seq.removed),
+            "tips_trimmed": self.trim is not None,
+            "medial_axis": {
+                "rer": seq.lost[0] / self.volume,
+                "length": self.axis.length,
+                "endpoints": self.axis.n_endpoints,
+                "branches": sum(1 for br in self.axis.graph.branches if br.alive),
+            },
+            "skeleton": {
+                "length": self.skeleton.length,
+                "endpoints": self.skeleton.n_endpoints,
+                "nodes": nodes,
+                "branches": branches,
+            },
+        }
+
+
+@dataclass
+class VolumeResult:
+    """What :func:`skelprune.prune` answers for a volume.
+
+    Examples
+    --------
+    >>> import skelprune
+    >>> v = np.zeros((12, 14, 40), bool); v[3:9, 4:10, 3:37] = True
+    >>> res = skelprune.prune(v, spacing=(2.0, 1.0, 1.0))
+    >>> doc = res.to_dict()
+    >>> doc["spacing"], len(doc["components"]), doc["components"][0]["skeleton"]["endpoints"]
+    ([2.0, 1.0, 1.0], 1, 2)
+    >>> res.to_swc().splitlines()[1].split()[1:]   # the root: type, x, y, z, radius, parent
+    ['0', '5', '7', '14', '3', '-1']
+    """
+
+    shape: tuple[int, int, int]
+    spacing: tuple[float, float, float]
+    options: PruneOptions
+    output: OutputOptions
+    volume: np.ndarray
+    components: list[VolumeComponent] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The document: the volume's shape and spacing, the options, and per component
+        its numbers, nodes and branches (points ``[x, y, z, radius]``)."""
+        opts = self.options
+        return {
+            "dimensions": 3,
+            "width": self.shape[2],
+            "height": self.shape[1],
+            "depth": self.shape[0],
+            "spacing": list(self.spacing),
+            "method": opts.method,
+            "beta": opts.beta,
+            "coarse": None,
+            "choice": opts.choice,
+            "trim": opts.trim,
+            "min_margin": opts.min_margin,
+            "components": [c.to_dict() for c in self.components],
+        }
+
+    def summary(self) -> Any:
+        """The branch table (a pandas ``DataFrame``): one row per branch of the answer,
+        its length, its width (twice the ball radius: mean, least, largest) and its two
+        ends, all in the units of ``spacing``."""
+        import pandas as pd
+
+        dz, dy, dx = self.spacing
+        rows = []
+        for i, comp in enumerate(self.components):
+            nodes, branches = comp.graph_doc()
+            for br in branches:
+                pts = np.asarray(br["points"], float)
+                kind = (
+                    "loop"
+                    if br["source"] is None
+                    else "end"
+                    if "endpoint" in {nodes[br["source"]]["kind"], nodes[br["target"]]["kind"]}
+                    else "inner"
+                )
+                rows.append(
+                    {
+                        "component": i,
+                        "label": comp.label,
+                        "branch": br["id"],
+                        "kind": kind,
+                        "length": br["length"],
+                        "voxels": len(pts) + len(br["off_path"]),
+                        "mean_width": float(2 * pts[:, 3].mean()),
+                        "min_width": float(2 * pts[:, 3].min()),
+                        "max_width": float(2 * pts[:, 3].max()),
+                        "x0": pts[0, 0] * dx,
+                        "y0": pts[0, 1] * dy,
+                        "z0": pts[0, 2] * dz,
+                        "x1": pts[-1, 0] * dx,
+                        "y1": pts[-1, 1] * dy,
+                        "z1": pts[-1, 2] * dz,
+                        "margin": br["margin"],
+                        "removed_at": br["removed_at"],
+                    }
+                )
+        return pd.DataFrame(rows)
+
+    @property
+    def warnings(self) -> list[dict[str, Any]]:
+        """None for a volume (the image result's warnings come from rasterising)."""
+        return []
+
+    def to_csv(self) -> str:
+        """:meth:`summary` as CSV."""
+        return str(self.summary().to_csv(index=False))
+
+    def to_networkx(self) -> Any:
+        """The skeleton as a ``networkx.MultiGraph``: nodes ``(component, node id)`` with
+        the document's node fields, one edge per branch keyed by its id (a loop: a
+        self-loop on a node of its own)."""
+        import networkx as nx
+
+        g = nx.MultiGraph()
+        for i, comp in enumerate(self.components):
+            nodes, branches = comp.graph_doc()
+            for node in nodes:
+                g.add_node((i, node["id"]), **{k: v for k, v in node.items() if k != "id"})
+            for br in branches:
+                a, b = br["source"], br["target"]
+                if a is None:  # a loop without junction: a node at its first voxel
+                    x, y, z, radius = br["points"][0]
+                    a = b = f"loop{br['id']}"
+                    g.add_node((i, a), x=x, y=y, z=z, radius=radius, kind="loop", points=[])
+                attrs = {k: v for k, v in br.items() if k not in ("id", "source", "target")}
+                g.add_edge((i, a), (i, b), key=br["id"], **attrs)
+        return g
+
+    def to_swc(self) -> str:
+        """The skeleton in the SWC format of neuron tools: one line per skeleton voxel,
+        ``id type x y z radius parent`` in the units of ``spacing``, type 0 (undefined),
+        each component a tree rooted at its voxel of largest radius. SWC holds trees
+        only: of a cycle, one step is left out."""
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import breadth_first_order
+
+        dz, dy, dx = self.spacing
+        lines = ["# skelprune curve skeleton; units of spacing " + " ".join(map(str, self.spacing))]
+        next_id = 1
+        for comp in self.components:
+            s = comp.skeleton
+            pts = s.points()
+            local = np.full(s.z.size, -1, np.int64)
+            local[pts] = np.arange(pts.size)
+            nbr = s.graph.nbr[pts]
+            rows, slots = np.nonzero(nbr >= 0)
+            keep = local[nbr[rows, slots]] >= 0
+            rows, cols = rows[keep], local[nbr[rows, slots][keep]]
+            adj = coo_matrix((np.ones(rows.size), (rows, cols)), shape=(pts.size, pts.size))
+            seen = np.zeros(pts.size, bool)
+            # roots by decreasing radius (ties: raster order), one per connected piece
+            for root in np.lexsort((pts, -s.r2[pts])).tolist():
+                if seen[root]:
+                    continue
+                order, parent = breadth_first_order(adj.tocsr(), root, directed=False)
+                ids = {}
+                for q in order.tolist():
+                    seen[q] = True
+                    ids[q] = next_id
+                    next_id += 1
+                    p = pts[q]
+                    up = -1 if parent[q] < 0 else ids[int(parent[q])]
+                    lines.append(
+                        f"{ids[q]} 0 {(s.x[p] + s.origin[2]) * dx:g} "
+                        f"{(s.y[p] + s.origin[1]) * dy:g} {(s.z[p] + s.origin[0]) * dz:g} "
+                        f"{float(np.sqrt(s.r2[p])):g} {up}"
+                    )
+        return "\n".join(lines) + "\n"
+
+    def to_geojson(self, *args: Any, **kwargs: Any) -> Any:
+        """Refused: GeoJSON holds plane geometry, a volume's skeleton is 3-D."""
+        raise InvalidOptionError(
+            "GeoJSON holds 2-D geometry and a volume's skeleton is 3-D: ask for the JSON "
+            "document (to_dict), SWC (to_swc) or a networkx graph (to_networkx)"
+        )
+
+    def render_overlay(self, scale: int = 1) -> np.ndarray:
+        """RGB image of the three maximum-intensity projections (along ``z`` top left,
+        along ``y`` below it, along ``x`` to its right, as orthogonal views are laid out),
+        the volume grey, the curve skeleton's removed voxels orange, the answer red and
+        its end points blue (three voxels a side); voxels stretched to their physical
+        proportions."""
+        from scipy.ndimage import binary_dilation
+
+        dz, dy, dx = self.spacing
+        unit = min(self.spacing)
+        fz, fy, fx = (max(1, round(d / unit)) * scale for d in (dz, dy, dx))
+        axis_m = np.zeros(self.shape, bool)
+        kept = np.zeros(self.shape, bool)
+        ends = np.zeros(self.shape, bool)
+        for comp in self.components:
+            for sk, drawn in ((comp.axis, axis_m), (comp.skeleton, kept)):
+                idx = sk.points()
+                oz, oy, ox = sk.origin
+                drawn[sk.z[idx] + oz, sk.y[idx] + oy, sk.x[idx] + ox] = True
+            for node in comp.graph_doc()[0]:
+                if node["kind"] == "endpoint":
+                    ends[int(node["z"]), int(node["y"]), int(node["x"])] = True
+
+        def view(axis: int, f0: int, f1: int, turn: bool = False) -> np.ndarray:
+            def mip(a: np.ndarray) -> np.ndarray:
+                m = a.max(axis=axis)
+                return m.T if turn else m
+
+            img = np.full((*mip(self.volume).shape, 3), 255, np.uint8)
+            img[mip(self.volume)] = (205, 205, 205)
+            img[mip(axis_m)] = (245, 160, 60)
+            img[mip(kept)] = (210, 20, 20)
+            img = np.repeat(np.repeat(img, f0, axis=0), f1, axis=1)
+            # end points as blocks of three voxels a side, to be seen at any scale
+            big = np.repeat(np.repeat(binary_dilation(mip(ends), np.ones((3, 3))), f0, 0), f1, 1)
+            img[big] = (20, 60, 220)
+            return img
+
+        top = view(0, fy, fx)  # rows y, columns x
+        front = view(1, fz, fx)  # rows z, columns x
+        side = view(2, fy, fz, turn=True)  # rows y, columns z
+        gap = 4 * scale
+        h = top.shape[0] + gap + front.shape[0]
+        w = top.shape[1] + gap + side.shape[1]
+        out = np.full((h, w, 3), 255, np.uint8)
+        out[: top.shape[0], : top.shape[1]] = top
+        out[top.shape[0] + gap :, : front.shape[1]] = front
+        out[: side.shape[0], top.shape[1] + gap :] = side
+        return out
+
+    def overlay_png(self, scale: int | None = None) -> bytes:
+        """:meth:`render_overlay` as PNG bytes (``scale``: the output options' or one
+        that makes the longer side at least 512 px)."""
+        from PIL import Image
+
+        if scale is None:
+            scale = self.output.overlay_scale or max(1, min(16, -(-512 // max(self.shape))))
+        buf = io.BytesIO()
+        Image.fromarray(self.render_overlay(scale)).save(buf, format="PNG")
+        return buf.getvalue()

@@ -1,0 +1,237 @@
+"""Pruning volumes: a 3-D array or ``.npy`` file to a pruned curve skeleton per component.
+
+The same pruning as for images (docs/algorithm.md), through the grid interface of
+:mod:`skelprune.pruning.grid`: the curve skeleton of each 26-connected component
+(:mod:`skelprune.grid3d`), end branches removed in the order that trades length against
+lost volume (limbs kept), the answer chosen by ``argmin λ``, its end branches of margin
+below ``min_margin`` dropped and its tips cut (``trim``). What the image pipeline has
+and a volume does not (docs/volumes.md): the coarse DCE stage and ``method="dce"`` (both
+follow a contour), and the noise-floor choice.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import (
+    EmptyMaskError,
+    ImageTooLargeError,
+    InvalidImageError,
+    InvalidOptionError,
+    SkelpruneError,
+)
+from .grid3d.skeleton import VolumeSkeleton
+from .grid3d.tips import trim_volume_tips
+from .options import OutputOptions, PruneOptions, VolumeOptions
+from .output.volume import VolumeComponent, VolumeResult
+from .pruning.bayesian import choose_step, pruning_sequence
+from .pruning.margin import branch_margins
+
+__all__ = [
+    "IMAGE_CHANNELS",
+    "MAX_VOLUME_VOXELS",
+    "is_volume",
+    "prune_volume",
+    "read_volume",
+    "volume_components",
+]
+
+
+#: The most channels an image array has (RGBA): a 3-D array whose last axis is no longer
+#: is an image, read as one, unless volume options are given.
+IMAGE_CHANNELS = 4
+
+
+#: The most voxels a volume read from a file may declare (a 1024³ stack): checked from
+#: the header, before anything is decoded.
+MAX_VOLUME_VOXELS = 1 << 30
+TIFF_SUFFIXES = (".tif", ".tiff")
+
+
+def is_volume(source: Any) -> bool:
+    """Whether ``source`` is a volume without being told: the path of a ``.npy`` file or
+    of a multi-page TIFF (a stack), or a 3-D array whose last axis is longer than an
+    image's channels (:data:`IMAGE_CHANNELS`; a ``(Z, Y, X)`` volume with ``X ≤ 4`` is read
+    as a volume when ``spacing`` is given)."""
+    if isinstance(source, np.ndarray):
+        return source.ndim == 3 and source.shape[-1] > IMAGE_CHANNELS
+    if not isinstance(source, str | os.PathLike):
+        return False
+    name = str(source).lower()
+    if name.endswith(".npy"):
+        return True
+    if name.endswith(TIFF_SUFFIXES):
+        try:
+            return _stack_pages(source) > 1
+        except Exception:  # not a readable TIFF: the image reader says what is wrong
+            return False
+    return False
+
+
+def _stack_pages(path: Any) -> int:
+    """Pages of a TIFF, or slices of a single 3-D page (the header only)."""
+    import tifffile
+
+    with tifffile.TiffFile(path) as tif:
+        n = len(tif.pages)
+        return n if n > 1 else int(getattr(tif.pages.first, "imagedepth", 1))
+
+
+def _read_stack(path: Any) -> np.ndarray:
+    """A multi-page TIFF as a ``(pages, height, width)`` array: one-channel pages of one
+    size, at most :data:`MAX_VOLUME_VOXELS` voxels by the header, before decoding."""
+    import tifffile
+
+    try:
+        with tifffile.TiffFile(path) as tif:
+            series = tif.series[0]
+            shape = tuple(int(v) for v in series.shape)
+            if len(shape) != 3:
+                raise InvalidImageError(
+                    f"a TIFF stack holds one-channel pages of one size; this one reads as "
+                    f"{'x'.join(map(str, shape))}"
+                )
+            voxels = shape[0] * shape[1] * shape[2]
+            if voxels > MAX_VOLUME_VOXELS:
+                raise ImageTooLargeError(
+                    f"the stack has {voxels} voxels, more than the {MAX_VOLUME_VOXELS} read"
+                )
+            return np.asarray(series.asarray())
+    except SkelpruneError:
+        raise
+    except Exception as exc:  # tifffile raises many kinds on a broken file
+        raise InvalidImageError(f"cannot read {os.fspath(path)!r} as a TIFF stack: {exc}") from None
+
+
+def read_volume(source: Any) -> np.ndarray:
+    """A volume as an array: ``source`` itself, a ``.npy`` file (no pickles) or a
+    multi-page TIFF (its pages along ``z``).
+
+    Raises
+    ------
+    InvalidImageError
+        Not a 3-D array of booleans or integers, or an unreadable file.
+    ImageTooLargeError
+        A file declaring more than :data:`MAX_VOLUME_VOXELS` voxels.
+    """
+    if isinstance(source, str | os.PathLike) and str(source).lower().endswith(TIFF_SUFFIXES):
+        arr = _read_stack(source)
+    elif isinstance(source, str | os.PathLike):
+        try:
+            # mapped, not read: the header's size is checked before the voxels are touched
+            arr = np.load(Path(source), mmap_mode="r", allow_pickle=False)
+        except (OSError, ValueError) as exc:
+            raise InvalidImageError(
+                f"cannot read {os.fspath(source)!r} as a .npy array: {exc}"
+            ) from None
+        if arr.size > MAX_VOLUME_VOXELS:
+            raise ImageTooLargeError(
+                f"the array has {arr.size} voxels, more than the {MAX_VOLUME_VOXELS} read"
+            )
+    else:
+        arr = np.asarray(source)
+    if arr.ndim != 3:
+        raise InvalidImageError(f"a volume is a 3-D array; this one has {arr.ndim} dimensions")
+    if not (arr.dtype == np.bool_ or np.issubdtype(arr.dtype, np.integer)):
+        raise InvalidImageError(
+            f"a volume holds booleans or integer labels, not {arr.dtype} values"
+        )
+    return arr
+
+
+def volume_components(
+    volume: np.ndarray,
+) -> list[tuple[np.ndarray, tuple[int, int, int], int | None]]:
+    """26-connected components as padded crops, with the crop's origin in the volume
+    and the label (``None`` for a boolean or 0/1 volume, else each non-zero value is a
+    shape of its own)."""
+    from scipy import ndimage
+
+    values = np.unique(volume)
+    binary = volume.dtype == np.bool_ or set(values.tolist()) <= {0, 1}
+    out = []
+    for value in [None] if binary else [v for v in values.tolist() if v != 0]:
+        mask = volume != 0 if value is None else volume == value
+        lab, _ = ndimage.label(mask, structure=np.ones((3, 3, 3), bool))
+        for i, box in enumerate(ndimage.find_objects(lab), start=1):
+            if box is None:
+                continue
+            crop = np.pad(lab[box] == i, 1)
+            origin = (box[0].start - 1, box[1].start - 1, box[2].start - 1)
+            out.append((crop, origin, value))
+    return out
+
+
+def prune_volume_component(
+    crop: np.ndarray,
+    origin: tuple[int, int, int],
+    options: PruneOptions,
+    spacing: tuple[float, float, float],
+) -> VolumeComponent:
+    """The curve skeleton of one padded component crop and its pruning."""
+    axis = VolumeSkeleton.curve_skeleton(crop, spacing, origin)
+    norm = axis.normalisation(options.beta)
+    seq = pruning_sequence(axis, norm.alpha, norm.lbar)
+    chosen = choose_step(seq.objective)
+    min_margin = options.min_margin or 0.0
+    if min_margin > 0 and seq.alpha is not None:
+        # As for images: the cheapest end branch is the sequence's next removal, and its
+        # margin that step's rise of λ.
+        lam = seq.objective
+        while chosen < len(seq.removed) and lam[chosen + 1] - lam[chosen] < min_margin:
+            chosen += 1
+    answer = seq.skeleton_at(chosen)
+    trim = None
+    if options.trim and seq.alpha is not None:
+        trim = trim_volume_tips(answer, seq.lost[chosen], seq.alpha, seq.lbar)  # type: ignore[arg-type]
+        answer = trim.skeleton
+    margins = branch_margins(answer.graph, seq, chosen, trim)  # type: ignore[arg-type]
+    return VolumeComponent(axis, answer, seq, chosen, margins, trim)  # type: ignore[arg-type]
+
+
+def prune_volume(
+    source: Any,
+    options: PruneOptions,
+    volume_options: VolumeOptions,
+    output: OutputOptions | None = None,
+) -> VolumeResult:
+    """Prune every 26-connected component of a volume (what :func:`skelprune.prune` runs
+    for a 3-D array or a ``.npy`` path).
+
+    Raises
+    ------
+    EmptyMaskError
+        No voxel inside.
+    InvalidOptionError
+        An option that holds for images only (``method="dce"``, ``choice="noise-floor"``).
+    """
+    applied = options.resolved()
+    if applied.method != "bayesian":
+        raise InvalidOptionError(
+            "method='dce' follows a contour and holds for images only; a volume is pruned "
+            "with method='bayesian'"
+        )
+    if applied.choice != "argmin":
+        raise InvalidOptionError(
+            f"choice={applied.choice!r} holds for images only; a volume's answer is the argmin"
+        )
+    volume = read_volume(source)
+    if not volume.any():
+        raise EmptyMaskError("the volume has no voxel inside")
+    spacing = volume_options.spacing
+    result = VolumeResult(
+        shape=(int(volume.shape[0]), int(volume.shape[1]), int(volume.shape[2])),
+        spacing=spacing,
+        options=applied,
+        output=OutputOptions() if output is None else output,
+        volume=volume != 0,
+    )
+    for crop, origin, label in volume_components(volume):
+        component = prune_volume_component(crop, origin, applied, spacing)
+        component.label = label
+        result.components.append(component)
+    return result

@@ -236,6 +236,10 @@ def prune_input(
     if not shape.mask.any():
         raise EmptyMaskError("the mask has no foreground pixel")
     applied = options.resolved()
+    if applied.scope == "local":
+        from .local import prune_local
+
+        return prune_local(shape, applied, output)
     result = PruneResult(
         input=shape, options=applied, output=OutputOptions() if output is None else output
     )

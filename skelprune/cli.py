@@ -34,6 +34,7 @@ from .options import (
     COARSE,
     FOREGROUND_RULES,
     METHODS,
+    SCOPES,
     OutputOptions,
     PruneOptions,
     RasterOptions,
@@ -180,6 +181,11 @@ TrimOption = Annotated[bool, typer.Option(help=HELP["trim"])]
 Choice = enum.Enum("Choice", {name: name for name in CHOICES}, type=str)
 ChoiceOption = Annotated[Choice, typer.Option(help=HELP["choice"])]
 ForegroundOption = Annotated[Rule, typer.Option(help=HELP["foreground"])]
+Scope = enum.Enum("Scope", {name: name for name in SCOPES}, type=str)
+ScopeOption = Annotated[Scope, typer.Option(help=HELP["scope"])]
+WindowOption = Annotated[int | None, typer.Option(help=HELP["window"])]
+FillOption = Annotated[int, typer.Option(help=HELP["fill_holes"])]
+AreaOption = Annotated[int, typer.Option(help=HELP["min_area"])]
 
 
 @app.command("prune", cls=_CleanCommand)
@@ -199,10 +205,12 @@ def prune_command(
     min_margin: MarginOption = None,
     choice: ChoiceOption = Choice(PruneOptions.choice),
     trim: TrimOption = PruneOptions.trim,
+    scope: ScopeOption = Scope(PruneOptions.scope),
+    window: WindowOption = None,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
     labels: Annotated[bool, typer.Option(help=HELP["labels"])] = ReadOptions.labels,
-    fill_holes: Annotated[int, typer.Option(help=HELP["fill_holes"])] = ReadOptions.fill_holes,
-    min_area: Annotated[int, typer.Option(help=HELP["min_area"])] = ReadOptions.min_area,
+    fill_holes: FillOption = ReadOptions.fill_holes,
+    min_area: AreaOption = ReadOptions.min_area,
     csv: Annotated[
         Path | None,
         typer.Option(
@@ -451,6 +459,10 @@ def prune_many_command(
     min_margin: MarginOption = None,
     choice: ChoiceOption = Choice(PruneOptions.choice),
     trim: TrimOption = PruneOptions.trim,
+    scope: ScopeOption = Scope(PruneOptions.scope),
+    window: WindowOption = None,
+    fill_holes: FillOption = ReadOptions.fill_holes,
+    min_area: AreaOption = ReadOptions.min_area,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
     curve: Annotated[bool, typer.Option(help=HELP["curve"])] = OutputOptions.curve,
     sequence: Annotated[bool, typer.Option(help=HELP["sequence"])] = OutputOptions.sequence,

@@ -44,7 +44,7 @@ from .options import (
 from .output.document import ComponentResult, GraphSummary, PruneResult
 from .pruning.bayesian import PruningSequence
 from .pruning.tips import trim_tips
-from .skeleton import Skeleton, normalisation
+from .skeleton import Normalisation, Skeleton, normalisation
 
 __all__ = ["default_window", "mean_width", "prune_local", "prune_window", "windows"]
 
@@ -212,6 +212,67 @@ def _seam_thinned(
     return ~drop[rows, cols]
 
 
+def _pieces(rows: np.ndarray, cols: np.ndarray) -> tuple[int, np.ndarray]:
+    """8-connected pieces of a pixel set: their number and each pixel's piece."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    n = rows.size
+    width = int(cols.max()) + 2
+    flat = rows * width + cols
+    order = np.argsort(flat)
+    sflat = flat[order]
+    src, dst = [], []
+    for dr, dc in ((0, 1), (1, -1), (1, 0), (1, 1)):
+        q = flat + dr * width + dc
+        j = np.minimum(np.searchsorted(sflat, q), n - 1)
+        hit = sflat[j] == q
+        src.append(np.flatnonzero(hit))
+        dst.append(order[j[hit]])
+    s, d = np.concatenate(src), np.concatenate(dst)
+    graph = coo_matrix((np.ones(s.size, np.int8), (s, d)), shape=(n, n))
+    count, label = connected_components(graph, directed=False)
+    return int(count), label
+
+
+def _bridged(
+    crop: np.ndarray, rows: np.ndarray, cols: np.ndarray, r2: np.ndarray, kept: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The axis of one component in one piece: where two windows' axes fail to meet at a
+    seam (each broke its ties its own way), the nearest pixels of the largest piece and
+    of another are joined by a straight 8-connected line (a few pixels), kept, with its
+    own radii; again until one piece is left."""
+    from scipy import ndimage
+    from scipy.spatial import cKDTree
+
+    while rows.size > 1:
+        count, label = _pieces(rows, cols)
+        if count == 1:
+            break
+        main = np.bincount(label).argmax()
+        mine = label == main
+        tree = cKDTree(np.stack([rows[~mine], cols[~mine]], 1))
+        dist, near = tree.query(np.stack([rows[mine], cols[mine]], 1))
+        a = int(np.argmin(dist))
+        p = np.array([rows[mine][a], cols[mine][a]])
+        q = np.array([rows[~mine][near[a]], cols[~mine][near[a]]])
+        steps = int(np.abs(q - p).max())
+        t = np.linspace(0.0, 1.0, steps + 1)[1:-1]
+        line = np.round(p[None, :] + t[:, None] * (q - p)[None, :]).astype(np.int64)
+        if line.size == 0:  # the two are neighbours already: cannot happen, but stop safely
+            break
+        pad = 32
+        lo = np.maximum(line.min(0) - pad, 0)
+        hi = np.minimum(line.max(0) + pad + 1, crop.shape)
+        patch = crop[lo[0] : hi[0], lo[1] : hi[1]]
+        d2 = np.rint(ndimage.distance_transform_edt(patch) ** 2).astype(np.int64)
+        rows = np.concatenate([rows, line[:, 0]])
+        cols = np.concatenate([cols, line[:, 1]])
+        r2 = np.concatenate([r2, d2[line[:, 0] - lo[0], line[:, 1] - lo[1]]])
+        kept = np.concatenate([kept, np.ones(len(line), bool)])
+    return rows, cols, r2, kept
+
+
 def _component_result(
     crop: np.ndarray,
     origin: tuple[int, int],
@@ -233,7 +294,7 @@ def _component_result(
     r = rows - origin[0]
     c = cols - origin[1]
     keep = _seam_thinned(r, c, crop.shape, origin, options.window or 0)
-    r, c, r2, kept = r[keep], c[keep], r2[keep], kept[keep]
+    r, c, r2, kept = _bridged(crop, r[keep], c[keep], r2[keep], kept[keep])
     axis = Skeleton(crop, r, c, r2, BranchGraph(r, c, crop.shape), origin=origin)
     graph = axis.working_graph()
     changed = True
@@ -250,7 +311,10 @@ def _component_result(
     area = answer.area
     lost = area - int(np.count_nonzero(answer.reconstruction() & crop))
     ma_lost = area - int(np.count_nonzero(axis.reconstruction() & crop))
-    norm = normalisation(graph, r2, options.beta)
+    try:
+        norm = normalisation(graph, r2, options.beta)
+    except ValueError:  # ends out of the seed's reach: the seams left the axis in pieces
+        norm = Normalisation(0, 0.0, None)
     trim = None
     if options.trim and options.method == "bayesian" and norm.alpha is not None:
         trim = trim_tips(answer, lost, norm.alpha, norm.lbar)
@@ -303,6 +367,13 @@ def prune_local(
     mask = shape.mask
     window = options.window or default_window(mask)
     applied = replace(options, window=window)
+    if window >= max(mask.shape):
+        # one window holds the image: it is pruned alone, as the global scope prunes it
+        from .api import prune_input
+
+        result = prune_input(shape, replace(applied, scope="global", window=None), output)
+        result.options = applied
+        return result
     rows, cols, r2, kept = _run_windows(mask, window, applied, client, progress)
     order = np.lexsort((cols, rows))
     rows, cols, r2, kept = rows[order], cols[order], r2[order], kept[order]

@@ -9,8 +9,8 @@ pixels inside the widest parts, as a segmentation leaves them). Widths run from 
 The truth a pruned skeleton is measured against:
 
 - ``dead_ends``: nodes of degree 1 inside the image (at least a width from its border)
-  whose edge is at least :data:`KEEP_LENGTH` long and four widths long: a road a person
-  would keep, ending there;
+  whose edge is at least :data:`KEEP_LENGTH` long and four widths long, and whose end
+  does not run into another road: a road a person would keep, ending there;
 - ``border_roads``: where an edge's centre line crosses the image border (a road running
   off the image), one point per crossing;
 - ``centre``: every centre line, as (row, col) points.
@@ -260,12 +260,21 @@ def network(kind: str, size: int, seed: int = 0, pinholes: float = 1.0) -> Netwo
     for a, b in edges:
         degree[a] += 1
         degree[b] += 1
+    # a dead end drawn onto another road is no dead end in the mask: the truth leaves it out
+    from scipy.spatial import cKDTree
+
+    owner = np.concatenate([np.full(len(line), k) for k, line in enumerate(lines)])
+    tree = cKDTree(np.concatenate(lines))
+    widest = max(radii) if radii else 0.0
     dead, dead_r = [], []
-    for (a, b), line, r in zip(edges, lines, radii, strict=True):
+    for k, ((a, b), line, r) in enumerate(zip(edges, lines, radii, strict=True)):
         length = float(np.sum(np.hypot(*np.diff(line, axis=0).T)))
         for node, end in ((a, line[0]), (b, line[-1])):
             w = 2 * r
             if degree[node] != 1 or length < max(KEEP_LENGTH, 4 * w):
+                continue
+            near = tree.query_ball_point(end, r + widest + 6)
+            if any(owner[q] != k for q in near):
                 continue
             if w <= end[0] <= size - 1 - w and w <= end[1] <= size - 1 - w:
                 dead.append(end)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -134,6 +135,7 @@ def prune(
     read: ReadOptions | None = None,
     raster: RasterOptions | None = None,
     output: OutputOptions | None = None,
+    progress: Callable[[int, int], None] | None = None,
     **keywords: Any,
 ) -> PruneResult:
     """Pruned skeleton of every 8-connected component of a shape: a mask, an image or a
@@ -161,6 +163,9 @@ def prune(
     output : OutputOptions, optional
         What the result's outputs hold by default (``curve``, ``sequence``, ``overlay``,
         ``overlay_scale``, ``overlay_legend``, ``simplify``, ``cut_ends``).
+    progress : callable, optional
+        ``progress(done, total)``, called as each component (with ``scope="local"``: each
+        window) is pruned: for a progress bar on a large image.
     **keywords
         Any field of those four classes by name, instead of the class's value (never
         both for one class): ``prune(mask, beta=3.0)`` is
@@ -222,11 +227,14 @@ def prune(
             else options_value(RasterOptions, raster, groups[RasterOptions])
         )
         shape = read_input(source, read=read, raster=raster)
-    return prune_input(shape, options, output)
+    return prune_input(shape, options, output, progress)
 
 
 def prune_input(
-    shape: Input, options: PruneOptions, output: OutputOptions | None = None
+    shape: Input,
+    options: PruneOptions,
+    output: OutputOptions | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> PruneResult:
     """The pipeline after reading: prune every component of an :class:`Input`.
 
@@ -239,12 +247,15 @@ def prune_input(
     if applied.scope == "local":
         from .local import prune_local
 
-        return prune_local(shape, applied, output)
+        return prune_local(shape, applied, output, progress=progress)
     result = PruneResult(
         input=shape, options=applied, output=OutputOptions() if output is None else output
     )
-    for crop, origin, label in shape.components():
+    parts = shape.components()
+    for k, (crop, origin, label) in enumerate(parts):
         component = prune_component(crop, origin, applied)
         component.label = label  # None unless a label image
         result.components.append(component)
+        if progress is not None:
+            progress(k + 1, len(parts))
     return result

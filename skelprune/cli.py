@@ -93,8 +93,39 @@ def _prune(
     GeoJSON: the library's one pipeline (``.geojson``/``.json`` files are polygons)."""
     from .api import prune
 
-    res = prune(Path(path), options, read=read, raster=raster, output=output)
+    res = prune(
+        Path(path), options, read=read, raster=raster, output=output, progress=_progress(path)
+    )
     return res, res.to_geojson() if geojson else res.to_dict()
+
+
+#: A run shows its progress on a terminal once it has taken this long (s): a large image.
+PROGRESS_AFTER = 1.0
+
+
+def _progress(path: str) -> Any:
+    """``progress(done, total)`` drawing a bar on stderr when it is a terminal and the
+    run has taken over :data:`PROGRESS_AFTER` seconds (None otherwise: nothing shown)."""
+    if not sys.stderr.isatty():
+        return None
+    import time
+
+    start = time.monotonic()
+    shown = [False]
+
+    def show(done: int, total: int) -> None:
+        if time.monotonic() - start < PROGRESS_AFTER and not shown[0]:
+            return
+        shown[0] = True
+        filled = 30 * done // max(total, 1)
+        sys.stderr.write(
+            f"\r{Path(path).name}: [{'#' * filled}{'.' * (30 - filled)}] {done}/{total}"
+        )
+        if done == total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+
+    return show
 
 
 def _prune_file(

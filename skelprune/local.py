@@ -371,7 +371,7 @@ def prune_local(
         # one window holds the image: it is pruned alone, as the global scope prunes it
         from .api import prune_input
 
-        result = prune_input(shape, replace(applied, scope="global", window=None), output)
+        result = prune_input(shape, replace(applied, scope="global", window=None), output, progress)
         result.options = applied
         return result
     rows, cols, r2, kept = _run_windows(mask, window, applied, client, progress)

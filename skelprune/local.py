@@ -178,8 +178,10 @@ def _run_windows(
     return rows, cols, r2, kept
 
 
-#: Pixels either side of a core border where the stitched answer is thinned again.
+#: Pixels either side of a core border where the stitched answer is thinned again ...
 SEAM = 2
+#: ... and where the pieces two windows' axes leave apart are looked for.
+BRIDGE = 6
 
 
 def _seam_thinned(
@@ -235,13 +237,34 @@ def _pieces(rows: np.ndarray, cols: np.ndarray) -> tuple[int, np.ndarray]:
     return int(count), label
 
 
+def _line(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """The pixels strictly between ``p`` and ``q`` on a straight 8-connected line."""
+    steps = int(np.abs(q - p).max())
+    t = np.linspace(0.0, 1.0, steps + 1)[1:-1]
+    return np.round(p[None, :] + t[:, None] * (q - p)[None, :]).astype(np.int64).reshape(-1, 2)
+
+
+def _find(parent: list[int], a: int) -> int:
+    while parent[a] != a:
+        parent[a] = parent[parent[a]]
+        a = parent[a]
+    return a
+
+
 def _bridged(
-    crop: np.ndarray, rows: np.ndarray, cols: np.ndarray, r2: np.ndarray, kept: np.ndarray
+    crop: np.ndarray,
+    rows: np.ndarray,
+    cols: np.ndarray,
+    r2: np.ndarray,
+    kept: np.ndarray,
+    origin: tuple[int, int] = (0, 0),
+    window: int = 0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The axis of one component in one piece: where two windows' axes fail to meet at a
-    seam (each broke its ties its own way), the nearest pixels of the largest piece and
-    of another are joined by a straight 8-connected line (a few pixels), kept, with its
-    own radii; again until one piece is left."""
+    seam (each broke its ties its own way), pieces are joined by straight 8-connected lines
+    (a few pixels), kept, with their own radii: the shortest joins first between the
+    pixels near a core border (:data:`BRIDGE` px), each only if its two pieces are still
+    apart; should pieces remain, the largest is joined to its nearest other, and so on."""
     from scipy import ndimage
     from scipy.spatial import cKDTree
 
@@ -249,26 +272,52 @@ def _bridged(
         count, label = _pieces(rows, cols)
         if count == 1:
             break
-        main = np.bincount(label).argmax()
-        mine = label == main
-        tree = cKDTree(np.stack([rows[~mine], cols[~mine]], 1))
-        dist, near = tree.query(np.stack([rows[mine], cols[mine]], 1))
-        a = int(np.argmin(dist))
-        p = np.array([rows[mine][a], cols[mine][a]])
-        q = np.array([rows[~mine][near[a]], cols[~mine][near[a]]])
-        steps = int(np.abs(q - p).max())
-        t = np.linspace(0.0, 1.0, steps + 1)[1:-1]
-        line = np.round(p[None, :] + t[:, None] * (q - p)[None, :]).astype(np.int64)
-        if line.size == 0:  # the two are neighbours already: cannot happen, but stop safely
+        pts = np.stack([rows, cols], 1)
+        joins: list[tuple[int, int]] = []
+        if window:
+            off_r = (rows + origin[0]) % window
+            off_c = (cols + origin[1]) % window
+            near = np.minimum(np.minimum(off_r, window - off_r), np.minimum(off_c, window - off_c))
+            seam = np.flatnonzero(near <= BRIDGE)
+            if seam.size > 1:
+                k = min(12, seam.size)
+                dist, idx = cKDTree(pts[seam]).query(pts[seam], k=k)
+                dist = np.where(label[seam][idx] != label[seam][:, None], dist, np.inf)
+                j = dist.argmin(1)
+                best = dist[np.arange(seam.size), j]
+                parent = list(range(count))
+                for a in np.argsort(best, kind="stable"):
+                    if not np.isfinite(best[a]) or best[a] > 2 * BRIDGE:
+                        break
+                    pa, pb = seam[a], seam[idx[a, j[a]]]
+                    la, lb = _find(parent, int(label[pa])), _find(parent, int(label[pb]))
+                    if la != lb:
+                        parent[la] = lb
+                        joins.append((int(pa), int(pb)))
+        if not joins:  # far apart, or no window: the largest piece to its nearest other
+            mine = label == np.bincount(label).argmax()
+            inside, outside = np.flatnonzero(mine), np.flatnonzero(~mine)
+            dist, near_i = cKDTree(pts[outside]).query(pts[inside])
+            a = int(np.argmin(dist))
+            joins = [(int(inside[a]), int(outside[near_i[a]]))]
+        lines = [_line(pts[a], pts[b]) for a, b in joins]
+        line = np.concatenate(lines) if lines else np.zeros((0, 2), np.int64)
+        if line.size == 0:  # the pieces touch already: cannot happen, but stop safely
             break
-        pad = 32
-        lo = np.maximum(line.min(0) - pad, 0)
-        hi = np.minimum(line.max(0) + pad + 1, crop.shape)
-        patch = crop[lo[0] : hi[0], lo[1] : hi[1]]
-        d2 = np.rint(ndimage.distance_transform_edt(patch) ** 2).astype(np.int64)
+        pad = int(np.sqrt(r2.max())) + 2 if r2.size else 2  # the patch holds every disk
+        radii = np.empty(len(line), np.int64)
+        for seg in np.split(np.arange(len(line)), np.cumsum([len(x) for x in lines])[:-1]):
+            if seg.size == 0:
+                continue
+            part = line[seg]
+            lo = np.maximum(part.min(0) - pad, 0)
+            hi = np.minimum(part.max(0) + pad + 1, crop.shape)
+            patch = crop[lo[0] : hi[0], lo[1] : hi[1]]
+            d2 = np.rint(ndimage.distance_transform_edt(patch) ** 2).astype(np.int64)
+            radii[seg] = d2[part[:, 0] - lo[0], part[:, 1] - lo[1]]
         rows = np.concatenate([rows, line[:, 0]])
         cols = np.concatenate([cols, line[:, 1]])
-        r2 = np.concatenate([r2, d2[line[:, 0] - lo[0], line[:, 1] - lo[1]]])
+        r2 = np.concatenate([r2, radii])
         kept = np.concatenate([kept, np.ones(len(line), bool)])
     return rows, cols, r2, kept
 
@@ -294,7 +343,9 @@ def _component_result(
     r = rows - origin[0]
     c = cols - origin[1]
     keep = _seam_thinned(r, c, crop.shape, origin, options.window or 0)
-    r, c, r2, kept = _bridged(crop, r[keep], c[keep], r2[keep], kept[keep])
+    r, c, r2, kept = _bridged(
+        crop, r[keep], c[keep], r2[keep], kept[keep], origin, options.window or 0
+    )
     axis = Skeleton(crop, r, c, r2, BranchGraph(r, c, crop.shape), origin=origin)
     graph = axis.working_graph()
     changed = True

@@ -178,3 +178,18 @@ def test_overlay_marks_fit_a_large_network() -> None:
     assert marked.any()
     near = ndimage.binary_dilation(net.mask, iterations=3)
     assert near[marked].mean() > 0.9
+
+
+def test_prune_many_takes_the_scope() -> None:
+    """prune_many's workers run the same pipeline: a batch item with scope="local"
+    answers what prune answers."""
+    from skelprune.parallel import document_bytes
+    from skelprune.parallel.items import expand
+    from skelprune.parallel.work import Job, run_batch
+
+    m = np.zeros((300, 300), bool)
+    m[100:112, 5:295] = m[5:295, 150:162] = True
+    options = PruneOptions(scope="local", window=128)
+    done = run_batch(list(enumerate(expand({"t": m}))), Job(options=options))
+    assert done[0].payload == document_bytes(skelprune.prune(m, options).to_dict())
+    assert b'"scope": "local"' in done[0].payload or b'"scope":"local"' in done[0].payload

@@ -129,8 +129,12 @@ def prune_window(
     for comp in res.components:
         s = comp.skeleton
         r, c = s.image_coordinates(s.rows, s.cols)
+        # the vote is on the window's branches before their tips were cut: a short kept
+        # branch cut back to less than half its pixels is kept all the same, its tip cut
+        # again once stitched
+        chosen = s if comp.trim is None else comp.sequence.skeleton_at(comp.chosen_step)
         alive = np.zeros(s.rows.size, bool)
-        alive[s.points()] = True
+        alive[chosen.points()] = True
         r = r + offset[0]
         c = c + offset[1]
         own = (r >= top) & (r < bottom) & (c >= left) & (c < right)

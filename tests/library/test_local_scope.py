@@ -193,3 +193,19 @@ def test_prune_many_takes_the_scope() -> None:
     done = run_batch(list(enumerate(expand({"t": m}))), Job(options=options))
     assert done[0].payload == document_bytes(skelprune.prune(m, options).to_dict())
     assert b'"scope": "local"' in done[0].payload or b'"scope":"local"' in done[0].payload
+
+
+def test_windows_vote_before_their_tips_are_cut() -> None:
+    """Cutting tips moves no end: a short branch a window keeps, cut back to less than
+    half its pixels, is still kept once stitched (the vote reads the uncut answer)."""
+    m = network("crack", 1024, seed=3).mask
+    ends = [
+        sum(
+            len(c["skeleton"]["endpoints"])
+            for c in skelprune.prune(m, scope="local", window=256, trim=trim).to_dict()[
+                "components"
+            ]
+        )
+        for trim in (True, False)
+    ]
+    assert ends[0] == ends[1]

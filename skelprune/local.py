@@ -10,17 +10,21 @@ prunes windows instead (docs/algorithm.md, "Local scope"):
    to the image) into its **window**.
 2. Each window is pruned alone, with the existing pipeline (:func:`skelprune.api.prune_input`
    with ``scope="global"``) and every other option as given.
-3. Each pixel of the medial axis is decided once, by the window whose core holds it: it is
-   kept if that window's answer keeps it. A branch crossing a core border is seen whole by
-   both windows (the halo is longer than the spurs a window prunes), so both decide alike.
-4. **Stitching**: where the owners disagree at a core border the kept pixels of one
-   component may fall apart; the pieces are joined again along the medial axis by the
-   shortest axis paths between them (a breadth-first search from every piece at once), so
-   that each component's answer is one connected graph, as the medial axis is.
+3. Each pixel of the medial axis is decided once, by the window whose core holds it: it
+   is kept if that window's answer (before its tips are cut) keeps it. A branch crossing
+   a core border is seen whole by both windows (the halo is longer than the spurs a
+   window prunes), so both decide alike.
+4. **Stitching**, per component: the cores' axis pixels make its medial axis (thinned
+   again within :data:`SEAM` px of a core border; pieces two windows' tie-breaking left
+   apart joined by short straight lines). From its graph every end branch of which fewer
+   than half the pixels are kept is removed, again and again: only end branches go, so
+   the answer is one connected graph, as the global answer is. The tips are then cut as
+   ``trim`` says, with ``α`` and ``ℓ̄`` of the stitched skeleton.
 
-Peak memory follows the window, not the image: one window is pruned at a time (or one per
-worker, :func:`prune_local` with ``client``), and what is kept of it is its axis pixels
-(three integers each). The input mask itself and the answer's graph are the rest.
+The windows' memory follows the window, not the image: one window is pruned at a time (or
+one per worker, :func:`prune_local` with ``client``), and what is kept of it is its axis
+pixels (three integers and a flag each). The input mask and the stitching over each
+component's box are the rest (docs/performance.md, "Large networks").
 """
 
 from __future__ import annotations

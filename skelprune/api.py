@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import fields
 from typing import TYPE_CHECKING, Any
 
@@ -141,6 +142,7 @@ def prune(
     raster: RasterOptions | None = None,
     output: OutputOptions | None = None,
     volume: VolumeOptions | None = None,
+    progress: Callable[[int, int], None] | None = None,
     **keywords: Any,
 ) -> PruneResult | VolumeResult:
     """Pruned skeleton of every 8-connected component of a shape: a mask, an image or a
@@ -175,6 +177,9 @@ def prune(
         Volume input (a 3-D array or a ``.npy`` path): the voxel ``spacing``
         ``(dz, dy, dx)``. A volume is pruned as docs/volumes.md says, and answers with a
         :class:`~skelprune.output.volume.VolumeResult`.
+    progress : callable, optional
+        ``progress(done, total)``, called as each component (with ``scope="local"``: each
+        window) is pruned: for a progress bar on a large image.
     **keywords
         Any field of those five classes by name, instead of the class's value (never
         both for one class): ``prune(mask, beta=3.0)`` is
@@ -230,11 +235,14 @@ def prune(
         shape = source
     else:
         shape = read_input(source, read=read, raster=raster)
-    return prune_input(shape, options, output)
+    return prune_input(shape, options, output, progress)
 
 
 def prune_input(
-    shape: Input, options: PruneOptions, output: OutputOptions | None = None
+    shape: Input,
+    options: PruneOptions,
+    output: OutputOptions | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> PruneResult:
     """The pipeline after reading: prune every component of an :class:`Input`.
 
@@ -244,11 +252,18 @@ def prune_input(
     if not shape.mask.any():
         raise EmptyMaskError("the mask has no foreground pixel")
     applied = options.resolved()
+    if applied.scope == "local":
+        from .local import prune_local
+
+        return prune_local(shape, applied, output, progress=progress)
     result = PruneResult(
         input=shape, options=applied, output=OutputOptions() if output is None else output
     )
-    for crop, origin, label in shape.components():
+    parts = shape.components()
+    for k, (crop, origin, label) in enumerate(parts):
         component = prune_component(crop, origin, applied)
         component.label = label  # None unless a label image
         result.components.append(component)
+        if progress is not None:
+            progress(k + 1, len(parts))
     return result

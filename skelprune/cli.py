@@ -35,6 +35,7 @@ from .options import (
     COARSE,
     FOREGROUND_RULES,
     METHODS,
+    SCOPES,
     OutputOptions,
     PruneOptions,
     RasterOptions,
@@ -97,8 +98,39 @@ def _prune(
     if is_volume(path):
         res: Any = prune(Path(path), options, output=output, volume=volume or VolumeOptions())
     else:
-        res = prune(Path(path), options, read=read, raster=raster, output=output)
+        res = prune(
+            Path(path), options, read=read, raster=raster, output=output, progress=_progress(path)
+        )
     return res, res.to_geojson() if geojson else res.to_dict()
+
+
+#: A run shows its progress on a terminal once it has taken this long (s): a large image.
+PROGRESS_AFTER = 1.0
+
+
+def _progress(path: str) -> Any:
+    """``progress(done, total)`` drawing a bar on stderr when it is a terminal and the
+    run has taken over :data:`PROGRESS_AFTER` seconds (None otherwise: nothing shown)."""
+    if not sys.stderr.isatty():
+        return None
+    import time
+
+    start = time.monotonic()
+    shown = [False]
+
+    def show(done: int, total: int) -> None:
+        if time.monotonic() - start < PROGRESS_AFTER and not shown[0]:
+            return
+        shown[0] = True
+        filled = 30 * done // max(total, 1)
+        sys.stderr.write(
+            f"\r{Path(path).name}: [{'#' * filled}{'.' * (30 - filled)}] {done}/{total}"
+        )
+        if done == total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+
+    return show
 
 
 def _prune_file(
@@ -208,6 +240,9 @@ CrsOption = Annotated[str | None, typer.Option(help=_geojson_only("crs"))]
 SimplifyOption = Annotated[float, typer.Option(help=HELP["simplify"])]
 CutEndsOption = Annotated[bool, typer.Option(help=HELP["cut_ends"])]
 OverlayScaleOption = Annotated[int | None, typer.Option(help=HELP["overlay_scale"])]
+Scope = enum.Enum("Scope", {name: name for name in SCOPES}, type=str)
+ScopeOption = Annotated[Scope, typer.Option(help=HELP["scope"])]
+WindowOption = Annotated[int | None, typer.Option(help=HELP["window"])]
 
 
 @app.command("prune", cls=_CleanCommand)
@@ -227,6 +262,8 @@ def prune_command(
     min_margin: MarginOption = None,
     choice: ChoiceOption = Choice(PruneOptions.choice),
     trim: TrimOption = PruneOptions.trim,
+    scope: ScopeOption = Scope(PruneOptions.scope),
+    window: WindowOption = None,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
     labels: LabelsOption = ReadOptions.labels,
     fill_holes: FillHolesOption = ReadOptions.fill_holes,
@@ -496,6 +533,10 @@ def prune_many_command(
     min_margin: MarginOption = None,
     choice: ChoiceOption = Choice(PruneOptions.choice),
     trim: TrimOption = PruneOptions.trim,
+    scope: ScopeOption = Scope(PruneOptions.scope),
+    window: WindowOption = None,
+    fill_holes: FillHolesOption = ReadOptions.fill_holes,
+    min_area: MinAreaOption = ReadOptions.min_area,
     foreground: ForegroundOption = Rule(ReadOptions.foreground),
     curve: CurveOption = OutputOptions.curve,
     sequence: SequenceOption = OutputOptions.sequence,

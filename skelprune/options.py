@@ -31,10 +31,14 @@ __all__ = [
     "DEFAULT_PIXEL_BUDGET",
     "FOREGROUND_RULES",
     "GROUPS",
+    "LOCAL_HALO_FRACTION",
+    "LOCAL_WINDOW_RANGE",
+    "LOCAL_WINDOW_WIDTHS",
     "LONGEST_SIDE_RANGE",
     "MAX_BETA",
     "MAX_CLEAN_AREA",
     "METHODS",
+    "SCOPES",
     "TABLES",
     "OutputOptions",
     "PruneOptions",
@@ -68,6 +72,16 @@ ARRAY_FOREGROUND = "nonzero"
 TABLES = ("branch", "component")
 #: How the answer is chosen from the sequence (:mod:`skelprune.pruning.floor`).
 CHOICES = ("argmin", "noise-floor")
+#: Where the trade-off is taken (:mod:`skelprune.local`): over each whole component (the
+#: paper's) or over windows of the image, each branch judged in its neighbourhood.
+SCOPES = ("global", "local")
+#: ``scope="local"``: the window, when none is given, is this many mean widths of the
+#: shape (2·area / boundary pixels), rounded up to a multiple of 64 ...
+LOCAL_WINDOW_WIDTHS = 64
+#: ... within this range (px), which is also the range ``window`` may be set to.
+LOCAL_WINDOW_RANGE = (128, 8192)
+#: The halo grown around each window's core, as a fraction of the window.
+LOCAL_HALO_FRACTION = 0.25
 #: The largest area (pixels) ``fill_holes`` and ``min_area`` take: a 2¹⁶ × 2¹⁶ image.
 MAX_CLEAN_AREA = 1 << 32
 #: Pixels across the longer side of a polygon's bounding box at the least (a polygon's
@@ -225,7 +239,7 @@ class PruneOptions:
     --------
     >>> PruneOptions(coarse="none")  # doctest: +NORMALIZE_WHITESPACE
     PruneOptions(beta=9.0, method='bayesian', coarse=None, dce_threshold=None,
-                 min_margin=None, choice='argmin', trim=True)
+                 min_margin=None, choice='argmin', trim=True, scope='global', window=None)
     >>> PruneOptions(beta=-1)
     Traceback (most recent call last):
     ...
@@ -280,6 +294,23 @@ class PruneOptions:
         "branches whole (false).",
         _flag,
     )
+    scope: str = _option(
+        "global",
+        "global: the paper's trade-off over each whole component (the default); local: "
+        "over windows of the image, each branch judged in its neighbourhood and the "
+        "windows' answers stitched, so that what is kept does not depend on how far the "
+        "image extends (for large networks: roads, vessels, cracks; docs/algorithm.md).",
+        _choice(SCOPES),
+        SCOPES,
+    )
+    window: int | None = _option(
+        None,
+        "For scope=local: the window's side in pixels, a whole number from "
+        f"{LOCAL_WINDOW_RANGE[0]} to {LOCAL_WINDOW_RANGE[1]} (default: "
+        f"{LOCAL_WINDOW_WIDTHS} mean widths of the shape, within that range); each "
+        f"window is pruned with a halo of a quarter of it around.",
+        _integer(*LOCAL_WINDOW_RANGE),
+    )
 
     def __post_init__(self) -> None:
         if self.coarse is None:  # the library's spelling of "none"
@@ -292,6 +323,8 @@ class PruneOptions:
                 "min_margin applies to method='bayesian' only: the "
                 "margin measures the Bayesian trade-off"
             )
+        if self.window is not None and self.scope != "local":
+            raise InvalidOptionError("window applies to scope='local' only")
 
     def resolved(self) -> PruneOptions:
         """The options as the pruning applies them, as the document records them: the
@@ -305,7 +338,8 @@ class PruneOptions:
         0.01
         >>> PruneOptions(method="dce").resolved()  # doctest: +NORMALIZE_WHITESPACE
         PruneOptions(beta=9.0, method='dce', coarse=None, dce_threshold=0.01,
-                     min_margin=None, choice='argmin', trim=False)
+                     min_margin=None, choice='argmin', trim=False, scope='global',
+                     window=None)
         """
         if self.method == "dce":
             threshold = DEFAULT_DCE_THRESHOLD if self.dce_threshold is None else self.dce_threshold

@@ -207,7 +207,8 @@ def prune_volume(
     EmptyMaskError
         No voxel inside.
     InvalidOptionError
-        An option that holds for images only (``method="dce"``, ``choice="noise-floor"``).
+        An option that holds for images only (``method="dce"``, ``choice="noise-floor"``,
+        ``scope="local"``).
     """
     applied = options.resolved()
     if applied.method != "bayesian":
@@ -218,6 +219,11 @@ def prune_volume(
     if applied.choice != "argmin":
         raise InvalidOptionError(
             f"choice={applied.choice!r} holds for images only; a volume's answer is the argmin"
+        )
+    if applied.scope != "global":
+        raise InvalidOptionError(
+            "scope='local' prunes an image window by window and holds for images only; a "
+            "volume is pruned whole"
         )
     volume = read_volume(source)
     if not volume.any():

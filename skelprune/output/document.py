@@ -371,7 +371,7 @@ class PruneResult:
     def _options_block(self) -> dict[str, Any]:
         """Every pruning option as applied, in the document's order."""
         o = self.options
-        return {
+        block: dict[str, Any] = {
             "method": o.method,
             "beta": float(o.beta),
             "coarse": o.coarse,
@@ -380,6 +380,10 @@ class PruneResult:
             "min_margin": o.min_margin,
             "dce_threshold": o.dce_threshold,
         }
+        if o.scope != "global":  # the paper's scope goes unsaid, as documents always had it
+            block["scope"] = o.scope
+            block["window"] = o.window
+        return block
 
     def to_geojson(
         self,

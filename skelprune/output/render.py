@@ -4,6 +4,7 @@ the pruned skeleton, its endpoints and junctions."""
 from __future__ import annotations
 
 import io
+import math
 from typing import Any
 
 import numpy as np
@@ -182,6 +183,10 @@ def render_overlay(
     side = max(mask.shape) * scale
     # lines and markers grow with the picture: visible on a large image, too
     widen = int(side // LINE_EVERY) // (2 * scale)
+    # ... but never past the shape's own width: on a large network (roads a few pixels
+    # wide over thousands) lines and marks grown with the picture would cover it
+    thick = float(np.sqrt(np.median(r2))) if r2.size else math.inf
+    widen = min(widen, int(thick // 3))
     line = np.zeros(mask.shape, bool)
     line[rows, cols] = True
     if widen:
@@ -191,7 +196,7 @@ def render_overlay(
     img[line] = COLOURS["skeleton"]
     if scale > 1:
         img = np.repeat(np.repeat(img, scale, axis=0), scale, axis=1)
-    radius = max(1.5 * scale, side / MARK_EVERY)
+    radius = max(1.5 * scale, min(side / MARK_EVERY, thick * scale))
     for kind, nodes in (("endpoint", endpoints), ("junction", junctions)):
         for r, c in np.zeros((0, 2), int) if nodes is None else nodes:
             _mark(img, int(r), int(c), COLOURS[kind], scale, radius)

@@ -69,6 +69,7 @@ NodeKind = Literal["endpoint", "junction", "loop"]
 Method = Literal["bayesian", "dce"]
 Coarse = Literal["dce"] | None
 Choice = Literal["argmin", "noise-floor"]
+Scope = Literal["global", "local"]
 
 
 # ------------------------------------------------------------------------ the document
@@ -282,6 +283,11 @@ class VersionsDoc(TypedDict):
 
 #: The pruning options the document records as applied: the method's default filled in,
 #: null where the method does not use the option.
+SCOPE_APPLIED = (
+    "Where the trade-off was taken: local (over windows, stitched); absent for the "
+    "paper's global scope."
+)
+WINDOW_APPLIED = "scope=local: the window's side in pixels, as applied (its halo a quarter of it)."
 MIN_MARGIN_APPLIED = (
     "As applied: the margin below which the answer's end branches went "
     "(method=bayesian; null for method=dce)."
@@ -344,6 +350,8 @@ class PruneDocument(TypedDict):
     trim: Annotated[bool, Doc("Whether the answer's end branches were cut back at their tips.")]
     min_margin: Annotated[float | None, Doc(MIN_MARGIN_APPLIED)]
     dce_threshold: Annotated[float | None, Doc(DCE_THRESHOLD_APPLIED)]
+    scope: NotRequired[Annotated[Scope, Doc(SCOPE_APPLIED)]]
+    window: NotRequired[Annotated[int, Doc(WINDOW_APPLIED)]]
     foreground: ForegroundTakenDoc
     components: list[ComponentDoc]
     raster: NotRequired[Annotated[RasterInfoDoc, Doc("Polygon input only.")]]
@@ -455,6 +463,8 @@ class CollectionPropertiesDoc(TypedDict):
     trim: bool
     min_margin: Annotated[float | None, Doc(MIN_MARGIN_APPLIED)]
     dce_threshold: Annotated[float | None, Doc(DCE_THRESHOLD_APPLIED)]
+    scope: NotRequired[Annotated[Scope, Doc(SCOPE_APPLIED)]]
+    window: NotRequired[Annotated[int, Doc(WINDOW_APPLIED)]]
     simplify: Annotated[float, Doc("How far each line was simplified, in pixels.")]
     cut_ends: Annotated[bool, Doc("Whether cut reaches end straight across.")]
     components: list[ComponentSummaryDoc]

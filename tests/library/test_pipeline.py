@@ -160,6 +160,9 @@ CHANGES: dict[str, tuple[dict[str, Any], Any]] = {
     "min_margin": ({"min_margin": 0.2}, lambda r: _doc(r)["min_margin"]),
     "choice": ({"choice": "noise-floor"}, lambda r: _doc(r)["choice"]),
     "trim": ({"trim": False}, lambda r: _doc(r)["trim"]),
+    # the paper's global scope goes unsaid (documents stay as they were); local is shown
+    "scope": ({"scope": "local"}, lambda r: _doc(r).get("scope", "global")),
+    "window": ({"scope": "local", "window": 128}, lambda r: _doc(r).get("window")),
     # ReadOptions: the rule asked for
     "foreground": ({"foreground": "zero"}, lambda r: _doc(r)["foreground"]["rule"]),
     "labels": ({"labels": True}, lambda r: _doc(r)["foreground"]["shape"]),
@@ -208,8 +211,15 @@ def test_every_option_shows_in_the_outputs(name: str) -> None:
 def test_every_pruning_option_is_in_the_document_and_the_geojson() -> None:
     res = skelprune.prune(L_SHAPE, longest_side=64)
     doc, geo = res.to_dict(), res.to_geojson()
+    unsaid = {"scope": "global", "window": None}  # the global scope's, left out
     for f in fields(PruneOptions):
-        assert doc[f.name] == geo["properties"][f.name] == getattr(res.options, f.name)
+        shown = doc.get(f.name, unsaid.get(f.name, "missing"))
+        assert shown == geo["properties"].get(f.name, unsaid.get(f.name))
+        assert shown == getattr(res.options, f.name)
+    local = skelprune.prune(L_SHAPE, longest_side=64, scope="local", window=128)
+    doc, geo = local.to_dict(), local.to_geojson()
+    assert doc["scope"] == geo["properties"]["scope"] == "local"
+    assert doc["window"] == geo["properties"]["window"] == 128
     for f in fields(RasterOptions):
         assert f.name in doc["raster"]
 

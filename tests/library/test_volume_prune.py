@@ -124,6 +124,8 @@ def test_volume_refusals(tmp_path) -> None:
         res.to_geojson()
     with pytest.raises(InvalidOptionError, match="images only"):
         skelprune.prune(bar, method="dce")
+    with pytest.raises(InvalidOptionError, match="images only"):
+        skelprune.prune(bar, scope="local")
     with pytest.raises(InvalidOptionError, match="spacing"):
         skelprune.prune(bar, spacing=(1.0, -1.0, 1.0))
     with pytest.raises(InvalidImageError, match="3-D"):

@@ -323,7 +323,7 @@ class RasterInfoDoc(TypedDict):
 class RasterWarningItemDoc(TypedDict):
     """A part of the polygon that the raster does not hold as it is."""
 
-    kind: Literal["vanished", "split", "merged", "holes", "skipped"]
+    kind: Literal["vanished", "split", "merged", "holes", "skipped", "crs"]
     message: str
     part: Annotated[int | None, Doc("The polygon part meant, if one is.")]
     pixel_size: Annotated[

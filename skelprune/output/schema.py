@@ -331,6 +331,21 @@ class RasterWarningItemDoc(TypedDict):
     ]
 
 
+class GeoreferenceDoc(TypedDict):
+    """Where a GeoTIFF mask's pixels lie on the map."""
+
+    crs: Annotated[str | None, Doc("The raster's CRS (EPSG:…; null: none recorded).")]
+    transform: Annotated[
+        list[float],
+        Doc(
+            "The affine map from a pixel's corner (col, row) to map coordinates, in GDAL's "
+            "order [a, b, c, d, e, f]: x = a·col + b·row + c, y = d·col + e·row + f. The "
+            "document's coordinates stay the raster's pixels; the GeoJSON answer's are "
+            "the map's."
+        ),
+    ]
+
+
 class PruneDocument(TypedDict):
     """The output document."""
 
@@ -347,6 +362,7 @@ class PruneDocument(TypedDict):
     foreground: ForegroundTakenDoc
     components: list[ComponentDoc]
     raster: NotRequired[Annotated[RasterInfoDoc, Doc("Polygon input only.")]]
+    georeference: NotRequired[Annotated[GeoreferenceDoc, Doc("GeoTIFF input only.")]]
     warnings: NotRequired[
         Annotated[
             list[RasterWarningItemDoc],

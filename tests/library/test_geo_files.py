@@ -192,3 +192,48 @@ def test_prune_takes_a_one_feature_table_with_its_crs_and_refuses_a_merge() -> N
     two = gpd.GeoDataFrame(geometry=[reach, box(2500, 0, 5500, 600)], crs="EPSG:32633")
     with pytest.raises(skelprune.InvalidPolygonError, match="each is its own shape"):
         skelprune.prune(two)
+
+
+def test_a_geotiff_as_bytes_gives_the_files_answer_and_records_its_grid(tmp_path: Path) -> None:
+    mask = np.zeros((40, 90), np.uint8)
+    mask[10:30, 5:85] = 3
+    mask[0:4, 0:4] = 9  # nodata
+    path = tmp_path / "mask.tif"
+    with rasterio.open(
+        path, "w", driver="GTiff", width=90, height=40, count=1, dtype="uint8",
+        crs="EPSG:3035", transform=from_origin(4_321_000, 3_210_000, 5, 5), nodata=9,
+    ) as f:  # fmt: skip
+        f.write(mask, 1)
+    from_file = skelprune.prune(path)
+    from_bytes = skelprune.prune(path.read_bytes())
+    assert from_file.to_dict() == from_bytes.to_dict()
+    assert from_file.to_geojson() == from_bytes.to_geojson()
+    assert from_file.to_dict()["georeference"] == {
+        "crs": "EPSG:3035",
+        "transform": [5.0, 0.0, 4_321_000.0, 0.0, -5.0, 3_210_000.0],
+    }
+    assert len(from_file.components) == 1  # nodata is not the shape
+
+
+def test_geotiff_tags_pixel_is_point_and_the_model_transformation() -> None:
+    import io
+
+    import tifffile
+
+    from skelprune.io.geotiff import geotiff_georeference
+
+    def tags(*extra: tuple) -> bytes:
+        buf = io.BytesIO()
+        tifffile.imwrite(buf, np.ones((4, 4), np.uint8), extratags=list(extra))
+        return buf.getvalue()
+
+    keys = (34735, 3, 12, (1, 1, 0, 2, 1025, 0, 1, 2, 2048, 0, 1, 4326))  # point, EPSG:4326
+    scale, tie = (33550, 12, 3, (0.5, 0.5, 0.0)), (33922, 12, 6, (0, 0, 0, 10.0, 60.0, 0))
+    geo = geotiff_georeference(tags(scale, tie, keys))
+    assert geo.crs == "EPSG:4326"
+    assert geo.transform == (0.5, 0.0, 9.75, 0.0, -0.5, 60.25)  # the tie is a pixel centre
+    matrix = (34264, 12, 16, (3.0, 0, 0, 100.0, 0, -3.0, 0, 200.0, 0, 0, 1, 0, 0, 0, 0, 1))
+    assert geotiff_georeference(tags(matrix)).transform == (3.0, 0.0, 100.0, 0.0, -3.0, 200.0)
+    assert geotiff_georeference(tags()) is None  # a plain TIFF
+    with pytest.raises(skelprune.InvalidImageError, match="no grid"):
+        geotiff_georeference(tags((34735, 3, 4, (1, 1, 0, 0))))

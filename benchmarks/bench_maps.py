@@ -125,9 +125,9 @@ def many_parts() -> None:
 def lonlat() -> None:
     """The 10 km, 30–90 m river in metres and the same river on the Earth at 0°, 45°,
     60° and 70° N, given in longitude/latitude: pruned on the ground (``crs`` given, and
-    without one: guessed), and in degrees taken as planar (``crs="planar"``). Distances over the local width:
-    between the two answers' lines, and of each from the true centre line (median, 95 %,
-    worst point)."""
+    without one: guessed), and in degrees taken as planar (``crs="planar"``). Distances
+    over the local width: between each answer's lines and those in metres, and of each
+    from the true centre line (median, 95 %, worst point)."""
     import pyproj
     from shapely.geometry import MultiLineString
 

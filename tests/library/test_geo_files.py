@@ -237,3 +237,35 @@ def test_geotiff_tags_pixel_is_point_and_the_model_transformation() -> None:
     assert geotiff_georeference(tags()) is None  # a plain TIFF
     with pytest.raises(skelprune.InvalidImageError, match="no grid"):
         geotiff_georeference(tags((34735, 3, 4, (1, 1, 0, 0))))
+
+
+@pytest.mark.parametrize("name", ["croatia", "italy"])
+def test_map_lines_on_real_coastlines_carry_at_most_4_vertices_a_width(name: str) -> None:
+    import json
+
+    from skelprune.io.polygon import parse_geojson
+    from testkit import REPO
+    from testkit.rivers import vertices_per_width
+
+    geom = parse_geojson(json.loads((REPO / "data" / "gis" / f"{name}.geojson").read_text()))
+    rows, _ = feature_lines(geom)
+    lines = [r["geometry"] for r in rows if r["kind"] == "line"]
+    per_part, local = vertices_per_width(lines, geom)
+    assert per_part <= 4 and local <= 4
+    # inside, but where a line crosses water narrower than a pixel between two parts
+    # that the raster merged (no way along one ring leads across)
+    pixel = skelprune.prune(geom).to_dict()["raster"]["pixel_size"]
+    rings = [r for part in geom.geoms for r in (part.exterior, *part.interiors)]
+    outside = [
+        piece
+        for ln in lines
+        for piece in shapely.get_parts(shapely.difference(ln, geom))
+        # on the boundary is inside: pieces a rounding off it are not counted
+        if geom.distance(piece.interpolate(0.5, normalized=True)) > 1e-3
+    ]
+    for piece in outside:
+        a, b = (shapely.points(c) for c in shapely.get_coordinates(piece)[[0, -1]])
+        ring_a = min(range(len(rings)), key=lambda i: rings[i].distance(a))
+        ring_b = min(range(len(rings)), key=lambda i: rings[i].distance(b))
+        assert ring_a != ring_b and piece.length < pixel
+    assert len(outside) <= 1

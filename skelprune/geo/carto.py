@@ -18,13 +18,7 @@ CRS, lengths and radii in its units):
    ``share`` of its own half-width (the skeleton's radius there): a wide lake's line
    keeps few vertices, a narrow inlet's its detail. A line that leaves the polygon is
    simplified again at half the share (three times at most, then kept).
-5. **Inside.** What still leaves the polygon (the skeleton's sub-pixel positions across
-   a bay narrower than a pixel, a segment cutting a concave corner) runs along the
-   boundary instead: a vertex outside moves to the boundary's nearest point, then each
-   stretch outside, from where it leaves one ring to where it comes back to it, is
-   replaced by the shorter way along that ring. Lines' ends stay
-   (nodes are shared); a stretch between two rings (parts the raster merged) is left.
-6. ``main_path``: one line per connected network, its longest path (for labels).
+5. ``main_path``: one line per connected network, its longest path (for labels).
 """
 
 from __future__ import annotations
@@ -37,7 +31,6 @@ import shapely
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from shapely.geometry import LineString
-from shapely.ops import substring
 
 from ..output.lines import douglas_peucker
 
@@ -52,9 +45,6 @@ CORNER_REACH = float(np.sqrt(2.0))
 SHARE = 0.25
 #: Halvings of the share tried for a line that leaves the polygon.
 RETRIES = 3
-#: What leaves the polygon by less than this share of its extent counts as inside
-#: (floating-point rounding of points on the boundary).
-INSIDE_TOLERANCE = 1e-9
 
 
 @dataclass
@@ -228,65 +218,6 @@ def _simplify(xy: np.ndarray, radii: np.ndarray, share: float, polygon: Any) -> 
     return np.arange(len(xy))
 
 
-def _ring_path(ring: Any, a: Any, b: Any) -> np.ndarray:
-    """The shorter way along a closed ring from its point nearest ``a`` to that nearest
-    ``b``: coordinates (n, 2), both ends included."""
-    total = ring.length
-    da, db = ring.project(a), ring.project(b)
-    forward = (db - da) % total
-    if forward > total / 2:  # the other way round is shorter: walk it from b, reversed
-        return _ring_path(ring, b, a)[::-1]
-    if da + forward <= total:
-        path = substring(ring, da, da + forward)
-        return shapely.get_coordinates(path)
-    head = shapely.get_coordinates(substring(ring, da, total))
-    tail = shapely.get_coordinates(substring(ring, 0.0, db))
-    return np.concatenate([head, tail[1:]])
-
-
-def _pull_inside(xy: np.ndarray, radii: np.ndarray, polygon: Any) -> tuple[np.ndarray, np.ndarray]:
-    """The line with each vertex outside ``polygon`` (prepared) moved onto its boundary,
-    then each stretch that leaves it between two points of one ring replaced by the
-    shorter way along that ring."""
-    if len(xy) < 2 or polygon.covers(LineString(xy)):
-        return xy, radii
-    minx, miny, maxx, maxy = polygon.bounds
-    tolerance = INSIDE_TOLERANCE * max(maxx - minx, maxy - miny)
-    rings = np.array(
-        [r for part in shapely.get_parts(polygon) for r in (part.exterior, *part.interiors)]
-    )
-    outside = np.flatnonzero(~shapely.covers(polygon, shapely.points(xy[1:-1]))) + 1
-    if len(outside):  # a vertex outside: onto the boundary's nearest point first
-        xy = xy.copy()
-        nearest = shapely.shortest_line(polygon.boundary, shapely.points(xy[outside]))
-        xy[outside] = shapely.get_coordinates(shapely.get_point(nearest, 0))
-    segments = shapely.linestrings(np.stack([xy[:-1], xy[1:]], axis=1))
-    crossing = set(np.flatnonzero(~shapely.covers(polygon, segments)).tolist())
-    out_xy, out_r = [xy[:1]], [radii[:1]]
-    for k in range(len(xy) - 1):
-        if k in crossing:
-            start = shapely.points(xy[k])
-            pieces = sorted(
-                (g for g in shapely.get_parts(shapely.difference(segments[k], polygon))
-                 if g.length > tolerance),
-                key=lambda g: shapely.distance(start, g),
-            )  # fmt: skip
-            for piece in pieces:
-                ends = shapely.points(shapely.get_coordinates(piece)[[0, -1]])
-                if shapely.distance(start, ends[1]) < shapely.distance(start, ends[0]):
-                    ends = ends[::-1]
-                near = shapely.distance(rings, ends[0]), shapely.distance(rings, ends[1])
-                ring = int(np.argmin(near[0]))
-                if near[0][ring] > tolerance or near[1][ring] > tolerance:
-                    continue  # between two rings: no way along one (left as it is)
-                path = _ring_path(rings[ring], ends[0], ends[1])
-                out_xy.append(path)
-                out_r.append(np.full(len(path), (radii[k] + radii[k + 1]) / 2))
-        out_xy.append(xy[k + 1 : k + 2])
-        out_r.append(radii[k + 1 : k + 2])
-    return np.concatenate(out_xy), np.concatenate(out_r)
-
-
 def _networks(lines: list[dict[str, Any]]) -> list[int]:
     """A network number for each line (lines sharing a node, transitively)."""
     parent: dict[Any, Any] = {}
@@ -384,9 +315,7 @@ def cartographic_lines(
         ]
     out = []
     nets = _networks(lines)
-    shapely.prepare(polygon)
     for ln, net in zip(lines, nets, strict=True):
         keep = _simplify(ln["xy"], ln["radii"], share, polygon)
-        xy, radii = _pull_inside(ln["xy"][keep], ln["radii"][keep], polygon)
-        out.append(CartoLine(xy, radii, (net, 0)))
+        out.append(CartoLine(ln["xy"][keep], ln["radii"][keep], (net, 0)))
     return out

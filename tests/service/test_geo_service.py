@@ -148,3 +148,21 @@ def _user_defined(mask, keys: tuple) -> bytes:
         extratags=[(33550, 12, 3, (2.0, 2.0, 0.0)), (33922, 12, 6, (0, 0, 0, 5e5, 6.6e6, 0)), keys],
     )
     return buf.getvalue()
+
+
+def test_lonlat_without_a_crs_is_guessed_and_said_and_planar_is_an_option(
+    client: TestClient,
+) -> None:
+    reach = mapping(on_earth(box(0, 0, 3000, 800), 10.0, 60.0))  # 0.05° × 0.007°
+    geo = client.post("/v1/prune", json=reach, headers=GEO).json()
+    assert geo["crs"] == {"type": "name", "properties": {"name": "OGC:CRS84"}}
+    (warning,) = geo["properties"]["warnings"]
+    assert warning["kind"] == "crs" and "longitude/latitude" in warning["message"]
+    lines = [f for f in geo["features"] if f["geometry"]["type"] == "LineString"]
+    assert max(f["properties"]["length"] for f in lines) > 2000  # metres
+    planar = client.post("/v1/prune", json=reach, params={"crs": "planar"}, headers=GEO)
+    assert planar.status_code == 200 and "crs" not in planar.json()
+    assert planar.json()["properties"]["warnings"] == []
+    pixels = {"type": "Polygon", "coordinates": [[[0, 0], [60, 0], [60, 50], [0, 0]]]}
+    doc = client.post("/v1/prune", json=pixels).json()
+    assert doc["raster"]["crs"] is None and doc["warnings"] == []

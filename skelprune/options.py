@@ -413,7 +413,7 @@ class RasterOptions:
         "OGC:CRS84 for RFC 7946 GeoJSON, EPSG:32633, urn:ogc:def:crs:EPSG::32633), or "
         "planar: coordinates used as they are. Default: the GeoJSON's crs member; "
         "without one, longitude/latitude (OGC:CRS84, with a warning) if every coordinate "
-        "lies within its bounds and the polygon is at most a degree across, else planar. "
+        "lies within its bounds and the polygon is 1e-6 to 1 degree across, else planar. "
         "Longitude/latitude is pruned in a local equidistant projection: "
         "pixel_size, lengths and radii in metres, lines back in longitude/latitude. Needs "
         "the geo extra (pyproj).",

@@ -31,6 +31,7 @@ from ..errors import InvalidOptionError, InvalidPolygonError
 __all__ = [
     "CRS_NAME",
     "GUESS_DEGREES",
+    "GUESS_MIN_DEGREES",
     "MAX_RADIUS",
     "PLANAR",
     "RFC7946_CRS",
@@ -64,6 +65,9 @@ PLANAR = "planar"
 #: while one in pixels 60 units across (``examples/shape.geojson``) would, read as
 #: degrees, be a 6,000 km shape. See docs/gis.md, "Which CRS, when none is given".
 GUESS_DEGREES = 1.0
+#: Smallest such extent: a polygon under 1e-6° (11 cm) across is no map feature, and
+#: its projection would keep few of its digits; it stays planar.
+GUESS_MIN_DEGREES = 1e-6
 
 
 def _pyproj() -> Any:
@@ -97,7 +101,8 @@ def check_crs_name(name: str, what: str = "crs") -> str:
 def guess_crs(geom: Any) -> str | None:
     """The CRS of a polygon given without one: :data:`RFC7946_CRS` when every coordinate
     lies within longitude −180…180 and latitude −90…90 and its bounding box is at most
-    :data:`GUESS_DEGREES` across, else None (planar).
+    :data:`GUESS_DEGREES` across (and at least :data:`GUESS_MIN_DEGREES`), else None
+    (planar).
 
     >>> from shapely.geometry import box
     >>> guess_crs(box(10.0, 60.0, 10.02, 60.01)), guess_crs(box(0, 0, 60, 50))
@@ -105,7 +110,7 @@ def guess_crs(geom: Any) -> str | None:
     """
     minx, miny, maxx, maxy = shapely.bounds(geom)
     within = -180 <= minx <= maxx <= 180 and -90 < miny <= maxy < 90
-    if within and max(maxx - minx, maxy - miny) <= GUESS_DEGREES:
+    if within and GUESS_MIN_DEGREES <= max(maxx - minx, maxy - miny) <= GUESS_DEGREES:
         return RFC7946_CRS
     return None
 

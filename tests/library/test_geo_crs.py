@@ -164,6 +164,10 @@ def test_the_guess_is_at_most_a_degree_across() -> None:
     assert guess_crs(box(179, 0, 180, 1)) == "OGC:CRS84"
     assert guess_crs(box(0, 0, 1.001, 1)) is None
     assert guess_crs(box(179.5, 0, 180.5, 0.5)) is None  # beyond the antimeridian
+    assert guess_crs(box(0, 0, 1e-6, 1e-7)) == "OGC:CRS84"
+    assert guess_crs(box(0, 0, 9e-7, 9e-7)) is None  # under 11 cm: no map feature
+    tiny = skelprune.prune(box(0, 0, 1e-9, 1e-9)).to_dict()  # as it always was: planar
+    assert tiny["raster"]["crs"] is None and len(tiny["components"]) == 1
 
 
 def test_centerlines_of_a_frame_without_crs_guess_as_prune_does() -> None:

@@ -40,7 +40,7 @@ import skelprune
 from benchmarks.common import table
 from skelprune.io.polygon import parse_geojson
 from testkit import DATA
-from testkit.rivers import River, river
+from testkit.rivers import River, river, vertices_per_width
 
 GIS = DATA / "gis"
 #: Seconds a reference tool may take on one polygon before it is skipped for the rest.
@@ -109,7 +109,7 @@ def _measure(fn: Callable[[], Any]) -> tuple[Any, float, float]:
 def _network(lines: list[LineString], geom: MultiPolygon) -> dict[str, float]:
     """Pieces per part, share inside, ends, vertices per mean width."""
     if not lines:
-        return {"pieces": 0, "inside": 0.0, "ends": 0, "vpw": 0.0}
+        return dict.fromkeys(("pieces", "inside", "ends", "vpw", "vpw_part", "vpw_local"), 0)
     # noded: lines that cross or touch share an end here
     segments = shapely.get_parts(shapely.union_all(lines))
     parent: dict[tuple[float, float], tuple[float, float]] = {}
@@ -133,11 +133,14 @@ def _network(lines: list[LineString], geom: MultiPolygon) -> dict[str, float]:
     inside = shapely.intersection(MultiLineString(lines), grown).length / total if total else 0
     mean_width = geom.area / total if total else 0.0
     vertices = sum(len(ln.coords) for ln in lines)
+    per_part, local = vertices_per_width(lines, geom)
     return {
         "pieces": pieces / len(geom.geoms),
         "inside": inside,
         "ends": sum(1 for d in degree.values() if d == 1),
         "vpw": vertices / (total / mean_width) if mean_width else 0.0,
+        "vpw_part": per_part,
+        "vpw_local": local,
     }
 
 

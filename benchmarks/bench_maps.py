@@ -9,7 +9,9 @@ lake, a river and a T burnt into a pixel mask and traced back with
 ``rasterio.features.shapes``). No real polygon can be downloaded here; the generators
 are ``testkit.rivers``. Per polygon and tool: pieces per part (connected networks, 1 is
 right), the share of line length inside, lines (between junctions and ends), ends,
-vertices per mean width (mean width: area over line length), wall time.
+vertices per width three ways (whole: the polygon's area over the lines' length as the
+mean width; part: each part's own; local: each line's own width along it:
+``testkit.rivers.vertices_per_width``), wall time.
 
 ``python -m benchmarks.bench_maps FOLDER`` draws the pictures of ``docs/gis.md``.
 """
@@ -122,10 +124,10 @@ def many_parts() -> None:
 
 def lonlat() -> None:
     """The 10 km, 30–90 m river in metres and the same river on the Earth at 0°, 45°,
-    60° and 70° N, given in longitude/latitude: pruned on the ground (``crs``) and, as
-    before a CRS was known, in degrees taken as planar. Distances over the local width:
-    between the two answers' lines, and of each from the true centre line (median, 95 %,
-    worst point)."""
+    60° and 70° N, given in longitude/latitude: pruned on the ground (``crs`` given, and
+    without one: guessed), and in degrees taken as planar (``crs="planar"``). Distances
+    over the local width: between each answer's lines and those in metres, and of each
+    from the true centre line (median, 95 %, worst point)."""
     import pyproj
     from shapely.geometry import MultiLineString
 
@@ -159,7 +161,11 @@ def lonlat() -> None:
         local = pyproj.CRS.from_proj4(f"+proj=aeqd +lat_0={lat} +lon_0=10 +datum=WGS84 +units=m")
         to = pyproj.Transformer.from_crs("EPSG:4326", local, always_xy=True)
         g = on_earth(reach.polygon, 10.0, lat)
-        for how, kw in (("on the ground (crs)", {"crs": "EPSG:4326"}), ("degrees as planar", {})):
+        for how, kw in (
+            ("on the ground (crs)", {"crs": "EPSG:4326"}),
+            ("no crs: guessed", {}),
+            ("degrees as planar", {"crs": "planar"}),
+        ):
             geo = skelprune.prune(g, **kw).to_geojson()
             ground = shapely.transform(
                 lines(geo), lambda xy, to=to: np.column_stack(to.transform(*xy.T))
@@ -171,9 +177,10 @@ def lonlat() -> None:
     print(table(header, rows))
 
 
-def main() -> None:
+def main(parts: bool = True) -> None:
     lonlat()
-    many_parts()
+    if parts:
+        many_parts()
     rows = []
     for name, geom in polygons():
         for tool, fn in TOOLS.items():
@@ -182,10 +189,10 @@ def main() -> None:
                 lines = fn(geom)
                 secs = time.perf_counter() - t
             except ImportError:
-                rows.append([name, tool, "-", "-", "-", "-", "-", "not installed"])
+                rows.append([name, tool, "-", "-", "-", "-", "-", "-", "-", "not installed"])
                 continue
             except Exception as exc:  # a reference tool failing on a polygon
-                rows.append([name, tool, "-", "-", "-", "-", "-", type(exc).__name__])
+                rows.append([name, tool, "-", "-", "-", "-", "-", "-", "-", type(exc).__name__])
                 continue
             m = _network(lines, geom)
             rows.append(
@@ -197,11 +204,14 @@ def main() -> None:
                     len(lines),
                     m["ends"],
                     f"{m['vpw']:.1f}",
+                    f"{m['vpw_part']:.1f}",
+                    f"{m['vpw_local']:.1f}",
                     f"{secs:.2f}",
                 ]
             )
             print(" | ".join(str(c) for c in rows[-1]), flush=True)
-    header = ["polygon", "tool", "pieces/part", "inside", "lines", "ends", "vert/width", "s"]
+    header = ["polygon", "tool", "pieces/part", "inside", "lines", "ends"]
+    header += ["vert/width whole", "part", "local", "s"]
     print()
     print(table(header, rows))
 

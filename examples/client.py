@@ -23,22 +23,33 @@ HERE = Path(__file__).parent
 
 def prune_png(client: httpx.Client, path: Path, **options: Any) -> dict[str, Any]:
     """The result document of a PNG mask; options go in the query string."""
-    resp = client.post("/v1/prune", content=path.read_bytes(), params=options,
-                       headers={"Content-Type": "image/png"})
+    resp = client.post(
+        "/v1/prune",
+        content=path.read_bytes(),
+        params=options,
+        headers={"Content-Type": "image/png"},
+    )
     return answer(resp).json()
 
 
 def prune_geojson(client: httpx.Client, path: Path, **options: Any) -> dict[str, Any]:
     """The result document of a GeoJSON polygon, in the polygon's own coordinates."""
-    resp = client.post("/v1/prune", content=path.read_bytes(), params=options,
-                       headers={"Content-Type": "application/geo+json"})
+    resp = client.post(
+        "/v1/prune",
+        content=path.read_bytes(),
+        params=options,
+        headers={"Content-Type": "application/geo+json"},
+    )
     return answer(resp).json()
 
 
 def overlay_png(client: httpx.Client, path: Path) -> tuple[bytes, float]:
     """The overlay image of a PNG mask and its RER (from the answer's headers)."""
-    resp = client.post("/v1/prune", content=path.read_bytes(),
-                       headers={"Content-Type": "image/png", "Accept": "image/png"})
+    resp = client.post(
+        "/v1/prune",
+        content=path.read_bytes(),
+        headers={"Content-Type": "image/png", "Accept": "image/png"},
+    )
     answer(resp)
     return resp.content, float(resp.headers["X-Skelprune-RER"].split(",")[0])
 
@@ -56,13 +67,17 @@ def main(base: str = "http://127.0.0.1:8000", overlay: str | None = None) -> Non
     with httpx.Client(base_url=base, timeout=60) as client:
         doc = prune_png(client, HERE / "shape.png", beta=9, curve="false")
         comp = doc["components"][0]
-        print(f"shape.png: RER {comp['rer']:.4f}, SS {comp['ss']:.3f}, "
-              f"{len(comp['skeleton']['endpoints'])} endpoints, "
-              f"{len(comp['skeleton']['branches'])} branches")
+        print(
+            f"shape.png: RER {comp['rer']:.4f}, SS {comp['ss']:.3f}, "
+            f"{len(comp['skeleton']['endpoints'])} endpoints, "
+            f"{len(comp['skeleton']['branches'])} branches"
+        )
         doc = prune_geojson(client, HERE / "shape.geojson", curve="false")
         comp = doc["components"][0]
-        print(f"shape.geojson: RER {comp['rer']:.4f}, skeleton length "
-              f"{comp['skeleton']['length']:.1f} (polygon units)")
+        print(
+            f"shape.geojson: RER {comp['rer']:.4f}, skeleton length "
+            f"{comp['skeleton']['length']:.1f} (polygon units)"
+        )
         png, rer = overlay_png(client, HERE / "shape.png")
         out.write_bytes(png)
         print(f"{out} written ({len(png)} bytes, RER {rer:.4f})")

@@ -172,8 +172,10 @@ def _flag(name: str, value: Any) -> bool:
 def _crs_name(name: str, value: Any) -> str:
     if not isinstance(value, str):
         raise InvalidOptionError(f"{name} must be a CRS name (e.g. EPSG:4326), got {shown(value)}")
-    from .io.crs import is_geographic
+    from .io.crs import PLANAR, is_geographic
 
+    if value == PLANAR:
+        return value
     is_geographic(value)  # an authority code pyproj knows, or the error says which not
     return value
 
@@ -444,9 +446,11 @@ class RasterOptions:
     crs: str | None = _option(
         None,
         "The coordinates' CRS, an authority code pyproj knows or its URN (EPSG:4326, "
-        "OGC:CRS84 for RFC 7946 GeoJSON, EPSG:32633, urn:ogc:def:crs:EPSG::32633; "
-        "default: the GeoJSON's crs member, else the coordinates are planar and used as "
-        "they are). Longitude/latitude is pruned in a local equidistant projection: "
+        "OGC:CRS84 for RFC 7946 GeoJSON, EPSG:32633, urn:ogc:def:crs:EPSG::32633), or "
+        "planar: coordinates used as they are. Default: the GeoJSON's crs member; "
+        "without one, longitude/latitude (OGC:CRS84, with a warning) if every coordinate "
+        "lies within its bounds and the polygon is 1e-6 to 1 degree across, else planar. "
+        "Longitude/latitude is pruned in a local equidistant projection: "
         "pixel_size, lengths and radii in metres, lines back in longitude/latitude. Needs "
         "the geo extra (pyproj).",
         _crs_name,

@@ -158,3 +158,46 @@ def lake(
         if all(islet.distance(p) > r for p in parts):
             parts.append(islet)
     return shapely.MultiPolygon(parts) if len(parts) > 1 else body
+
+
+def vertices_per_width(lines: list[LineString], geom: Any) -> tuple[float, float]:
+    """Vertices per width of map lines, two ways: ``(per part, local)``.
+
+    - per part: each polygon part's lines measured in its own mean width (the part's area
+      over the length of its lines), the vertices over the sum of those counts;
+    - local: each line measured in its own width (twice the mean distance from points
+      along it to the polygon's boundary), the vertices over the sum of its lengths in
+      those widths: how many vertices a stretch of line as long as the shape is wide
+      there carries.
+
+    One mean width over a whole multi-part polygon (its area over all lines' length)
+    mixes a country's mainland with its islets: it grows as lines are dropped.
+
+    >>> from shapely.geometry import box
+    >>> line = LineString([(5, 5), (95, 5)])  # 9 widths of 10 long: 2 vertices
+    >>> part, local = vertices_per_width([line], box(0, 0, 100, 10))
+    >>> round(part, 3), round(local, 3)  # part: 1000 / 90 = 11.1 wide on average
+    (0.247, 0.222)
+    """
+    parts = list(getattr(geom, "geoms", [geom]))
+    tree = shapely.STRtree(parts)
+    length: dict[int, float] = {}
+    for ln in lines:
+        mid = ln.interpolate(0.5, normalized=True)
+        hit = tree.query(mid, predicate="intersects")
+        i = int(hit[0]) if len(hit) else int(tree.query_nearest(mid)[0])
+        length[i] = length.get(i, 0.0) + ln.length
+    vertices = sum(len(ln.coords) for ln in lines)
+    in_parts = sum(v**2 / parts[i].area for i, v in length.items())
+    boundary = geom.boundary
+    step = geom.length / 20_000  # the boundary's length in 20,000 samples, at most 200 a line
+    in_local = 0.0
+    for ln in lines:
+        n = max(2, min(200, int(ln.length / step) + 2))
+        pts = shapely.line_interpolate_point(ln, np.linspace(0, 1, n), normalized=True)
+        width = 2 * float(np.mean(shapely.distance(boundary, pts)))
+        in_local += ln.length / width if width > 0 else 0.0
+    return (
+        vertices / in_parts if in_parts else 0.0,
+        vertices / in_local if in_local else 0.0,
+    )

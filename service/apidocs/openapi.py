@@ -32,7 +32,9 @@ Compute the pruned skeleton of a shape.
 
 **Input** (by `Content-Type`):
 - `image/png`: the PNG itself as the body;
-- `image/tiff`: a single-image TIFF as the body (docs/tables.md#tiff);
+- `image/tiff`: a single-image TIFF as the body (docs/tables.md#tiff); a GeoTIFF mask
+  (GeoTIFF tags: a north-up grid, an EPSG CRS) is its non-zero pixels but nodata, and
+  the GeoJSON answer's lines are in its map coordinates and CRS (docs/gis.md);
 - `multipart/form-data`: the PNG or TIFF in the field `file`;
 - `application/json` (or `application/geo+json`): a GeoJSON `Polygon`, `MultiPolygon`,
   `Feature` or `FeatureCollection` (holes allowed), or an object

@@ -17,6 +17,7 @@ formats by the file name's ending: ``.gpkg``, ``.shp``, ``.geojson``/``.json``,
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import os
 from collections.abc import Callable
@@ -29,7 +30,7 @@ import shapely
 from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 
 from ..errors import SkelpruneError
-from ..io.crs import crs_name
+from ..io.crs import PLANAR, crs_name
 from .carto import END_FACTOR, SHARE, cartographic_lines
 
 __all__ = ["centerlines", "feature_lines", "read_frame", "write_frame"]
@@ -84,14 +85,25 @@ def feature_lines(
     import skelprune
 
     from ..io.crs import local_projection
+    from ..io.fit import RasterWarning
+    from ..io.polygon import _guessed
 
     polygon = _polygonal(geom)
     if polygon is None:
         raise SkelpruneError("the feature has no polygon (null, empty, or not polygonal)")
-    projection = None if crs is None else local_projection(polygon, crs)
+    guessed: list[RasterWarning] = []
+    if crs is None:  # as skelprune.prune reads a polygon without a CRS
+        crs = _guessed(polygon, guessed)
+    projection = None if crs in (None, PLANAR) else local_projection(polygon, crs)
     ground = polygon if projection is None else projection.forward(polygon)
+    # the ground is planar (metres, or the projected CRS's units): never guessed again
+    if options.get("raster") is not None:
+        options = {**options, "raster": dataclasses.replace(options["raster"], crs=PLANAR)}
+    else:
+        options = {**options, "crs": PLANAR}
     res = skelprune.prune(ground, **options)
-    warnings = [w["message"] for w in res.to_dict().get("warnings", [])]
+    warnings = [w.message for w in guessed]
+    warnings += [w["message"] for w in res.to_dict().get("warnings", [])]
     lines = cartographic_lines(
         res.to_geojson(), ground, share=share, end_factor=end_factor, main_path=main_path
     )
@@ -160,6 +172,7 @@ def centerlines(
     jobs: int = 1,
     progress: bool = False,
     main_path: bool = False,
+    crs: str | None = None,
     share: float = SHARE,
     end_factor: float = END_FACTOR,
     on_feature: Callable[[Any, str | None], None] | None = None,
@@ -178,6 +191,12 @@ def centerlines(
         A progress bar on stderr.
     main_path : bool
         One line per connected network: its longest path (for label placement).
+    crs : str, optional
+        The features' CRS (an authority code, or ``"planar"``), where the frame has none
+        or says wrong; default: the frame's CRS, and for a frame without one what
+        :func:`skelprune.prune` does (longitude/latitude if every coordinate lies within
+        its bounds and a feature is at most a degree across, with a warning in the log;
+        planar otherwise).
     share, end_factor : float
         How far a simplified line may move (a share of its local half-width) and how
         long an end branch must be to stay (in junction radii): :mod:`.carto`.
@@ -215,7 +234,12 @@ def centerlines(
     frame = read_frame(source) if isinstance(source, str | os.PathLike) else source
     if isinstance(frame, gpd.GeoSeries):
         frame = gpd.GeoDataFrame(geometry=frame)
-    crs = crs_name(frame.crs)
+    if crs is not None:
+        from ..options import RasterOptions
+
+        RasterOptions(crs=crs)  # checked once, here, not in every worker
+    else:
+        crs = crs_name(frame.crs)
     settings = {"share": share, "end_factor": end_factor, "main_path": main_path, **options}
     tasks = [
         (index, None if g is None else shapely.to_wkb(g), crs, settings)
@@ -245,7 +269,8 @@ def centerlines(
         {"kind": object, "error": object}
     )
     table = table.where(table.notna(), None) if len(table) else table
-    return gpd.GeoDataFrame(table, geometry=gpd.GeoSeries(geoms, crs=frame.crs), crs=frame.crs)
+    out_crs = frame.crs if frame.crs is not None or crs == PLANAR else crs
+    return gpd.GeoDataFrame(table, geometry=gpd.GeoSeries(geoms, crs=out_crs), crs=out_crs)
 
 
 def _run(

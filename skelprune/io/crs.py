@@ -8,7 +8,12 @@ bounding box (distances from the centre true, and within 1,000 km of it the scal
 under 1.3 %: :data:`MAX_RADIUS`), pruned there in metres, and its lines mapped back. A
 projected CRS (UTM, a national grid) is used as it is: lengths are in its units.
 
-pyproj is the ``geo`` extra; it is imported only when a CRS is given.
+Without a CRS (no ``crs`` option, no ``crs`` member), a polygon is read as RFC 7946
+longitude/latitude when its coordinates can hardly be anything else (:func:`guess_crs`:
+within longitude/latitude bounds and at most :data:`GUESS_DEGREES` across), with a
+warning that says so; otherwise as planar coordinates. ``crs="planar"`` says planar.
+
+pyproj is the ``geo`` extra; it is imported only when a CRS is given or guessed.
 """
 
 from __future__ import annotations
@@ -25,10 +30,15 @@ from ..errors import InvalidOptionError, InvalidPolygonError
 
 __all__ = [
     "CRS_NAME",
+    "GUESS_DEGREES",
+    "GUESS_MIN_DEGREES",
     "MAX_RADIUS",
+    "PLANAR",
+    "RFC7946_CRS",
     "LocalProjection",
     "check_crs_name",
     "crs_name",
+    "guess_crs",
     "local_projection",
 ]
 
@@ -44,6 +54,21 @@ CRS_NAME = re.compile(
 #: azimuthal equidistant projection keeps distances from the centre; across, its scale
 #: grows as ``θ/sin θ``: 1.3 % at 1,000 km.
 MAX_RADIUS = 1_000_000.0
+
+#: The CRS of RFC 7946 GeoJSON: longitude, latitude on WGS 84.
+RFC7946_CRS = "OGC:CRS84"
+#: The ``crs`` value that says the coordinates have none: planar, used as they are.
+PLANAR = "planar"
+#: Longest side, in coordinate units, of the bounding box of a polygon without a CRS that
+#: is read as longitude/latitude (with its bounds). A degree is 111 km: a lake, a river
+#: reach, a field or a town fits; a polygon in pixels or metres a unit across does not
+#: exist in practice (the project's pixel and metre polygons are 4 to 10⁵ units across),
+#: while one in pixels 60 units across (``examples/shape.geojson``) would, read as
+#: degrees, be a 6,000 km shape. See docs/gis.md, "Which CRS, when none is given".
+GUESS_DEGREES = 1.0
+#: Smallest such extent: a polygon under 1e-6° (11 cm) across is no map feature, and
+#: its projection would keep few of its digits; it stays planar.
+GUESS_MIN_DEGREES = 1e-6
 
 
 def _pyproj() -> Any:
@@ -90,6 +115,32 @@ def crs_name(crs: Any) -> str | None:
         return None
     epsg = crs.to_epsg()
     return f"EPSG:{epsg}" if epsg else ":".join(crs.to_authority() or ("?", "?"))
+
+
+def guess_crs(geom: Any) -> str | None:
+    """The CRS of a polygon given without one: :data:`RFC7946_CRS` when every coordinate
+    lies within longitude −180…180 and latitude −90…90 and its bounding box is at most
+    :data:`GUESS_DEGREES` across (and at least :data:`GUESS_MIN_DEGREES`), else None
+    (planar).
+
+    >>> from shapely.geometry import box
+    >>> guess_crs(box(10.0, 60.0, 10.02, 60.01)), guess_crs(box(0, 0, 60, 50))
+    ('OGC:CRS84', None)
+    """
+    minx, miny, maxx, maxy = shapely.bounds(geom)
+    within = -180 <= minx <= maxx <= 180 and -90 < miny <= maxy < 90
+    if within and GUESS_MIN_DEGREES <= max(maxx - minx, maxy - miny) <= GUESS_DEGREES:
+        return RFC7946_CRS
+    return None
+
+
+def has_pyproj() -> bool:
+    """Whether pyproj (the ``geo`` extra) can be imported."""
+    try:
+        import pyproj  # noqa: F401
+    except ImportError:  # pragma: no cover - the geo extra installs it
+        return False
+    return True
 
 
 def _crs(name: str) -> Any:

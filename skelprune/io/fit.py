@@ -203,7 +203,7 @@ def fitted_pixel_size(
 class RasterWarning:
     """A part of the polygon that the raster does not hold as it is."""
 
-    kind: str  # "vanished" | "split" | "merged" | "holes" | "skipped" | "point"
+    kind: str  # "vanished" | "split" | "merged" | "holes" | "skipped" | "point" | "crs"
     message: str
     part: int | None = None  # index of the polygon part, where one is meant
     pixel_size: float | None = None  # a pixel size that holds it (None: not found)

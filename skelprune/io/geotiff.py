@@ -1,15 +1,23 @@
 """GeoTIFF masks (a segmentation model's output): the mask, and the frame and CRS that
-put the answer back on the map (rasterio, the ``geo`` extra).
+put the answer back on the map.
 
 The first band is read; the shape is its non-zero pixels that are not the band's
 ``nodata`` value. The raster must be north-up with square pixels (no rotation or shear:
 the frame maps a pixel to the map by one size and one origin), as segmentation masks
 on a map grid are.
+
+Two readers, one answer: a file (:func:`read_geotiff`) is read with rasterio (the ``geo``
+extra: anything GDAL reads, any CRS); bytes (:func:`read_geotiff_bytes`, what the
+service receives) are decoded by the hostile-input TIFF reader (:mod:`.tiff`) and their
+georeference taken from the GeoTIFF tags (the model tie point and pixel scale, or the
+model transformation; the CRS's EPSG code; GDAL's nodata tag), so that no untrusted
+bytes reach GDAL.
 """
 
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -20,7 +28,13 @@ from .frame import PixelFrame
 #: File name endings read as GeoTIFF masks (any case).
 GEOTIFF_SUFFIXES = (".tif", ".tiff")
 
-__all__ = ["GEOTIFF_SUFFIXES", "read_geotiff"]
+__all__ = [
+    "GEOTIFF_SUFFIXES",
+    "Georeference",
+    "geotiff_georeference",
+    "read_geotiff",
+    "read_geotiff_bytes",
+]
 
 
 def read_geotiff(
@@ -73,3 +87,156 @@ def read_geotiff(
     from .crs import crs_name  # shapely, which crs imports, only when a GeoTIFF is read
 
     return mask, frame, crs_name(crs)
+
+
+@dataclass(frozen=True)
+class Georeference:
+    """Where a GeoTIFF's pixels lie: the affine ``transform`` from a pixel's corner
+    ``(col, row)`` to map coordinates, as GDAL and rasterio write it
+    ``(a, b, c, d, e, f)``: ``x = a·col + b·row + c``, ``y = d·col + e·row + f``, the CRS
+    name (``EPSG:…``) and the band's nodata value (None: none)."""
+
+    transform: tuple[float, float, float, float, float, float]
+    crs: str | None
+    nodata: float | None = None
+
+    @classmethod
+    def of_frame(cls, frame: PixelFrame, crs: str | None) -> Georeference:
+        """The north-up grid of a GeoTIFF's frame (pixel centres on the map).
+
+        >>> Georeference.of_frame(PixelFrame(5.0, 95.0, 10.0, flip_y=True), None).transform
+        (10.0, 0.0, 0.0, 0.0, -10.0, 100.0)
+        """
+        a = frame.pixel_size
+        return cls((a, 0.0, frame.x0 - 0.5 * a, 0.0, -a, frame.y0 + 0.5 * a), crs)
+
+    def frame(self) -> PixelFrame:
+        """The frame from pixel centres to the map; a rotated, sheared, south-up or
+        non-square grid is refused."""
+        a, b, c, d, e, f = self.transform
+        if b != 0 or d != 0 or e >= 0 or not np.isclose(a, -e, rtol=1e-9):
+            raise InvalidImageError(
+                "the GeoTIFF is not north-up with square pixels (its transform is "
+                f"{self.transform}); warp it to a map grid first"
+            )
+        # pixel (col, row)'s centre is the transform of (col + 0.5, row + 0.5)
+        return PixelFrame(x0=c + 0.5 * a, y0=f + 0.5 * e, pixel_size=a, flip_y=True)
+
+    def to_dict(self) -> dict[str, Any]:
+        """What a document records of it (``georeference``)."""
+        return {"crs": self.crs, "transform": list(self.transform)}
+
+
+#: GeoKeys that name the CRS by its EPSG code (projected first), and the value GeoTIFF
+#: uses for a user-defined one.
+_CRS_KEYS = ("ProjectedCSTypeGeoKey", "GeographicTypeGeoKey")
+_USER_DEFINED = 32767
+#: The tags of the grid, by tifffile's names.
+_GRID_TAGS = {"ModelPixelScale": 33550, "ModelTiepoint": 33922, "ModelTransformation": 34264}
+
+
+def geotiff_georeference(data: bytes) -> Georeference | None:
+    """The georeference of a TIFF's bytes, from its header (nothing decoded), or None
+    for a TIFF without GeoTIFF tags.
+
+    Raises
+    ------
+    InvalidImageError
+        GeoTIFF tags that give no grid (no tie point and scale, nor a transformation), or
+        a CRS that is not an EPSG code.
+
+    Examples
+    --------
+    >>> import io, tifffile
+    >>> buf = io.BytesIO()
+    >>> tifffile.imwrite(buf, np.zeros((4, 6), np.uint8), extratags=[
+    ...     (33550, 12, 3, (10.0, 10.0, 0.0)), (33922, 12, 6, (0, 0, 0, 5e5, 6.6e6, 0)),
+    ...     (34735, 3, 8, (1, 1, 0, 1, 3072, 0, 1, 32633))])
+    >>> geo = geotiff_georeference(buf.getvalue())
+    >>> geo.crs, geo.transform
+    ('EPSG:32633', (10.0, 0.0, 500000.0, 0.0, -10.0, 6600000.0))
+    """
+    from .tiff import GEO_TAGS, _page
+
+    page = _page(data)
+    if not any(code in page.tags for code in GEO_TAGS):
+        return None
+    try:
+        tags = dict(page.geotiff_tags or {})  # None without a key directory
+        for name, code in _GRID_TAGS.items():  # the grid's tags, key directory or not
+            if name not in tags and code in page.tags:
+                tags[name] = page.tags[code].value
+    except Exception as exc:  # a malformed key directory
+        raise InvalidImageError(f"unreadable GeoTIFF tags: {str(exc)[:200]}") from None
+    transform = _transform(tags)
+    code = next((tags[k] for k in _CRS_KEYS if k in tags), None)
+    crs = None
+    if code is not None:
+        if int(code) == _USER_DEFINED:
+            raise InvalidImageError(
+                "the GeoTIFF's CRS is user-defined (no EPSG code); reproject it to a CRS "
+                "with an EPSG code, or read the file from disk"
+            )
+        crs = f"EPSG:{int(code)}"
+    nodata = None
+    if 42113 in page.tags:  # GDAL_NODATA: the value as ASCII
+        try:
+            nodata = float(str(page.tags[42113].value).strip().strip("\x00"))
+        except ValueError:
+            raise InvalidImageError("the GeoTIFF's nodata tag is not a number") from None
+    return Georeference(transform, crs, nodata)
+
+
+def _transform(tags: dict[str, Any]) -> tuple[float, float, float, float, float, float]:
+    matrix = tags.get("ModelTransformation")
+    if matrix is not None:
+        m = np.asarray(matrix, float).ravel()
+        if m.size != 16:
+            raise InvalidImageError("the GeoTIFF's model transformation is not 4×4")
+        t = (m[0], m[1], m[3], m[4], m[5], m[7])
+    else:
+        scale, tie = tags.get("ModelPixelScale"), tags.get("ModelTiepoint")
+        if scale is None or tie is None or len(scale) < 2 or len(tie) < 6:
+            raise InvalidImageError(
+                "the GeoTIFF has no grid: neither a tie point with a pixel scale nor a "
+                "model transformation"
+            )
+        sx, sy = float(scale[0]), float(scale[1])
+        i, j, x, y = float(tie[0]), float(tie[1]), float(tie[3]), float(tie[4])
+        t = (sx, 0.0, x - i * sx, 0.0, -sy, y + j * sy)
+    if int(tags.get("GTRasterTypeGeoKey", 1)) == 2:  # PixelIsPoint: the tie is a centre
+        t = (t[0], t[1], t[2] - 0.5 * t[0], t[3], t[4], t[5] - 0.5 * t[4])
+    values = tuple(float(v) for v in t)
+    if not all(np.isfinite(values)):
+        raise InvalidImageError("the GeoTIFF's transform is not finite")
+    return values  # type: ignore[return-value]
+
+
+def read_geotiff_bytes(
+    data: bytes, georeference: Georeference, max_pixels: int | None = None
+) -> tuple[np.ndarray, PixelFrame, str | None]:
+    """:func:`read_geotiff` of a GeoTIFF's bytes: the mask, the frame and the CRS name;
+    the pixels decoded by :func:`~skelprune.io.tiff.read_tiff` (its limits and checks).
+
+    Examples
+    --------
+    >>> import io, tifffile
+    >>> buf = io.BytesIO(); m = np.zeros((4, 6), np.uint8); m[1:3, 1:5] = 1
+    >>> tifffile.imwrite(buf, m, extratags=[
+    ...     (33550, 12, 3, (10.0, 10.0, 0.0)), (33922, 12, 6, (0, 0, 0, 5e5, 6.6e6, 0)),
+    ...     (34735, 3, 8, (1, 1, 0, 1, 3072, 0, 1, 32633))])
+    >>> data = buf.getvalue()
+    >>> mask, frame, crs = read_geotiff_bytes(data, geotiff_georeference(data))
+    >>> int(mask.sum()), frame.point(0, 0), crs
+    (8, (500005.0, 6599995.0), 'EPSG:32633')
+    """
+    from .tiff import read_tiff
+
+    frame = georeference.frame()
+    values = read_tiff(data, max_pixels=max_pixels)
+    band = values if values.ndim == 2 else values[..., 0]  # the first band
+    mask = band != 0
+    nodata = georeference.nodata
+    if nodata is not None and not np.isnan(nodata):
+        mask &= band != nodata
+    return mask, frame, georeference.crs

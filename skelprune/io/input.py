@@ -21,7 +21,7 @@ from ..errors import ImageTooLargeError, InvalidImageError, InvalidPolygonError
 from ..options import ARRAY_FOREGROUND, RasterOptions, ReadOptions
 from .foreground import POLYGON_FOREGROUND, Foreground
 from .frame import IDENTITY, PixelFrame
-from .geotiff import GEOTIFF_SUFFIXES
+from .geotiff import GEOTIFF_SUFFIXES, Georeference
 from .tiff import is_georeferenced
 
 if TYPE_CHECKING:
@@ -91,6 +91,7 @@ class Input:
     hint: str | None = None
     pixel_size: float | None = None
     crs: str | None = None  # a GeoTIFF's CRS (a polygon's is its raster's)
+    georeference: Georeference | None = None  # a GeoTIFF's grid on the map
 
     def __post_init__(self) -> None:
         mask = np.asarray(self.mask)
@@ -283,7 +284,19 @@ def read_input(
         from .geotiff import read_geotiff
 
         mask, frame, crs = read_geotiff(source, max_pixels=max_pixels)
-        return Input(mask, frame, MASK_FOREGROUND, crs=crs)  # its non-zero pixels
+        geo = Georeference.of_frame(frame, crs)
+        return Input(mask, frame, MASK_FOREGROUND, crs=crs, georeference=geo)
+    if isinstance(source, bytes | bytearray | memoryview):
+        from .tiff import is_tiff
+
+        if is_tiff(bytes(source[:4])):
+            from .geotiff import geotiff_georeference, read_geotiff_bytes
+
+            geo = geotiff_georeference(bytes(source))
+            if geo is not None:  # a GeoTIFF sent as data: its map, as from a file
+                mask, frame, crs = read_geotiff_bytes(bytes(source), geo, max_pixels)
+                geo = Georeference.of_frame(frame, crs)  # as the file's reader records it
+                return Input(mask, frame, MASK_FOREGROUND, crs=crs, georeference=geo)
     if read is None:
         read = ReadOptions(ARRAY_FOREGROUND) if isinstance(source, np.ndarray) else ReadOptions()
     values, alpha = _image_values(source, max_pixels)

@@ -27,7 +27,14 @@ import numpy as np
 from shapely.geometry import MultiPolygon
 
 from skelprune.errors import EmptyMaskError, ImageTooLargeError, InvalidPolygonError, shown
-from skelprune.io.crs import LocalProjection, local_projection
+from skelprune.io.crs import (
+    GUESS_DEGREES,
+    PLANAR,
+    LocalProjection,
+    guess_crs,
+    has_pyproj,
+    local_projection,
+)
 from skelprune.io.fit import (
     RasterWarning,
     budget_pixel_size,
@@ -287,6 +294,34 @@ def polygon_mask(
     return rasterize(geom, options, margin=margin, max_pixels=max_pixels)
 
 
+def _guessed(geom: MultiPolygon, warnings: list[RasterWarning]) -> str | None:
+    """The CRS of a polygon given without one (:func:`guess_crs`), its warning added."""
+    crs = guess_crs(geom)
+    if crs is None:
+        return None
+    what = (
+        f"no CRS given, and every coordinate lies within longitude/latitude bounds with the "
+        f"polygon at most {GUESS_DEGREES:g}° across"
+    )
+    if not has_pyproj():  # pragma: no cover - the geo extra installs it
+        warnings.append(
+            RasterWarning(
+                "crs",
+                f"{what}, as RFC 7946 longitude/latitude is; read as planar all the same "
+                "(pyproj is missing: install skelprune[geo]); give crs to say which",
+            )
+        )
+        return None
+    warnings.append(
+        RasterWarning(
+            "crs",
+            f"{what}: read as RFC 7946 longitude/latitude ({crs}), pruned on the ground in "
+            'metres; give crs="planar" if the coordinates are planar',
+        )
+    )
+    return crs
+
+
 def read_polygon(
     obj: Mapping[str, Any],
     options: RasterOptions | None = None,
@@ -298,13 +333,18 @@ def read_polygon(
     :func:`parse_geojson` then :func:`polygon_raster`.
 
     The one way a polygon becomes a raster for pruning (:func:`skelprune.io.read_input`).
-    A polygon in a geographic CRS (``options.crs``, else the GeoJSON's ``crs`` member) is
-    rasterised in its local equidistant projection (:mod:`skelprune.io.crs`).
+    A polygon in a geographic CRS (``options.crs``, else the GeoJSON's ``crs`` member,
+    else :func:`~skelprune.io.crs.guess_crs`, with a ``crs`` warning) is rasterised in its
+    local equidistant projection (:mod:`skelprune.io.crs`).
     """
     options = RasterOptions() if options is None else options
     parsed = parse_polygon(obj, max_vertices=max_vertices, repair=options.repair)
     crs = options.crs or parsed.crs
     geom, projection = parsed.geometry, None
+    if crs is None:
+        crs = _guessed(geom, parsed.warnings)
+    elif crs == PLANAR:
+        crs = None
     if crs is not None:
         projection = local_projection(geom, crs)
         if projection is not None:

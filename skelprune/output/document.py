@@ -362,6 +362,8 @@ class PruneResult:
         if self.raster is not None:
             doc["raster"] = self.raster.to_dict()
             doc["warnings"] = self.warnings
+        if self.input.georeference is not None:
+            doc["georeference"] = self.input.georeference.to_dict()
         if self.input.hint is not None:
             doc["hint"] = self.input.hint
         if overlay:

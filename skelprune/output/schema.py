@@ -329,11 +329,26 @@ class RasterInfoDoc(TypedDict):
 class RasterWarningItemDoc(TypedDict):
     """A part of the polygon that the raster does not hold as it is."""
 
-    kind: Literal["vanished", "split", "merged", "holes", "skipped"]
+    kind: Literal["vanished", "split", "merged", "holes", "skipped", "crs"]
     message: str
     part: Annotated[int | None, Doc("The polygon part meant, if one is.")]
     pixel_size: Annotated[
         float | None, Doc("A pixel size that holds it (null: none found within the limits).")
+    ]
+
+
+class GeoreferenceDoc(TypedDict):
+    """Where a GeoTIFF mask's pixels lie on the map."""
+
+    crs: Annotated[str | None, Doc("The raster's CRS (EPSG:…; null: none recorded).")]
+    transform: Annotated[
+        list[float],
+        Doc(
+            "The affine map from a pixel's corner (col, row) to map coordinates, in GDAL's "
+            "order [a, b, c, d, e, f]: x = a·col + b·row + c, y = d·col + e·row + f. The "
+            "document's coordinates stay the raster's pixels; the GeoJSON answer's are "
+            "the map's."
+        ),
     ]
 
 
@@ -355,6 +370,7 @@ class PruneDocument(TypedDict):
     foreground: ForegroundTakenDoc
     components: list[ComponentDoc]
     raster: NotRequired[Annotated[RasterInfoDoc, Doc("Polygon input only.")]]
+    georeference: NotRequired[Annotated[GeoreferenceDoc, Doc("GeoTIFF input only.")]]
     warnings: NotRequired[
         Annotated[
             list[RasterWarningItemDoc],

@@ -27,7 +27,7 @@ from .work import Budget, Job, finite_lines, run_item
 if TYPE_CHECKING:
     from distributed import Client
 
-__all__ = ["LINE_COLUMNS", "branch_lines", "prune_geoparquet"]
+__all__ = ["LINE_COLUMNS", "branch_lines", "map_lines", "prune_geoparquet"]
 
 #: The columns each output row adds to its input row's attributes (``problem`` and
 #: ``detail``: the problem kind and its detail, on the one row of a feature that failed,
@@ -87,6 +87,34 @@ def branch_lines(part: Any, job: Job) -> Any:
     return geopandas.GeoDataFrame(out, geometry=geometries, crs=part.crs)
 
 
+def map_lines(part: Any, job: Job) -> Any:
+    """One partition's map lines (:func:`skelprune.geo.centerlines`: corner branches
+    dropped, chains joined, simplified by the local width, a Point for a part too small
+    for a line): one row a line or point with ``feature`` (the input row's index),
+    ``part``, ``kind``, ``length``, ``width`` and ``error``, then the input row's
+    attributes, in the partition's CRS. A geographic CRS is pruned on the ground (lengths
+    and widths in metres). A feature that fails gives one row with no geometry and its
+    reason in ``error``. Each feature is rasterised within the raster options' pixel
+    budget; the memory estimate of :func:`branch_lines` does not apply."""
+    from ..geo import centerlines
+
+    options: dict[str, Any] = {"options": job.options, "output": job.output}
+    if job.raster is not None:
+        options["raster"] = job.raster
+    out = centerlines(part, **options)
+    # the same column types in every partition (and the empty meta), so the parts
+    # share one schema: a partition without a failure has no string in `error`, and
+    # the attributes come back from records as objects
+    types = {"feature": part.index.dtype, "part": "Int64", "kind": "string"}
+    types |= {"length": "float64", "width": "float64", "error": "string"}
+    types |= {c: part[c].dtype for c in part.columns if c != part.geometry.name and c in out}
+    return out.astype(types)
+
+
+#: What a partition becomes, by name: :func:`branch_lines` or :func:`map_lines`.
+LINES = {"branches": branch_lines, "map": map_lines}
+
+
 def prune_geoparquet(
     source: str | os.PathLike[str],
     destination: str | os.PathLike[str],
@@ -98,7 +126,7 @@ def prune_geoparquet(
     jobs: int | None = None,
     budget: Budget | None = None,
     npartitions: int | None = None,
-    lines: Callable[[Any, Job], Any] | None = None,
+    lines: str | Callable[[Any, Job], Any] = "branches",
     **keywords: Any,
 ) -> Path:
     """Prune every polygon of a GeoParquet and write their skeleton lines as GeoParquet.
@@ -120,9 +148,11 @@ def prune_geoparquet(
         As for :func:`~skelprune.parallel.prune_many`.
     npartitions : int, optional
         Split the table into this many partitions at least (default: some four a worker).
-    lines : callable, optional
-        ``lines(partition, job) -> GeoDataFrame``, what a partition becomes (default
-        :func:`branch_lines`): the place for another per-feature function.
+    lines : {"branches", "map"} or callable
+        What a partition becomes: ``"branches"`` (:func:`branch_lines`, the skeleton's
+        branches, the default), ``"map"`` (:func:`map_lines`, the map lines of
+        :func:`skelprune.geo.centerlines`), or ``lines(partition, job) -> GeoDataFrame``,
+        another per-feature function.
 
     Returns
     -------
@@ -137,7 +167,12 @@ def prune_geoparquet(
     if read is not None:
         raise SkelpruneError("a GeoParquet holds polygons: read options do not apply")
     job = Job(options, None, raster, output, budget=budget or Budget())
-    fn = lines or branch_lines
+    if isinstance(lines, str):
+        if lines not in LINES:
+            raise SkelpruneError(f"lines: {lines!r} is not one of {', '.join(LINES)}")
+        fn = LINES[lines]
+    else:
+        fn = lines
     with _client(client, jobs, job.budget) as c:
         table = dask_geopandas.read_parquet(source)
         wanted = npartitions or 4 * _workers(c)

@@ -277,3 +277,45 @@ def test_a_geoparquet_becomes_a_geoparquet_of_lines_with_the_rows_attributes(
         ]
         got = good[good["source_row"] == row].sort_values("branch")
         assert [[list(c) for c in g.coords] for g in got.geometry] == expected
+
+
+def test_a_geoparquet_becomes_map_lines_with_the_rows_attributes(
+    tmp_path: Path, scheduler: str
+) -> None:
+    import geopandas
+    from shapely.geometry import LineString, MultiPolygon, box
+
+    from skelprune.geo import centerlines
+    from skelprune.parallel.geoparquet import prune_geoparquet
+
+    shapes = [box(0, 0, 300 + 10 * i, 40 + i % 5) for i in range(12)]
+    shapes[3] = MultiPolygon([box(0, 0, 300, 40), box(400, 0, 404, 4)])  # and an islet
+    shapes[7] = LineString([(0, 0), (5, 5)])  # not a polygon: its row fails alone
+    table = geopandas.GeoDataFrame(
+        {"name": [f"lake{i}" for i in range(12)], "depth": np.arange(12.0)},
+        geometry=shapes,
+        crs="EPSG:32633",
+        index=range(500, 512),
+    )
+    table.to_parquet(tmp_path / "lakes.parquet")
+    out = prune_geoparquet(
+        tmp_path / "lakes.parquet", tmp_path / "lines", client=scheduler, npartitions=3,
+        lines="map",
+    )  # fmt: skip
+    lines = geopandas.read_parquet(out).sort_values(["feature", "part"], kind="stable")
+    assert len(list(out.glob("*.parquet"))) == 3 and lines.crs == table.crs
+    failed = lines[lines["error"].notna()]
+    assert list(failed["feature"]) == [507] and failed.geometry.isna().all()
+    assert list(failed["name"]) == ["lake7"]
+    # the same rows as centerlines of the table in one process
+    expected = centerlines(table).sort_values(["feature", "part"], kind="stable")
+    assert list(lines["feature"]) == list(expected["feature"])
+    assert list(lines["kind"].fillna("-")) == list(expected["kind"].fillna("-"))
+    assert list(lines["name"]) == list(expected["name"])
+    good = lines["error"].isna().to_numpy()
+    assert [g.wkb for g in lines.geometry[good]] == [
+        g.wkb for g in expected.geometry[expected["error"].isna().to_numpy()]
+    ]
+    assert set(lines[lines["feature"] == 503]["part"]) == {0, 1}  # every part a row
+    with pytest.raises(skelprune.SkelpruneError, match="lines: 'rivers' is not one of"):
+        prune_geoparquet(tmp_path / "lakes.parquet", tmp_path / "x", lines="rivers")

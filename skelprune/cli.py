@@ -240,7 +240,7 @@ CrsOption = Annotated[str | None, typer.Option(help=_geojson_only("crs"))]
 SimplifyOption = Annotated[float, typer.Option(help=HELP["simplify"])]
 CutEndsOption = Annotated[bool, typer.Option(help=HELP["cut_ends"])]
 OverlayScaleOption = Annotated[int | None, typer.Option(help=HELP["overlay_scale"])]
-Scope = enum.Enum("Scope", {name: name for name in SCOPES}, type=str)
+Scope = enum.Enum("Scope", {name: name for name in SCOPES}, type=str)  # type: ignore[misc]
 ScopeOption = Annotated[Scope, typer.Option(help=HELP["scope"])]
 WindowOption = Annotated[int | None, typer.Option(help=HELP["window"])]
 

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from .grid.graph import BranchGraph
+from .grid.thinning import thin
 from .io.input import Input
 from .options import (
     LOCAL_HALO_FRACTION,
@@ -198,9 +199,8 @@ def _seam_thinned(
     """Which kept pixels stay once the seams are thinned: the two windows' axes meet at a
     core border, each tie broken in its own window, and may touch there side by side
     (a 2 × 2 block, a short cycle); within :data:`SEAM` px of a border, pixels that
-    thinning (skimage's, topology-preserving) removes go; nowhere else does a pixel change."""
-    from skimage.morphology import thin
-
+    thinning (:func:`~skelprune.grid.thinning.thin`, topology-preserving) removes go;
+    nowhere else does a pixel change."""
     img = np.zeros(shape, bool)
     img[rows, cols] = True
     drop = np.zeros(shape, bool)

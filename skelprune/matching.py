@@ -32,7 +32,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from .api import prune
-from .errors import SkelpruneError
+from .errors import InvalidImageError, SkelpruneError
 from .io.frame import IDENTITY, PixelFrame
 from .output.document import PruneResult, branch_line
 
@@ -265,6 +265,10 @@ def describe(shape: PruneResult | SkeletonDescriptor | Any) -> SkeletonDescripto
     if isinstance(shape, SkeletonDescriptor):
         return shape
     result = shape if isinstance(shape, PruneResult) else prune(shape)
+    if not isinstance(result, PruneResult):
+        raise InvalidImageError(
+            "shape matching takes a silhouette or a polygon; a volume has no descriptor"
+        )
     ci = int(np.argmax([c.area for c in result.components]))
     comp = result.components[ci]
     skeleton = comp.to_dict(curve=False)["skeleton"]

@@ -187,10 +187,10 @@ def prune_volume_component(
     answer = seq.skeleton_at(chosen)
     trim = None
     if options.trim and seq.alpha is not None:
-        trim = trim_volume_tips(answer, seq.lost[chosen], seq.alpha, seq.lbar)  # type: ignore[arg-type]
+        trim = trim_volume_tips(answer, seq.lost[chosen], seq.alpha, seq.lbar)
         answer = trim.skeleton
-    margins = branch_margins(answer.graph, seq, chosen, trim)  # type: ignore[arg-type]
-    return VolumeComponent(axis, answer, seq, chosen, margins, trim)  # type: ignore[arg-type]
+    margins = branch_margins(answer.graph, seq, chosen, trim)
+    return VolumeComponent(axis, answer, seq, chosen, margins, trim)
 
 
 def prune_volume(

@@ -31,6 +31,7 @@ from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 
 from ..errors import SkelpruneError
 from ..io.crs import PLANAR, crs_name
+from ..output.document import PruneResult
 from .carto import END_FACTOR, SHARE, cartographic_lines
 
 __all__ = ["centerlines", "feature_lines", "read_frame", "write_frame"]
@@ -102,6 +103,7 @@ def feature_lines(
     else:
         options = {**options, "crs": PLANAR}
     res = skelprune.prune(ground, **options)
+    assert isinstance(res, PruneResult)  # a polygon, never a volume
     warnings = [w.message for w in guessed]
     warnings += [w["message"] for w in res.to_dict().get("warnings", [])]
     lines = cartographic_lines(

@@ -169,15 +169,15 @@ def geotiff_georeference(data: bytes) -> Georeference | None:
     except Exception as exc:  # a malformed key directory
         raise InvalidImageError(f"unreadable GeoTIFF tags: {str(exc)[:200]}") from None
     transform = _transform(tags)
-    code = next((tags[k] for k in _CRS_KEYS if k in tags), None)
-    crs = None
-    if code is not None:
-        if int(code) == _USER_DEFINED:
+    crs_code = next((tags[k] for k in _CRS_KEYS if k in tags), None)
+    crs: str | None = None
+    if crs_code is not None:
+        if int(crs_code) == _USER_DEFINED:
             raise InvalidImageError(
                 "the GeoTIFF's CRS is user-defined (no EPSG code); reproject it to a CRS "
                 "with an EPSG code, or read the file from disk"
             )
-        crs = f"EPSG:{int(code)}"
+        crs = f"EPSG:{int(crs_code)}"
     nodata = None
     if 42113 in page.tags:  # GDAL_NODATA: the value as ASCII
         try:

@@ -292,9 +292,9 @@ def read_input(
         if is_tiff(bytes(source[:4])):
             from .geotiff import geotiff_georeference, read_geotiff_bytes
 
-            geo = geotiff_georeference(bytes(source))
-            if geo is not None:  # a GeoTIFF sent as data: its map, as from a file
-                mask, frame, crs = read_geotiff_bytes(bytes(source), geo, max_pixels)
+            tags = geotiff_georeference(bytes(source))
+            if tags is not None:  # a GeoTIFF sent as data: its map, as from a file
+                mask, frame, crs = read_geotiff_bytes(bytes(source), tags, max_pixels)
                 geo = Georeference.of_frame(frame, crs)  # as the file's reader records it
                 return Input(mask, frame, MASK_FOREGROUND, crs=crs, georeference=geo)
     if read is None:

@@ -65,7 +65,7 @@ class ComponentResult:
 
     skeleton: Skeleton
     axis_summary: GraphSummary
-    sequence: PruningSequence
+    sequence: PruningSequence[Skeleton]
     chosen_step: int
     ma_rer: float
     margins: Margins = field(default_factory=Margins)

@@ -66,7 +66,9 @@ def branch_dicts(t: BranchTable, margins: bool = True) -> list[BranchDoc]:
     return out
 
 
-def sequence_dict(seq: PruningSequence, answer: Skeleton, frame: PixelFrame) -> SequenceDoc:
+def sequence_dict(
+    seq: PruningSequence[Skeleton], answer: Skeleton, frame: PixelFrame
+) -> SequenceDoc:
     """The pruning sequence as a viewer needs it, in ``frame``'s coordinates.
 
     ``S(0)``'s nodes and branches (ids of their own), each branch with the step whose

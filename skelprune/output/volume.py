@@ -31,7 +31,7 @@ class VolumeComponent:
 
     axis: VolumeSkeleton
     skeleton: VolumeSkeleton
-    sequence: PruningSequence
+    sequence: PruningSequence[VolumeSkeleton]
     chosen_step: int
     margins: Margins
     trim: VolumeTrim | None = None

@@ -112,7 +112,8 @@ def map_lines(part: Any, job: Job) -> Any:
 
 
 #: What a partition becomes, by name: :func:`branch_lines` or :func:`map_lines`.
-LINES = {"branches": branch_lines, "map": map_lines}
+#: The per-partition functions ``prune_geoparquet(lines=...)`` names.
+LINES: dict[str, Callable[[Any, Job], Any]] = {"branches": branch_lines, "map": map_lines}
 
 
 def prune_geoparquet(
@@ -167,6 +168,7 @@ def prune_geoparquet(
     if read is not None:
         raise SkelpruneError("a GeoParquet holds polygons: read options do not apply")
     job = Job(options, None, raster, output, budget=budget or Budget())
+    fn: Callable[[Any, Job], Any]
     if isinstance(lines, str):
         if lines not in LINES:
             raise SkelpruneError(f"lines: {lines!r} is not one of {', '.join(LINES)}")

@@ -18,6 +18,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import Any, Generic, TypeVar
 
 import numpy as np
 from numba import njit
@@ -45,15 +46,19 @@ def objective(lost: int, area: int, na: int, nd: int, alpha: float, lbar: float)
     return target(lost, area, step_length(na, nd), alpha, lbar)
 
 
+#: The axis type of one grid: a sequence gives back skeletons of its start's type.
+A = TypeVar("A", bound="GridAxis[Any]")
+
+
 @dataclass
-class PruningSequence:
+class PruningSequence(Generic[A]):
     """The greedy removal sequence of one component, on any grid (:mod:`.grid`).
 
     ``removed[i]`` is the branch removed at step ``i + 1``; the per-step lists have
     one entry per skeleton ``S(0)``, …, ``S(n)``, ``S(0)`` being ``start``.
     """
 
-    start: GridAxis
+    start: A
     removed: list[int]
     lost: list[int]
     #: Per skeleton: its steps of each kind (the grid's :attr:`~.grid.GridAxis.step_weights`
@@ -98,7 +103,7 @@ class PruningSequence:
             ]
         )
 
-    def skeleton_at(self, step: int) -> GridAxis:
+    def skeleton_at(self, step: int) -> A:
         """``S(step)``: the start with the first ``step`` removals made (on a copy)."""
         if step == len(self.removed):
             return self.start.with_graph(self.end)
@@ -118,12 +123,12 @@ def choose_step(objectives: np.ndarray) -> int:
 
 
 def pruning_sequence(
-    start: GridAxis,
+    start: A,
     alpha: float | None,
     lbar: float,
     order: list[int] | None = None,
     uncovered: bool = False,
-) -> PruningSequence:
+) -> PruningSequence[A]:
     """Remove end branches until none is left; record every step.
 
     Speaks to the grid only through :mod:`.grid`'s interface, so that one sequence serves

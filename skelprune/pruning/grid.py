@@ -25,7 +25,7 @@ two implementations that make the same removals agree bit for bit.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Protocol
+from typing import Protocol, Self, TypeVar
 
 import numpy as np
 from numba import njit
@@ -50,8 +50,16 @@ class PointSet(Protocol):
 class GridGraph(Protocol):
     """A mutable branch graph over the axis points (indices into the axis)."""
 
-    branches: Sequence[PointSet]
-    junctions: Sequence[PointSet]
+    @property
+    def branches(self) -> Sequence[PointSet]:
+        """Every branch ever made, by id (removed ones with ``alive`` false)."""
+        ...
+
+    @property
+    def junctions(self) -> Sequence[PointSet]:
+        """Every junction cluster ever made, by id."""
+        ...
+
     #: Ids of the current end branches (one free end, one junction end).
     ends: set[int]
 
@@ -123,7 +131,11 @@ class LimbTest(Protocol):
     def merged(self, kept: int, absorbed: int) -> None: ...
 
 
-class GridAxis(Protocol):
+#: The graph type of one grid (an axis takes only its own grid's graphs).
+G = TypeVar("G", bound="GridGraph")
+
+
+class GridAxis(Protocol[G]):
     """A skeleton of one component on its grid: what the sequence starts from."""
 
     @property
@@ -136,20 +148,20 @@ class GridAxis(Protocol):
         """Length of each step kind, in the order of the graph's step counts."""
         ...
 
-    def working_graph(self) -> GridGraph:
+    def working_graph(self) -> G:
         """A copy of the skeleton's graph that the core may change."""
         ...
 
-    def with_graph(self, graph: GridGraph) -> GridAxis:
+    def with_graph(self, graph: G) -> Self:
         """The same shape and points with another graph over them."""
         ...
 
-    def coverage(self, graph: GridGraph, labels: np.ndarray, n_labels: int) -> GridCoverage:
+    def coverage(self, graph: G, labels: np.ndarray, n_labels: int) -> GridCoverage:
         """The coverage of the shape by the points alive in ``graph``, ``labels[p]``
         being point ``p``'s owner label (``1 .. n_labels - 1``)."""
         ...
 
-    def limb_test(self, graph: GridGraph) -> LimbTest | None:
+    def limb_test(self, graph: G) -> LimbTest | None:
         """The grid's limb test on ``graph`` (read, never changed), or ``None``."""
         ...
 

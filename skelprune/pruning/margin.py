@@ -21,14 +21,12 @@ covers (what the choice reads anyway) and which branches merged.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 from .bayesian import PruningSequence, target
 from .grid import GridGraph, path_length
-
-if TYPE_CHECKING:
-    from .tips import Trim
 
 __all__ = ["Margins", "branch_margins"]
 
@@ -41,8 +39,25 @@ class Margins:
     removed_at: dict[int, int | None] = field(default_factory=dict)
 
 
+class TrimmedAnswer(Protocol):
+    """The tips cut from an answer, on any grid (:class:`~.tips.Trim`, the volume's
+    :class:`~skelprune.grid3d.tips.VolumeTrim`)."""
+
+    @property
+    def lost(self) -> int: ...
+
+    @property
+    def steps(self) -> Sequence[int]: ...
+
+    @property
+    def exclusive(self) -> dict[int, int]: ...
+
+
 def branch_margins(
-    graph: GridGraph, seq: PruningSequence, chosen: int, trim: Trim | None = None
+    graph: GridGraph,
+    seq: PruningSequence[Any],
+    chosen: int,
+    trim: TrimmedAnswer | None = None,
 ) -> Margins:
     """Margins of the branches of ``graph``, which is ``S(chosen)`` of ``seq``, or its
     tips cut (``trim``): then ``λ(Ŝ)`` and the end branches' areas are the trimmed
@@ -57,12 +72,13 @@ def branch_margins(
         merges are all the margins need.
     chosen : int
         The answer's step.
-    trim : Trim, optional
+    trim : TrimmedAnswer, optional
         The tips cut from ``S(chosen)``, when ``graph`` is the trimmed skeleton.
     """
     alive = [b for b, br in enumerate(graph.branches) if br.alive]
     removed_at = _removal_steps(seq, chosen, alive)
-    if seq.alpha is None or not seq.lbar > 0:
+    alpha = seq.alpha
+    if alpha is None or not seq.lbar > 0:
         return Margins({b: None for b in alive}, removed_at)
     lam = seq.objective
     base = float(lam[chosen])
@@ -70,11 +86,11 @@ def branch_margins(
 
     def without(lost: int, b: int) -> float:
         length = path_length(graph.counts_without(b), weights)
-        return target(lost, seq.area, length, seq.alpha, seq.lbar) - base
+        return target(lost, seq.area, length, alpha, seq.lbar) - base
 
     if trim is not None:
         length = path_length(trim.steps, weights)
-        base = target(trim.lost, seq.area, length, seq.alpha, seq.lbar)
+        base = target(trim.lost, seq.area, length, alpha, seq.lbar)
     margin: dict[int, float | None] = {}
     for b in alive:
         j = removed_at[b]

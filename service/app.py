@@ -7,12 +7,11 @@ import asyncio
 import logging
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
-from dataclasses import dataclass
 from functools import partial
 
 from fastapi import FastAPI
 from fastapi.middleware.cors import CORSMiddleware
-from prometheus_client import CollectorRegistry, Gauge, Histogram
+from prometheus_client import CollectorRegistry
 from prometheus_fastapi_instrumentator import Instrumentator
 
 from service import __version__
@@ -22,62 +21,14 @@ from service.http.api_key import ApiKeyMiddleware
 from service.http.middleware import BodyLimitMiddleware, HeadMiddleware, SlashRedirectMiddleware
 from service.http.request_context import REQUEST_ID_HEADER, RequestContextMiddleware
 from service.http.routes import ROUTERS
+from service.metrics import metrics
 from service.settings import Settings
 from service.worker.jobs import warmup
 from service.worker.pool import WorkerPool
 
-__all__ = ["Metrics", "create_app"]
+__all__ = ["create_app"]
 
 log = logging.getLogger("service")
-
-
-@dataclass
-class Metrics:
-    """The service's own Prometheus metrics (HTTP ones come from the instrumentator)."""
-
-    registry: CollectorRegistry
-    prune_seconds: Histogram
-    job_seconds: Histogram
-
-
-def _metrics(registry: CollectorRegistry, pool: WorkerPool) -> Metrics:
-    buckets = (0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1, 2, 5, 10, 30, 60)
-    m = Metrics(
-        registry=registry,
-        prune_seconds=Histogram(
-            "skelprune_prune_seconds",
-            "Time in skelprune.prune per job.",
-            buckets=buckets,
-            registry=registry,
-        ),
-        job_seconds=Histogram(
-            "skelprune_job_seconds",
-            "Worker round trip per job: decode, prune, serialise, transfer.",
-            buckets=buckets,
-            registry=registry,
-        ),
-    )
-    Gauge(
-        "skelprune_queue_depth", "Jobs waiting for a free worker.", registry=registry
-    ).set_function(lambda: pool.waiting)
-    Gauge("skelprune_workers_busy", "Workers running a job.", registry=registry).set_function(
-        lambda: pool.busy
-    )
-    Gauge("skelprune_workers", "Worker processes alive.", registry=registry).set_function(
-        pool.alive
-    )
-    Gauge(
-        "skelprune_worker_restarts",
-        "Workers replaced (a timeout, a crash, over the memory budget, or recycled).",
-        registry=registry,
-    ).set_function(lambda: pool.restarts)
-    Gauge(
-        "skelprune_workers_recycled",
-        "Workers replaced because their memory did not come back after a job.",
-        registry=registry,
-    ).set_function(lambda: pool.recycled)
-    pool.on_job_done = m.job_seconds.observe
-    return m
 
 
 def _fixed_paths(app: FastAPI) -> set[str]:
@@ -165,7 +116,7 @@ def create_app(
     app.state.settings = settings
     app.state.pool = pool
     app.state.pool_failure = None  # why the pool did not start, if it did not
-    app.state.metrics = _metrics(registry, pool)
+    app.state.metrics = metrics(registry, pool)
     for router in ROUTERS:
         app.include_router(router)
     install_docs(app)  # /openapi.json, /docs and /redoc

@@ -8,8 +8,9 @@ prunes windows instead (docs/algorithm.md, "Local scope"):
 1. The image is cut into square **cores** of ``window`` pixels (a grid from the top-left
    corner); each core is grown by a **halo** of ``window // 4`` pixels on every side (clipped
    to the image) into its **window**.
-2. Each window is pruned alone, with the existing pipeline (:func:`skelprune.api.prune_input`
-   with ``scope="global"``) and every other option as given.
+2. Each window is pruned alone, with the existing pipeline
+   (:func:`skelprune.pipeline.prune_components` with ``scope="global"``) and every other
+   option as given.
 3. Each pixel of the medial axis is decided once, by the window whose core holds it: it
    is kept if that window's answer (before its tips are cut) keeps it. A branch crossing
    a core border is seen whole by both windows (the halo is longer than the spurs a
@@ -47,6 +48,7 @@ from .options import (
     PruneOptions,
 )
 from .output.document import ComponentResult, GraphSummary, PruneResult
+from .pipeline import prune_component, prune_components
 from .pruning.bayesian import PruningSequence
 from .pruning.tips import trim_tips
 from .skeleton import Normalisation, Skeleton, normalisation
@@ -123,13 +125,11 @@ def prune_window(
 
     What a worker runs; pure, so that windows may run anywhere in any order.
     """
-    from .api import prune_input
-
     top, bottom, left, right = core
     empty = np.zeros(0, np.int64)
     if not sub.any():
         return empty, empty, empty, np.zeros(0, bool)
-    res = prune_input(Input(sub), replace(options, scope="global", window=None))
+    res = prune_components(Input(sub), replace(options, scope="global", window=None).resolved())
     rows, cols, r2, kept = [], [], [], []
     for comp in res.components:
         s = comp.skeleton
@@ -427,9 +427,9 @@ def prune_local(
     applied = replace(options, window=window)
     if window >= max(mask.shape):
         # one window holds the image: it is pruned alone, as the global scope prunes it
-        from .api import prune_input
-
-        result = prune_input(shape, replace(applied, scope="global", window=None), output, progress)
+        result = prune_components(
+            shape, replace(applied, scope="global", window=None).resolved(), output, progress
+        )
         result.options = applied
         return result
     rows, cols, r2, kept = _run_windows(mask, window, applied, client, progress)
@@ -447,8 +447,6 @@ def prune_local(
         sel = np.flatnonzero(inside)
         sel = sel[crop[r[sel], c[sel]]] + lo
         if sel.size == 0:  # too small to hold an axis pixel of its own windows
-            from .api import prune_component
-
             result.components.append(
                 prune_component(crop, origin, replace(applied, scope="global"))
             )

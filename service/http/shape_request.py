@@ -27,7 +27,7 @@ from service.worker.jobs import Media
 from service.worker.pool import WorkerPool
 
 if TYPE_CHECKING:
-    from service.app import Metrics
+    from service.metrics import Metrics
 
 __all__ = ["BodyKind", "ShapeRequest", "ShapeRequests"]
 

@@ -102,7 +102,7 @@ def canonical_orientation(mask: np.ndarray) -> Orientation:
 def oriented(mask: np.ndarray) -> tuple[np.ndarray, Orientation]:
     """``mask`` in its canonical orientation (contiguous), and that orientation.
 
-    :func:`skelprune.api.prune_component` works in this frame: the graph, the branch ids
+    :func:`skelprune.pipeline.prune_component` works in this frame: the graph, the branch ids
     and the ``(row, col)`` tie rules of docs/algorithm.md of a
     :class:`~skelprune.output.document.ComponentResult` are in it.
     """

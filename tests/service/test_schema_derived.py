@@ -10,7 +10,7 @@ import pydantic
 import pytest
 
 import skelprune
-from service import schemas
+from service.http import schemas
 from skelprune.output import schema
 
 

@@ -33,14 +33,22 @@ from .errors import InvalidPolygonError, JobTooLargeError
 __all__ = [
     "BYTES_PER_ANSWER_PIXEL",
     "BYTES_PER_COMPONENT",
+    "BYTES_PER_FACE",
+    "BYTES_PER_INSIDE_VOXEL",
     "BYTES_PER_PIXEL",
     "BYTES_PER_SKELETON_POINT",
+    "BYTES_PER_VOXEL",
+    "IMAGE_BASIS",
     "SECONDS_PER_COMPONENT",
+    "SECONDS_PER_FACE",
+    "SECONDS_PER_INSIDE_VOXEL",
     "SECONDS_PER_PART",
     "SECONDS_PER_PART_PAIR",
     "SECONDS_PER_PIXEL",
     "SECONDS_PER_POSITION",
     "SECONDS_PER_SKELETON_POINT",
+    "SECONDS_PER_VOXEL",
+    "VOLUME_BASIS",
     "Estimate",
     "JobTooLargeError",
     "check_budget",
@@ -51,6 +59,7 @@ __all__ = [
     "polygon_estimate",
     "resident_bytes",
     "shape_counts",
+    "volume_estimate",
 ]
 
 # The memory coefficients are fitted so that what a warm worker holds plus the estimate
@@ -82,6 +91,19 @@ SECONDS_PER_PART = 2.5e-3
 #: ... and per pair of parts: the fitting and union of many parts grow faster than
 #: their number (20,000 unit squares: ~20 s, 10,000: ~4 s).
 SECONDS_PER_PART_PAIR = 60e-9
+# A volume's coefficients are fitted on trees, balls and opened noise at 96³-256³
+# (docs/volumes.md): the estimate is 0.85-1.35x the measured peak over a warm worker.
+#: A volume's cost: bytes per voxel (the distance transform, labels, crops) ...
+BYTES_PER_VOXEL = 8
+#: ... per voxel inside (the balls' coverage, the thinning's state) ...
+BYTES_PER_INSIDE_VOXEL = 32
+#: ... and per boundary face (the thinning queue, skeleton voxels and their graph) ...
+BYTES_PER_FACE = 150
+#: ... seconds per voxel (the distance transform), per voxel inside and per boundary
+#: face (the thinning: opened noise, all surface, ~10 µs a face).
+SECONDS_PER_VOXEL = 0.04e-6
+SECONDS_PER_INSIDE_VOXEL = 0.3e-6
+SECONDS_PER_FACE = 12e-6
 _EIGHT = np.ones((3, 3), bool)
 
 
@@ -132,6 +154,35 @@ def estimate(mask: np.ndarray, answer_pixels: int = 0) -> Estimate:
         seconds=SECONDS_PER_PIXEL * pixels
         + SECONDS_PER_SKELETON_POINT * skeleton
         + SECONDS_PER_COMPONENT * n_components,
+    )
+
+
+def volume_estimate(volume: np.ndarray, answer_pixels: int = 0) -> Estimate:
+    """Worst-case memory and time of pruning a volume (and rendering ``answer_pixels``).
+
+    The cost grows with the voxels, the voxels inside and the boundary faces (a face
+    between a voxel inside and one outside or the volume's edge).
+
+    >>> v = np.zeros((64, 64, 64), bool); v[8:56, 30:34, 30:34] = True
+    >>> e = volume_estimate(v); e.bytes // 2**20, round(e.seconds, 3)
+    (2, 0.02)
+    """
+    inside = np.asarray(volume) != 0
+    n_inside = int(np.count_nonzero(inside))
+    faces = sum(
+        int(np.count_nonzero(np.diff(inside, axis=axis)))
+        + int(np.count_nonzero(np.take(inside, 0, axis=axis)))
+        + int(np.count_nonzero(np.take(inside, -1, axis=axis)))
+        for axis in range(inside.ndim)
+    )
+    return Estimate(
+        bytes=BYTES_PER_VOXEL * inside.size
+        + BYTES_PER_INSIDE_VOXEL * n_inside
+        + BYTES_PER_FACE * faces
+        + BYTES_PER_ANSWER_PIXEL * answer_pixels,
+        seconds=SECONDS_PER_VOXEL * inside.size
+        + SECONDS_PER_INSIDE_VOXEL * n_inside
+        + SECONDS_PER_FACE * faces,
     )
 
 
@@ -196,29 +247,47 @@ def mib(n: float) -> str:
     return f"{n / 2**20:,.0f} MiB"
 
 
-def check_budget(cost: Estimate, memory: int | None, seconds: float | None = None) -> None:
+#: What an image's estimate is judged by, and what to send instead of a refused one.
+IMAGE_BASIS = (
+    "its pixels, boundary and components",
+    "send fewer pixels or a cleaner mask (noise, one-pixel patterns and scattered dots cost "
+    "the most)",
+)
+#: The same for a volume's (:func:`volume_estimate`).
+VOLUME_BASIS = (
+    "its voxels and the voxels inside",
+    "send fewer voxels (a crop of the volume, or a coarser one)",
+)
+
+
+def check_budget(
+    cost: Estimate,
+    memory: int | None,
+    seconds: float | None = None,
+    basis: tuple[str, str] = IMAGE_BASIS,
+) -> None:
     """Refuse a job whose estimate (:func:`estimate`) is over its budget: ``memory``
     bytes on top of what this worker holds now, or ``seconds`` (the job time limit).
+    ``basis``: what the estimate is judged by and the advice, for the message.
 
     Raises
     ------
     JobTooLargeError
         Naming the estimate and the limit.
     """
-    advice = "send fewer pixels or a cleaner mask (noise, one-pixel patterns and scattered "
-    advice += "dots cost the most)"
+    judged, advice = basis
     if memory is not None:
         held = resident_bytes()
         if held + cost.bytes > memory:
             raise JobTooLargeError(
-                f"this input would need about {mib(cost.bytes)} to prune (judged by its "
-                f"pixels, boundary and components; a worker holds {mib(held)} already), "
+                f"this input would need about {mib(cost.bytes)} to prune (judged by "
+                f"{judged}; a worker holds {mib(held)} already), "
                 f"over the memory budget of {mib(memory)} a job: {advice}"
             )
     if seconds is not None and cost.seconds > seconds:
         raise JobTooLargeError(
-            f"this input would take about {cost.seconds:.0f} s to prune (judged by its "
-            f"pixels, boundary and components), over the job time limit of {seconds:g} s: "
+            f"this input would take about {cost.seconds:.0f} s to prune (judged by "
+            f"{judged}), over the job time limit of {seconds:g} s: "
             f"{advice}"
         )
 

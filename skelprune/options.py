@@ -464,8 +464,11 @@ class RasterOptions:
 
 def _spacing(name: str, value: Any) -> tuple[float, float, float]:
     try:
-        values = tuple(value)
-    except TypeError:
+        if isinstance(value, str):  # "dz,dy,dx", as a query or the CLI writes it
+            values: tuple[Any, ...] = tuple(float(v) for v in value.split(","))
+        else:
+            values = tuple(value)
+    except (TypeError, ValueError):
         values = ()
     if len(values) != 3 or not all(
         not isinstance(v, bool) and isinstance(v, int | float) and math.isfinite(v) and v > 0
@@ -488,12 +491,13 @@ _with_schema(
 
 @dataclass(frozen=True)
 class VolumeOptions:
-    """How a 3-D volume's voxels measure (volume input only: a 3-D array or ``.npy``).
+    """How a 3-D volume's voxels measure (volume input only: a 3-D array, a ``.npy`` or a
+    TIFF stack).
 
     Examples
     --------
-    >>> VolumeOptions(spacing=(3, 1, 1)).spacing
-    (3.0, 1.0, 1.0)
+    >>> VolumeOptions(spacing=(3, 1, 1)).spacing, VolumeOptions(spacing="2,1,1").spacing
+    ((3.0, 1.0, 1.0), (2.0, 1.0, 1.0))
     >>> VolumeOptions(spacing=(1, 0, 1))  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...

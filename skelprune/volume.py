@@ -11,6 +11,7 @@ follow a contour), and the noise-floor choice.
 
 from __future__ import annotations
 
+import io
 import os
 from pathlib import Path
 from typing import Any
@@ -34,6 +35,7 @@ from .pruning.margin import branch_margins
 __all__ = [
     "IMAGE_CHANNELS",
     "MAX_VOLUME_VOXELS",
+    "check_volume_size",
     "is_volume",
     "prune_volume",
     "read_volume",
@@ -50,6 +52,8 @@ IMAGE_CHANNELS = 4
 #: the header, before anything is decoded.
 MAX_VOLUME_VOXELS = 1 << 30
 TIFF_SUFFIXES = (".tif", ".tiff")
+#: The first bytes of a ``.npy`` file.
+NPY_MAGIC = b"\x93NUMPY"
 
 
 def is_volume(source: Any) -> bool:
@@ -59,6 +63,11 @@ def is_volume(source: Any) -> bool:
     as a volume when ``spacing`` is given)."""
     if isinstance(source, np.ndarray):
         return source.ndim == 3 and source.shape[-1] > IMAGE_CHANNELS
+    if isinstance(source, bytes | bytearray | memoryview):
+        from .io.tiff import tiff_pages
+
+        head = bytes(source[:6])
+        return head == NPY_MAGIC or (head[:2] in (b"II", b"MM") and tiff_pages(bytes(source)) > 1)
     if not isinstance(source, str | os.PathLike):
         return False
     name = str(source).lower()
@@ -107,9 +116,89 @@ def _read_stack(path: Any) -> np.ndarray:
         raise InvalidImageError(f"cannot read {os.fspath(path)!r} as a TIFF stack: {exc}") from None
 
 
-def read_volume(source: Any) -> np.ndarray:
+def check_volume_size(data: bytes, max_voxels: int | None) -> tuple[int, int, int]:
+    """A ``.npy`` or TIFF stack's ``(depth, height, width)`` from its header; refuses
+    more than ``max_voxels`` voxels before anything is decoded (what the service checks
+    before it queues a volume).
+
+    >>> buf = io.BytesIO(); np.save(buf, np.zeros((4, 5, 6), bool))
+    >>> check_volume_size(buf.getvalue(), 1000)
+    (4, 5, 6)
+    """
+    data = bytes(data)
+    if data[:6] == NPY_MAGIC:
+        shape, _, _ = _npy_header(io.BytesIO(data))
+        if len(shape) != 3:
+            raise InvalidImageError(
+                f"a volume is a 3-D array; this one has {len(shape)} dimensions"
+            )
+        dims = (int(shape[0]), int(shape[1]), int(shape[2]))
+    else:
+        from .io.tiff import tiff_pages, tiff_size
+
+        pages = tiff_pages(data)
+        if pages < 2:
+            raise InvalidImageError("not a volume: neither a .npy file nor a multi-page TIFF")
+        try:
+            width, height = tiff_size(data)
+        except InvalidImageError:  # the first page alone: its size is what is asked
+            import tifffile
+
+            with tifffile.TiffFile(io.BytesIO(data)) as tif:
+                first = tif.pages.first
+                width, height = int(first.imagewidth), int(first.imagelength)
+        dims = (pages, height, width)
+    voxels = dims[0] * dims[1] * dims[2]
+    if max_voxels is not None and voxels > max_voxels:
+        raise ImageTooLargeError(
+            f"the volume has {voxels} voxels ({'×'.join(map(str, dims))}), the limit is "
+            f"{max_voxels}"
+        )
+    return dims
+
+
+def _npy_header(f: io.BytesIO) -> tuple[tuple[int, ...], bool, np.dtype[Any]]:
+    """A ``.npy`` header: shape, Fortran order, dtype (refused: no header, objects)."""
+    try:
+        version = np.lib.format.read_magic(f)
+        read_header = (
+            np.lib.format.read_array_header_1_0
+            if version == (1, 0)
+            else np.lib.format.read_array_header_2_0
+        )
+        shape, fortran, dtype = read_header(f)
+    except ValueError as exc:
+        raise InvalidImageError(f"cannot read the .npy header: {str(exc)[:200]}") from None
+    if dtype.hasobject:
+        raise InvalidImageError("a .npy of Python objects is not read (no pickles)")
+    return tuple(shape), bool(fortran), dtype
+
+
+def _npy_bytes(data: bytes, max_voxels: int) -> np.ndarray:
+    """A ``.npy`` file's array from its bytes: the header checked (no pickles, the size
+    within ``max_voxels`` and within the bytes given) before the array is made."""
+    f = io.BytesIO(data)
+    shape, fortran, dtype = _npy_header(f)
+    voxels = int(np.prod(shape, dtype=np.int64))
+    if voxels > max_voxels:
+        raise ImageTooLargeError(
+            f"the array has {voxels} voxels ({'×'.join(map(str, shape))}), the limit is "
+            f"{max_voxels}"
+        )
+    if len(data) - f.tell() < voxels * dtype.itemsize:
+        raise InvalidImageError(
+            f"truncated .npy: {'×'.join(map(str, shape))} {dtype} needs "
+            f"{voxels * dtype.itemsize} bytes, {len(data) - f.tell()} follow the header"
+        )
+    arr = np.frombuffer(data, dtype, voxels, offset=f.tell())
+    return arr.reshape(shape, order="F" if fortran else "C")
+
+
+def read_volume(source: Any, max_voxels: int | None = None) -> np.ndarray:
     """A volume as an array: ``source`` itself, a ``.npy`` file (no pickles) or a
-    multi-page TIFF (its pages along ``z``).
+    multi-page TIFF (its pages along ``z``), as a path or as the file's bytes; files of
+    more than ``max_voxels`` voxels (default :data:`MAX_VOLUME_VOXELS`) are refused from
+    their header.
 
     Raises
     ------
@@ -118,7 +207,17 @@ def read_volume(source: Any) -> np.ndarray:
     ImageTooLargeError
         A file declaring more than :data:`MAX_VOLUME_VOXELS` voxels.
     """
-    if isinstance(source, str | os.PathLike) and str(source).lower().endswith(TIFF_SUFFIXES):
+    if max_voxels is None:
+        max_voxels = MAX_VOLUME_VOXELS
+    if isinstance(source, bytes | bytearray | memoryview):
+        data = bytes(source)
+        if data[:6] == NPY_MAGIC:
+            arr = _npy_bytes(data, max_voxels)
+        else:
+            from .io.tiff import read_tiff_stack
+
+            arr = read_tiff_stack(data, max_voxels=max_voxels)
+    elif isinstance(source, str | os.PathLike) and str(source).lower().endswith(TIFF_SUFFIXES):
         arr = _read_stack(source)
     elif isinstance(source, str | os.PathLike):
         try:
@@ -128,9 +227,9 @@ def read_volume(source: Any) -> np.ndarray:
             raise InvalidImageError(
                 f"cannot read {os.fspath(source)!r} as a .npy array: {exc}"
             ) from None
-        if arr.size > MAX_VOLUME_VOXELS:
+        if arr.size > max_voxels:
             raise ImageTooLargeError(
-                f"the array has {arr.size} voxels, more than the {MAX_VOLUME_VOXELS} read"
+                f"the array has {arr.size} voxels, more than the {max_voxels} read"
             )
     else:
         arr = np.asarray(source)

@@ -309,6 +309,20 @@ PRUNE_REQUEST_BODY: dict[str, Any] = {
     "required": True,
     "content": {
         "image/png": {"schema": {"type": "string", "format": "binary"}},
+        "image/tiff": {
+            "schema": {
+                "type": "string",
+                "format": "binary",
+                "description": "A TIFF mask, a GeoTIFF mask, or a stack of pages (a volume).",
+            }
+        },
+        "application/x-npy": {
+            "schema": {
+                "type": "string",
+                "format": "binary",
+                "description": "A volume: a .npy file of a 3-D boolean or integer array.",
+            }
+        },
         "multipart/form-data": {
             "schema": {
                 "type": "object",

@@ -35,6 +35,12 @@ Compute the pruned skeleton of a shape.
 - `image/tiff`: a single-image TIFF as the body (docs/tables.md#tiff); a GeoTIFF mask
   (GeoTIFF tags: a north-up grid, an EPSG CRS) is its non-zero pixels but nodata, and
   the GeoJSON answer's lines are in its map coordinates and CRS (docs/gis.md);
+- a volume: `application/x-npy` (a `.npy` file of a 3-D boolean or integer array, no
+  pickles) or `image/tiff` with several pages (a stack, one page a slice), as the body;
+  its voxels count against the pixel limit, `spacing=dz,dy,dx` gives the voxel's size
+  (docs/volumes.md). The answer is the 3-D document (`application/json`, points
+  `[x, y, z, radius]`), the three projections with the skeleton (`image/png`) or the
+  branch table (`text/csv`);
 - `multipart/form-data`: the PNG or TIFF in the field `file`;
 - `application/json` (or `application/geo+json`): a GeoJSON `Polygon`, `MultiPolygon`,
   `Feature` or `FeatureCollection` (holes allowed), or an object

@@ -10,7 +10,7 @@ else.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 from fastapi.exceptions import RequestValidationError
@@ -21,7 +21,14 @@ from service.settings import Settings
 from service.worker.jobs import MEDIA_TYPES, Job, Media
 from service.worker.match_job import MatchJob
 from skelprune.errors import InvalidOptionError
-from skelprune.options import GROUPS, OutputOptions, PruneOptions, RasterOptions, ReadOptions
+from skelprune.options import (
+    GROUPS,
+    OutputOptions,
+    PruneOptions,
+    RasterOptions,
+    ReadOptions,
+    VolumeOptions,
+)
 
 __all__ = ["JobBuilder", "job_builder"]
 
@@ -35,6 +42,8 @@ GEOJSON_ONLY = ("simplify", "cut_ends")
 #: Options of the tables' answers only (Accept: text/csv; pixel_size too, for an image).
 TABLE_ONLY = ("table",)
 TABLE_OUTPUTS = ("csv", "graphml")
+#: The option groups a request's options are sorted into, each checked by its class.
+OPTION_GROUPS = (*GROUPS, VolumeOptions)
 
 
 def _gather(
@@ -81,6 +90,10 @@ def _gather(
             "option(s) pixel_size only apply to polygon input, or to an image's tables "
             "(Accept: text/csv or application/graphml+xml), whose unit it sets"
         )
+    if polygon and "spacing" in opts:
+        raise InvalidOptionError(
+            "option(s) spacing only apply to volume input (a .npy or a TIFF stack body)"
+        )
     if not polygon:
         misplaced = [k for k in POLYGON_ONLY if k in opts]
         if misplaced:
@@ -117,7 +130,7 @@ def _values(opts: dict[str, Any], where: dict[str, str]) -> tuple[Any, ...]:
     (the request's models check wire types). Every refused option is located where it
     was given, as a validation error of the request."""
     values, errors = [], []
-    for group in GROUPS:
+    for group in OPTION_GROUPS:
         try:
             values.append(group(**_group(opts, group)))
         except InvalidOptionError as exc:
@@ -143,9 +156,11 @@ class JobBuilder:
     output: OutputOptions
     read: ReadOptions
     raster: RasterOptions
+    volume: VolumeOptions = field(default_factory=VolumeOptions)
 
     def job(self, png: bytes | None = None, geojson: dict[str, Any] | None = None) -> Job:
-        """The worker's job for one shape: exactly one of ``png`` and ``geojson``."""
+        """The worker's job for one shape: exactly one of ``png`` (the bytes of an image
+        body: PNG, TIFF, or a volume's ``.npy`` or TIFF stack) and ``geojson``."""
         settings = self.settings
         kind, data = ("image", png) if png is not None else ("geojson", geojson or {})
         return Job(
@@ -156,6 +171,7 @@ class JobBuilder:
             read=self.read,
             raster=self.raster,
             output=self.output,
+            volume=self.volume,
             max_pixels=settings.max_pixels,
             max_vertices=settings.max_vertices,
             memory_budget=settings.job_memory_mb * 2**20,
@@ -212,7 +228,7 @@ def job_builder(
         and settings.polygon_longest_side is not None
     ):
         opts["longest_side"] = settings.polygon_longest_side  # the server's default
-    values = dict(zip(GROUPS, _values(opts, _where(query, body)), strict=True))
+    values = dict(zip(OPTION_GROUPS, _values(opts, _where(query, body)), strict=True))
     return JobBuilder(
         media,
         settings,
@@ -220,4 +236,5 @@ def job_builder(
         values[OutputOptions],
         values[ReadOptions],
         values[RasterOptions],
+        values[VolumeOptions],
     )

@@ -37,7 +37,7 @@ from pydantic import (
     model_validator,
 )
 
-from skelprune.options import GROUPS, RasterOptions, ReadOptions
+from skelprune.options import GROUPS, RasterOptions, ReadOptions, VolumeOptions
 from skelprune.output import schema
 from skelprune.output.schema import Doc, Len
 
@@ -108,6 +108,16 @@ def _option_models() -> tuple[type[BaseModel], dict[str, Any]]:
                 text += " A server may set a default (`SKELPRUNE_POLYGON_LONGEST_SIDE`)."
             schema = getattr(f.metadata["check"], "schema", None)
             fields[f.name] = (wire | None, Field(None, description=text, json_schema_extra=schema))
+    spacing = dataclass_fields(VolumeOptions)[0]
+    fields[spacing.name] = (
+        str | None,
+        Field(
+            None,
+            description=spacing.metadata["help"]
+            + " Written `dz,dy,dx` (`3,1,1`); for a `.npy` or TIFF stack body only.",
+            json_schema_extra={"pattern": r"^[^,]+,[^,]+,[^,]+$", "examples": ["3,1,1"]},
+        ),
+    )
     query = create_model("PruneQuery", __config__=ConfigDict(extra="forbid"), **fields)
     query.__doc__ = "Options in the query string (all optional; unknown parameters are refused)."
     return query, fields
@@ -141,7 +151,9 @@ def query_parameters(model: type[BaseModel]) -> list[dict[str, Any]]:
 GEOJSON = ConfigDict(strict=True, extra="allow")
 #: Option names, refused as foreign members: an option there would be ignored silently
 #: (but ``crs``, which is the GeoJSON's own member too).
-_OPTION_NAMES = frozenset(f.name for group in GROUPS for f in dataclass_fields(group)) - {"crs"}
+_OPTION_NAMES = frozenset(
+    f.name for group in (*GROUPS, VolumeOptions) for f in dataclass_fields(group)
+) - {"crs"}
 
 
 class _GeoJSONObject(BaseModel):

@@ -32,11 +32,12 @@ if TYPE_CHECKING:
 __all__ = ["BodyKind", "ShapeRequest", "ShapeRequests"]
 
 #: What a body holds, by its ``Content-Type``: an image as the body itself (PNG or
-#: TIFF), a multipart form, or JSON (GeoJSON).
+#: TIFF; a volume as a ``.npy`` or a TIFF stack), a multipart form, or JSON (GeoJSON).
 BodyKind = Literal["image", "form", "json"]
 KINDS: dict[str, BodyKind] = {
     "image/png": "image",
     "image/tiff": "image",
+    "application/x-npy": "image",  # a volume as a .npy file
     "multipart/form-data": "form",
     **dict.fromkeys(JSON_TYPES, "json"),
 }

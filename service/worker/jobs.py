@@ -14,10 +14,22 @@ from typing import Any, Literal
 
 import numpy as np
 
-from skelprune.budget import check_budget, estimate, out_of_memory
-from skelprune.errors import ImageTooLargeError, SkelpruneError
+from skelprune.budget import (
+    VOLUME_BASIS,
+    check_budget,
+    estimate,
+    out_of_memory,
+    volume_estimate,
+)
+from skelprune.errors import ImageTooLargeError, InvalidOptionError, SkelpruneError
 from skelprune.io.input import Input, Kind, read_input
-from skelprune.options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
+from skelprune.options import (
+    OutputOptions,
+    PruneOptions,
+    RasterOptions,
+    ReadOptions,
+    VolumeOptions,
+)
 from skelprune.output.render import auto_scale
 
 __all__ = [
@@ -49,9 +61,11 @@ class Job:
     """One shape to prune, as sent to a worker (picklable): the input as it came, its
     kind, and the request's options as the library's checked, frozen values.
 
-    ``data`` is PNG bytes for ``kind="image"``, a GeoJSON mapping for ``kind="geojson"``;
-    the worker reads it with :func:`skelprune.io.read_input` (as data, never a file's
-    name) and prunes it with :func:`skelprune.api.prune_input`, the library's pipeline.
+    ``data`` is the body's bytes for ``kind="image"`` (PNG or TIFF; a ``.npy`` or a
+    multi-page TIFF is a volume), a GeoJSON mapping for ``kind="geojson"``; the worker
+    reads it with :func:`skelprune.io.read_input` (as data, never a file's name) and
+    prunes it with :func:`skelprune.api.prune_input`, the library's pipeline, or a volume
+    with :func:`skelprune.volume.prune_volume`.
     """
 
     media: Media
@@ -61,6 +75,7 @@ class Job:
     read: ReadOptions = field(default_factory=ReadOptions)
     raster: RasterOptions = field(default_factory=RasterOptions)
     output: OutputOptions = field(default_factory=OutputOptions)
+    volume: VolumeOptions = field(default_factory=VolumeOptions)
     max_pixels: int | None = None
     max_vertices: int | None = None
     memory_budget: int | None = None  # bytes a worker may hold for the job
@@ -113,8 +128,8 @@ def warmup() -> str:
 
     The shape has a hole (the loop code paths) and a noisy boundary whose spurs the
     coarse stage removes (its code paths); ``coarse=None``, ``method="dce"`` and
-    ``choice="noise-floor"`` run too, and a match, so that no job of any option meets a
-    function still to be loaded.
+    ``choice="noise-floor"`` run too, a match and a volume, so that no job of any option
+    meets a function still to be loaded.
 
     Returns
     -------
@@ -137,6 +152,13 @@ def warmup() -> str:
     res.to_geojson()
     res.overlay_png()
     skelprune.match(res, res).to_dict()  # the matching kernels of POST /v1/match
+    volume = np.zeros((12, 24, 36), dtype=bool)  # a T of two bars: a volume's code paths
+    volume[3:9, 4:10, 3:33] = True
+    volume[3:9, 4:21, 15:21] = True
+    vres = skelprune.prune(volume, spacing=(2.0, 1.0, 1.0))
+    vres.to_dict()
+    vres.to_csv()
+    vres.overlay_png()
     loaded, compiled = kernel_counts()
     took = f"{time.perf_counter() - t0:.1f} s"
     if compiled:
@@ -194,7 +216,14 @@ def run_job(job: Job) -> JobResult:
 
 def _run_job(job: Job) -> JobResult:
     from skelprune.api import prune_input
+    from skelprune.volume import is_volume
 
+    if job.kind == "image" and isinstance(job.data, bytes) and is_volume(job.data):
+        return _run_volume_job(job)
+    if job.volume != VolumeOptions():
+        raise InvalidOptionError(
+            "option(s) spacing only apply to volume input (a .npy or a TIFF stack body)"
+        )
     shape = read_job(job)
     cost = estimate(shape.mask, answer_pixels(job, shape.mask.shape))
     check_budget(cost, job.memory_budget, job.time_budget)
@@ -220,6 +249,58 @@ def _run_job(job: Job) -> JobResult:
         body = res.to_csv(job.output.table).encode()
     elif job.media == "graphml":
         body = res.to_graphml().encode()
+    else:
+        body = dumps(res.to_dict())
+    return JobResult(
+        body=body, media_type=MEDIA_TYPES[job.media], prune_seconds=elapsed, headers=headers
+    )
+
+
+def _run_volume_job(job: Job) -> JobResult:
+    """A volume's job: its voxels count against the pixel limit and the budgets."""
+    from skelprune.volume import prune_volume, read_volume
+
+    if job.read != ReadOptions():
+        raise InvalidOptionError(
+            "read options (foreground, labels, fill_holes, min_area) apply to images; a "
+            "volume's non-zero voxels are its shapes, each label its own"
+        )
+    shown = [k for k in ("overlay", "sequence", "overlay_legend") if getattr(job.output, k)]
+    if shown:
+        raise InvalidOptionError(
+            f"option(s) {', '.join(shown)} apply to images; a volume's JSON document is its "
+            "graph, and its picture the image/png answer"
+        )
+    if job.media in ("geojson", "graphml"):
+        raise InvalidOptionError(
+            f"a volume has no {MEDIA_TYPES[job.media]} answer; ask for application/json, "
+            "image/png (its three projections) or text/csv"
+        )
+    volume = read_volume(job.data, max_voxels=job.max_pixels)
+    answer = 0
+    if job.media == "png":
+        z, y, x = volume.shape
+        scale = job.output.overlay_scale or max(1, min(16, -(-512 // max(volume.shape))))
+        answer = (y + z + 4) * (x + z + 4) * scale * scale
+    cost = volume_estimate(volume, answer)
+    check_budget(cost, job.memory_budget, job.time_budget, VOLUME_BASIS)
+    t0 = time.perf_counter()
+    res = prune_volume(volume, job.options, job.volume, job.output)
+    elapsed = time.perf_counter() - t0
+    headers: dict[str, str] = {}
+    if job.media == "png":
+        body = res.overlay_png()
+        headers = {"X-Skelprune-Components": str(len(res.components))}
+        if len(res.components) <= PNG_HEADER_COMPONENTS:
+            docs = [c.to_dict() for c in res.components]
+            for name, key in PNG_HEADERS.items():
+                headers[name] = ",".join(repr(float(d[key])) for d in docs)
+        else:
+            headers["X-Skelprune-Values"] = (
+                f"omitted: more than {PNG_HEADER_COMPONENTS} components; ask for application/json"
+            )
+    elif job.media == "csv":
+        body = res.to_csv().encode()
     else:
         body = dumps(res.to_dict())
     return JobResult(

@@ -34,7 +34,16 @@ import numpy as np
 
 from ..errors import ImageTooLargeError, InvalidImageError
 
-__all__ = ["COMPRESSIONS", "is_georeferenced", "is_tiff", "read_tiff", "tiff_size"]
+__all__ = [
+    "COMPRESSIONS",
+    "MAX_STACK_PAGES",
+    "is_georeferenced",
+    "is_tiff",
+    "read_tiff",
+    "read_tiff_stack",
+    "tiff_pages",
+    "tiff_size",
+]
 
 #: TIFF compression codes read, and their names.
 COMPRESSIONS = {1: "none", 5: "LZW", 8: "Deflate", 32946: "Deflate", 32773: "PackBits"}
@@ -97,8 +106,8 @@ def _page(data: bytes) -> Any:
             raise InvalidImageError(f"corrupt TIFF: {_plain(exc)}") from None
         if n != 1:
             raise InvalidImageError(
-                f"multi-page TIFF: {n} pages; skelprune reads single-image TIFFs (a stack "
-                "or volume is not read)"
+                f"multi-page TIFF: {n} pages; an image is one page (a stack of pages is "
+                "read as a volume, docs/volumes.md)"
             )
         page = tif.pages.first
         if getattr(page, "imagedepth", 1) != 1:
@@ -205,7 +214,11 @@ def read_tiff(data: bytes, *, max_pixels: int | None = None) -> np.ndarray:
     data = bytes(data)
     if not is_tiff(data):
         raise InvalidImageError("not a TIFF file: the TIFF signature is missing")
-    page = _page(data)
+    return _decode_page(_page(data), data, max_pixels)
+
+
+def _decode_page(page: Any, data: bytes, max_pixels: int | None) -> np.ndarray:
+    """One page's values, its header checked against the file and the limits first."""
     width, height = int(page.imagewidth), int(page.imagelength)
     if width <= 0 or height <= 0:
         raise InvalidImageError(f"corrupt TIFF: invalid size {width}×{height}")
@@ -264,3 +277,92 @@ def read_tiff(data: bytes, *, max_pixels: int | None = None) -> np.ndarray:
         values = np.moveaxis(values, 0, -1)
     values = values.reshape(height, width, -1)
     return values[..., 0] if values.shape[-1] == 1 else values
+
+
+#: The most pages of a TIFF stack read as a volume.
+MAX_STACK_PAGES = 4096
+
+
+def tiff_pages(data: bytes) -> int:
+    """Pages of a TIFF (slices of a single 3-D page counted as pages), from its header;
+    0 for bytes that are not a readable TIFF.
+
+    >>> import tifffile
+    >>> buf = io.BytesIO()
+    >>> tifffile.imwrite(buf, np.zeros((3, 4, 5), np.uint8), photometric="minisblack")
+    >>> tiff_pages(buf.getvalue()), tiff_pages(b"not a tiff")
+    (3, 0)
+    """
+    import tifffile
+
+    if not is_tiff(bytes(data[:4])):
+        return 0
+    try:
+        with tifffile.TiffFile(io.BytesIO(data)) as tif:
+            n = len(tif.pages)
+            return n if n > 1 else int(getattr(tif.pages.first, "imagedepth", 1))
+    except Exception:  # a broken header: the readers say what is wrong
+        return 0
+
+
+def read_tiff_stack(data: bytes, *, max_voxels: int | None = None) -> np.ndarray:
+    """The pages of a multi-page TIFF as a ``(pages, H, W)`` volume (each page's first
+    sample), every page checked as :func:`read_tiff` checks its one page.
+
+    Raises
+    ------
+    InvalidImageError
+        Not a TIFF, pages of different sizes, more than :data:`MAX_STACK_PAGES` pages, or
+        a page :func:`read_tiff` would refuse.
+    ImageTooLargeError
+        More voxels than ``max_voxels`` by the headers, before anything is decoded.
+
+    Examples
+    --------
+    >>> import tifffile
+    >>> vol = np.zeros((3, 4, 5), np.uint8); vol[1, 1:3, 1:4] = 1
+    >>> buf = io.BytesIO()
+    >>> tifffile.imwrite(buf, vol, photometric="minisblack", compression="zlib")
+    >>> v = read_tiff_stack(buf.getvalue()); v.shape, int(v.sum())
+    ((3, 4, 5), 6)
+    """
+    import tifffile
+
+    data = bytes(data)
+    if not is_tiff(data):
+        raise InvalidImageError("not a TIFF file: the TIFF signature is missing")
+    try:
+        tif = tifffile.TiffFile(io.BytesIO(data))
+    except Exception as exc:  # tifffile raises many kinds on a broken header
+        raise InvalidImageError(f"cannot read TIFF: {_plain(exc)}") from None
+    with tif:
+        try:
+            n = len(tif.pages)
+            if n > MAX_STACK_PAGES:
+                raise InvalidImageError(
+                    f"TIFF stack of {n} pages; at most {MAX_STACK_PAGES} are read"
+                )
+            pages: list[Any] = [tif.pages[i] for i in range(n)]
+        except InvalidImageError:
+            raise
+        except Exception as exc:
+            raise InvalidImageError(f"corrupt TIFF: {_plain(exc)}") from None
+        if n == 1 and getattr(pages[0], "imagedepth", 1) != 1:
+            raise InvalidImageError("a 3-D TIFF page is not read; write one page a slice")
+        sizes = {(int(p.imagelength), int(p.imagewidth)) for p in pages}
+        if len(sizes) != 1:
+            raise InvalidImageError(
+                f"the TIFF stack's pages differ in size ({len(sizes)} sizes); a volume's "
+                "slices are one size"
+            )
+        height, width = sizes.pop()
+        if max_voxels is not None and n * height * width > max_voxels:
+            raise ImageTooLargeError(
+                f"the stack has {n * height * width} voxels ({n}×{height}×{width}), the "
+                f"limit is {max_voxels}"
+            )
+        slices = []
+        for page in pages:
+            values = _decode_page(page, data, None)
+            slices.append(values if values.ndim == 2 else values[..., 0])
+    return np.stack(slices)

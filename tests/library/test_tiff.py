@@ -12,7 +12,7 @@ import pytest
 import tifffile
 
 import skelprune
-from skelprune.errors import ImageTooLargeError, InvalidImageError
+from skelprune.errors import EmptyMaskError, ImageTooLargeError, InvalidImageError
 from skelprune.io.tiff import read_tiff
 
 
@@ -72,8 +72,11 @@ def test_multi_page_and_3d_tiffs_are_refused_naming_the_pages():
     stack = np.zeros((5, 32, 32), np.uint8)
     with pytest.raises(InvalidImageError, match="multi-page TIFF: 5 pages"):
         read_tiff(tiff(stack, photometric="minisblack"))
-    with pytest.raises(InvalidImageError, match="multi-page TIFF: 5 pages"):
+    # given to prune, a stack is a volume
+    with pytest.raises(EmptyMaskError, match="no voxel inside"):
         skelprune.prune(tiff(stack, photometric="minisblack"))
+    stack[1:4, 8:24, 8:24] = 1
+    assert skelprune.prune(tiff(stack, photometric="minisblack")).to_dict()["depth"] == 5
     volume = tiff(stack, photometric="minisblack", volumetric=True, tile=(16, 16))
     with pytest.raises(InvalidImageError, match="3-D TIFF: 1 page of 5 slices"):
         read_tiff(volume)

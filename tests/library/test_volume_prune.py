@@ -8,11 +8,11 @@ import pytest
 from scipy import ndimage
 
 import skelprune
-from skelprune.errors import InvalidImageError, InvalidOptionError
+from skelprune.errors import ImageTooLargeError, InvalidImageError, InvalidOptionError
 from skelprune.grid3d.skeleton import VolumeSkeleton
 from skelprune.pruning.bayesian import pruning_sequence
 from testkit import volume_oracle as oracle
-from testkit.volumes import random_tree, tube
+from testkit.volumes import random_tree, tube, y_tubes
 
 SPACINGS = [(1.0, 1.0, 1.0), (3.0, 1.0, 1.0), (0.7, 1.3, 0.4)]
 
@@ -255,3 +255,49 @@ def test_a_volume_file_declaring_too_many_voxels_is_refused_unread(tmp_path, mon
     monkeypatch.setattr(volume_module, "MAX_VOLUME_VOXELS", 999)
     with pytest.raises(ImageTooLargeError, match="1000 voxels"):
         skelprune.prune(str(tmp_path / "v.npy"))
+
+
+def test_a_volume_given_as_file_bytes_is_the_arrays_answer() -> None:
+    import io
+
+    import tifffile
+
+    from skelprune.volume import check_volume_size, read_volume
+
+    fork = y_tubes(radius=2.5, arm=14.0).volume()
+    expected = skelprune.prune(fork, spacing=(2, 1, 1)).to_dict()
+    npy = io.BytesIO()
+    np.save(npy, np.asfortranarray(fork))  # Fortran order read as written
+    stack = io.BytesIO()
+    tifffile.imwrite(stack, fork.astype(np.uint8), photometric="minisblack", compression="zlib")
+    for data in (npy.getvalue(), stack.getvalue()):
+        assert check_volume_size(data, fork.size) == fork.shape
+        assert np.array_equal(read_volume(data) != 0, fork)
+        assert skelprune.prune(data, spacing=(2, 1, 1)).to_dict() == expected
+        with pytest.raises(ImageTooLargeError, match="voxels"):
+            check_volume_size(data, fork.size - 1)
+        with pytest.raises(ImageTooLargeError, match="voxels"):
+            read_volume(data, max_voxels=fork.size - 1)
+
+
+def test_volume_bytes_that_are_not_a_volume_are_refused_by_name() -> None:
+    import io
+
+    import tifffile
+
+    from skelprune.volume import read_volume
+
+    objects = io.BytesIO()
+    np.save(objects, np.array([[[None]]], dtype=object), allow_pickle=True)
+    with pytest.raises(InvalidImageError, match="no pickles"):
+        read_volume(objects.getvalue())
+    uneven = io.BytesIO()
+    with tifffile.TiffWriter(uneven) as tif:
+        tif.write(np.ones((8, 8), np.uint8))
+        tif.write(np.ones((8, 9), np.uint8))
+    with pytest.raises(InvalidImageError, match="differ in size"):
+        read_volume(uneven.getvalue())
+    with pytest.raises(InvalidImageError, match="truncated"):
+        buf = io.BytesIO()
+        np.save(buf, np.ones((6, 6, 6), np.uint16))
+        read_volume(buf.getvalue()[:-10])

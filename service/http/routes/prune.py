@@ -33,6 +33,7 @@ from service.worker.pool import PoolError
 from skelprune.budget import check_polygon
 from skelprune.errors import InvalidPolygonError, SkelpruneError
 from skelprune.io.input import check_image_size
+from skelprune.volume import check_volume_size, is_volume
 
 __all__ = ["job_function", "router"]
 
@@ -49,11 +50,13 @@ async def job_function() -> Callable[[Job], Any]:
     return run_job
 
 
-#: ``POST /v1/prune`` takes a PNG or TIFF (as the body or a form's file) or GeoJSON.
+#: ``POST /v1/prune`` takes a PNG or TIFF (as the body or a form's file), GeoJSON, or a
+#: volume (a ``.npy`` or a multi-page TIFF as the body).
 PRUNE = ShapeRequests(
     negotiate,
     ("image", "form", "json"),
-    "image/png, image/tiff, multipart/form-data (field 'file') or application/json (GeoJSON)",
+    "image/png, image/tiff, application/x-npy, multipart/form-data (field 'file') or "
+    "application/json (GeoJSON)",
 )
 #: ``POST /v1/prune/batch`` takes a form of files or a JSON list; it answers NDJSON.
 BATCH = ShapeRequests(
@@ -90,8 +93,11 @@ async def prune(
             call.body,
             check_polygon_body(settings.max_vertices, settings.estimate_seconds),
         )
-    if png is not None:
-        check_image_size(png, settings.max_pixels)  # refused before it is queued
+    if png is not None:  # refused before it is queued
+        if is_volume(png):
+            check_volume_size(png, settings.max_pixels)  # voxels count as pixels
+        else:
+            check_image_size(png, settings.max_pixels)
     assert call.media is not None  # negotiate always names one
     build = job_builder(
         call.query, envelope, settings, polygon=geojson is not None, media=call.media

@@ -252,6 +252,43 @@ def _line(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     return np.round(p[None, :] + t[:, None] * (q - p)[None, :]).astype(np.int64).reshape(-1, 2)
 
 
+def _join(crop: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """The pixels strictly between ``p`` and ``q`` on a path inside the shape: the straight
+    line where it stays inside (at a seam, nearly always), else the shortest 8-connected
+    path through the shape (a ragged or noisy component, whose straight joins cross the
+    background, where no disk could be)."""
+    line = _line(p, q)
+    if crop[line[:, 0], line[:, 1]].all():
+        return line
+    from collections import deque
+
+    h, w = crop.shape
+    start, goal = int(p[0]) * w + int(p[1]), int(q[0]) * w + int(q[1])
+    came = np.full(h * w, -1, np.int64)
+    came[start] = start
+    queue = deque([start])
+    flat = crop.ravel()
+    while queue:
+        at = queue.popleft()
+        if at == goal:
+            break
+        r, c = divmod(at, w)
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                rr, cc = r + dr, c + dc
+                if 0 <= rr < h and 0 <= cc < w:
+                    nxt = rr * w + cc
+                    if flat[nxt] and came[nxt] < 0:
+                        came[nxt] = at
+                        queue.append(nxt)
+    path = []
+    at = int(came[goal])
+    while at != start:  # one component: the goal is always reached
+        path.append(divmod(at, w))
+        at = int(came[at])
+    return np.asarray(path[::-1], np.int64).reshape(-1, 2)
+
+
 def _find(parent: list[int], a: int) -> int:
     while parent[a] != a:
         parent[a] = parent[parent[a]]
@@ -272,7 +309,8 @@ def _bridged(
     seam (each broke its ties its own way), pieces are joined by straight 8-connected lines
     (a few pixels), kept, with their own radii: the shortest joins first between the
     pixels near a core border (:data:`BRIDGE` px), each only if its two pieces are still
-    apart; should pieces remain, the largest is joined to its nearest other, and so on."""
+    apart; should pieces remain, the largest is joined to its nearest other, and so on.
+    A join that would cross the background follows the shape instead (:func:`_join`)."""
     from scipy import ndimage
     from scipy.spatial import cKDTree
 
@@ -308,7 +346,7 @@ def _bridged(
             dist, near_i = cKDTree(pts[outside]).query(pts[inside])
             a = int(np.argmin(dist))
             joins = [(int(inside[a]), int(outside[near_i[a]]))]
-        lines = [_line(pts[a], pts[b]) for a, b in joins]
+        lines = [_join(crop, pts[a], pts[b]) for a, b in joins]
         line = np.concatenate(lines) if lines else np.zeros((0, 2), np.int64)
         if line.size == 0:  # the pieces touch already: cannot happen, but stop safely
             break

@@ -209,3 +209,16 @@ def test_windows_vote_before_their_tips_are_cut() -> None:
         for trim in (True, False)
     ]
     assert ends[0] == ends[1]
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_noise_in_windows_keeps_every_axis_point_inside(seed: int) -> None:
+    # ragged components cross several windows whose axes meet nowhere near a straight
+    # join inside the shape: the joins follow the shape, every point keeps a disk
+    mask = np.random.default_rng(seed).random((384, 384)) < 0.5
+    res = skelprune.prune(mask, scope="local", window=128)
+    assert len(res.components) == ndimage.label(mask, np.ones((3, 3)))[1]
+    for comp in res.components:
+        rows, cols, r2 = comp.points()
+        assert (r2 >= 1).all()
+        assert mask[rows, cols].all()

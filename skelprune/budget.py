@@ -36,6 +36,7 @@ __all__ = [
     "BYTES_PER_FACE",
     "BYTES_PER_INSIDE_VOXEL",
     "BYTES_PER_PIXEL",
+    "BYTES_PER_PIXEL_LOCAL",
     "BYTES_PER_SKELETON_POINT",
     "BYTES_PER_VOXEL",
     "IMAGE_BASIS",
@@ -69,6 +70,10 @@ __all__ = [
 #: Bytes per input pixel: the PNG decoded, mask, distance transform, labels, crops
 #: (4096² silhouettes: 13-37) ...
 BYTES_PER_PIXEL = 32
+#: With ``scope="local"`` no pass runs over the whole image at once but the cleaning and
+#: the stitching: bytes per input pixel then (networks at 4096²-8192², cleaned, and
+#: noise: the estimate 0.9-1.5x the measured peak, ``python -m benchmarks local_budget``).
+BYTES_PER_PIXEL_LOCAL = 10
 #: ... per pixel that can be a skeleton point, at most min(shape pixels, boundary
 #: pixels): graph, branch lists and their copies (pixel noise, checkerboards: 400-1,000) ...
 BYTES_PER_SKELETON_POINT = 768
@@ -142,12 +147,14 @@ class Estimate:
         return Estimate(self.bytes + other.bytes, self.seconds + other.seconds)
 
 
-def estimate(mask: np.ndarray, answer_pixels: int = 0) -> Estimate:
-    """Worst-case memory and time of pruning ``mask`` (and rendering ``answer_pixels``)."""
+def estimate(mask: np.ndarray, answer_pixels: int = 0, scope: str = "global") -> Estimate:
+    """Worst-case memory and time of pruning ``mask`` (and rendering ``answer_pixels``),
+    with the scope's cost per pixel (:data:`BYTES_PER_PIXEL_LOCAL` for ``"local"``)."""
     pixels, fg, boundary, n_components = shape_counts(mask)
     skeleton = min(fg, boundary)
+    per_pixel = BYTES_PER_PIXEL_LOCAL if scope == "local" else BYTES_PER_PIXEL
     return Estimate(
-        bytes=BYTES_PER_PIXEL * pixels
+        bytes=per_pixel * pixels
         + BYTES_PER_SKELETON_POINT * skeleton
         + BYTES_PER_COMPONENT * n_components
         + BYTES_PER_ANSWER_PIXEL * answer_pixels,

@@ -70,7 +70,7 @@ DEFAULT_DCE_THRESHOLD = 0.01
 ARRAY_FOREGROUND = "nonzero"
 #: The tables of :meth:`PruneResult.summary` (docs/tables.md).
 TABLES = ("branch", "component")
-#: How the answer is chosen from the sequence (:mod:`skelprune.pruning.floor`).
+#: How the answer is chosen from the sequence (:mod:`skelprune.pruning.choice`).
 CHOICES = ("argmin", "noise-floor")
 #: Where the trade-off is taken (:mod:`skelprune.local`): over each whole component (the
 #: paper's) or over windows of the image, each branch judged in its neighbourhood.

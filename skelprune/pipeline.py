@@ -16,14 +16,14 @@ from .grid.reconstruction import count_covered
 from .io.input import Input
 from .options import OutputOptions, PruneOptions
 from .output.document import ComponentResult, GraphSummary, PruneResult
-from .pruning.bayesian import choose_step, pruning_sequence, remove_unsupported
+from .pruning.bayesian import pruning_sequence, remove_unsupported
+from .pruning.choice import chosen_step
 from .pruning.coarse import coarse_dce
 from .pruning.dce import (
     DCE_VERTICES,
     boundary_partition,
     generated_in_several_segments,
 )
-from .pruning.floor import floor_step
 from .pruning.margin import Margins, branch_margins
 from .pruning.tips import trim_tips
 from .skeleton import Skeleton
@@ -52,7 +52,6 @@ def prune_component(
     """
     options = options.resolved()  # the method's defaults filled in
     beta = options.beta
-    min_margin = options.min_margin or 0.0  # None for DCE pruning
     medial = Skeleton.medial_axis(crop, origin)
     if options.method == "dce":
         norm = medial.normalisation(beta)
@@ -74,13 +73,7 @@ def prune_component(
         seq = pruning_sequence(
             start, norm.alpha, norm.lbar, uncovered=start.n_points < medial.n_points
         )
-        chosen = choose_step(seq.objective) if options.choice == "argmin" else floor_step(seq)
-        if min_margin > 0 and seq.alpha is not None:
-            # Drop end branches kept by less than min_margin: the cheapest one is the
-            # sequence's next removal, and its margin is that step's rise of λ.
-            lam = seq.objective
-            while chosen < len(seq.removed) and lam[chosen + 1] - lam[chosen] < min_margin:
-                chosen += 1
+        chosen = chosen_step(seq, options.choice, options.min_margin)
     # Λ(D \ R(M)) without a second painting: a sequence from M knows it; from the
     # coarse skeleton, only the pixels it misses need testing against the removed disks.
     ma_lost = seq.lost[0]

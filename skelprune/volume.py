@@ -29,7 +29,8 @@ from .grid3d.skeleton import VolumeSkeleton
 from .grid3d.tips import trim_volume_tips
 from .options import OutputOptions, PruneOptions, VolumeOptions
 from .output.volume import VolumeComponent, VolumeResult
-from .pruning.bayesian import choose_step, pruning_sequence
+from .pruning.bayesian import pruning_sequence
+from .pruning.choice import chosen_step
 from .pruning.margin import branch_margins
 
 __all__ = [
@@ -275,14 +276,7 @@ def prune_volume_component(
     axis = VolumeSkeleton.curve_skeleton(crop, spacing, origin)
     norm = axis.normalisation(options.beta)
     seq = pruning_sequence(axis, norm.alpha, norm.lbar)
-    chosen = choose_step(seq.objective)
-    min_margin = options.min_margin or 0.0
-    if min_margin > 0 and seq.alpha is not None:
-        # As for images: the cheapest end branch is the sequence's next removal, and its
-        # margin that step's rise of λ.
-        lam = seq.objective
-        while chosen < len(seq.removed) and lam[chosen + 1] - lam[chosen] < min_margin:
-            chosen += 1
+    chosen = chosen_step(seq, options.choice, options.min_margin)
     answer = seq.skeleton_at(chosen)
     trim = None
     if options.trim and seq.alpha is not None:

@@ -225,7 +225,7 @@ def _run_job(job: Job) -> JobResult:
             "option(s) spacing only apply to volume input (a .npy or a TIFF stack body)"
         )
     shape = read_job(job)
-    cost = estimate(shape.mask, answer_pixels(job, shape.mask.shape))
+    cost = estimate(shape.mask, answer_pixels(job, shape.mask.shape), job.options.scope)
     check_budget(cost, job.memory_budget, job.time_budget)
     t0 = time.perf_counter()
     res = prune_input(shape, job.options, job.output)

@@ -143,7 +143,7 @@ def _answer(item: Item, job: Job) -> dict[str, Any]:
     shape = _read(item, job)
     budget = job.budget
     memory = None if budget.memory_mb is None else budget.memory_mb * 2**20
-    check_budget(estimate(shape.mask), memory, budget.seconds)
+    check_budget(estimate(shape.mask, scope=job.options.scope), memory, budget.seconds)
     res = prune_input(shape, job.options, job.output)
     if isinstance(item.source, Feature):
         line = {"row": item.source.row, "index": _plain(item.source.index)}

@@ -9,7 +9,7 @@ hundreds of disks of hundreds of pixels' radius overlap, that is the difference 
 the sum of the disks' areas and the area they cover.
 
 Used by the tips' cut (:mod:`skelprune.pruning.tips`) and the noise-floor choice
-(:mod:`skelprune.pruning.floor`), which both keep ``c``: per pixel, how many disks of the
+(:mod:`skelprune.pruning.choice`), which both keep ``c``: per pixel, how many disks of the
 current skeleton cover it.
 """
 

@@ -28,7 +28,6 @@ from .grid import GridAxis, GridGraph, compiled_length, path_lengths
 
 __all__ = [
     "PruningSequence",
-    "choose_step",
     "objective",
     "pruning_sequence",
     "remove_unsupported",
@@ -111,15 +110,6 @@ class PruningSequence(Generic[A]):
         for b in self.removed[:step]:
             graph.remove_end_branch(b)
         return self.start.with_graph(graph)
-
-
-def choose_step(objectives: np.ndarray) -> int:
-    """``argmin λ`` over the sequence; ties go to the later, simpler skeleton."""
-    best = 0
-    for i, v in enumerate(objectives):
-        if v <= objectives[best]:
-            best = i
-    return best
 
 
 def pruning_sequence(

@@ -36,7 +36,7 @@ from ._rowcover import cover_counts, uncover
 __all__ = ["MIN_LIMB_AREA", "RIM", "LimbGuard"]
 
 #: Squared radius up to which a disk lies in the boundary's one-pixel rim (as
-#: :data:`skelprune.pruning.floor.RIM`).
+#: :data:`skelprune.pruning.choice.RIM`).
 RIM = 2
 #: The fewest pixels a limb alone covers: the whole disks of at least 4 distinct points
 #: (``2·r > 2·√2``), each holding the 3 × 3 block around its point (``r² ≥ 4``), cover

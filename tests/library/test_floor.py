@@ -8,7 +8,7 @@ import pytest
 from skelprune.api import components
 from skelprune.grid.medial_axis import squared_distance
 from skelprune.pruning.bayesian import pruning_sequence
-from skelprune.pruning.floor import RIM, floor_lost
+from skelprune.pruning.choice import RIM, floor_lost
 from skelprune.skeleton import Skeleton
 from testkit.oracle import disk_pixels, uncovered
 from testkit.shapes import DRAWN, blobs

@@ -18,7 +18,7 @@ from skelprune.errors import InvalidOptionError
 from skelprune.grid._orientation import oriented
 from skelprune.grid.reconstruction import reconstruction
 from skelprune.options import DEFAULT_MIN_MARGIN
-from skelprune.pruning.bayesian import choose_step
+from skelprune.pruning.choice import choose_step
 from testkit.oracle import objective
 from testkit.shapes import blobs, dataset, load, rectangle_with_holes, two_components
 

@@ -10,7 +10,8 @@ from hypothesis import strategies as st
 import skelprune
 from skelprune.api import components
 from skelprune.pruning import tips
-from skelprune.pruning.bayesian import choose_step, pruning_sequence
+from skelprune.pruning.bayesian import pruning_sequence
+from skelprune.pruning.choice import choose_step
 from skelprune.pruning.coarse import coarse_dce
 from skelprune.pruning.tips import trim_tips
 from skelprune.skeleton import Skeleton

@@ -207,7 +207,8 @@ def test_colour_image_arrays_stay_images_unless_spacing_is_given() -> None:
 
 def test_tips_cuts_match_the_oracle_that_repaints() -> None:
     from skelprune.grid3d.tips import trim_volume_tips
-    from skelprune.pruning.bayesian import choose_step, target
+    from skelprune.pruning.bayesian import target
+    from skelprune.pruning.choice import choose_step
 
     made = 0
     for spacing in SPACINGS:

@@ -3,9 +3,11 @@ refused with a problem when wrong."""
 
 from __future__ import annotations
 
+import dataclasses
 import io
 
 import numpy as np
+import pytest
 from fastapi.testclient import TestClient
 from PIL import Image
 
@@ -55,3 +57,26 @@ def test_scope_refused_when_wrong(client: TestClient) -> None:
         )
         assert bad.status_code in (400, 422), bad.text
         assert name in bad.text
+
+
+def test_the_memory_estimate_follows_the_scope() -> None:
+    # the local scope never holds a whole-image pass but the cleaning and the stitching:
+    # its estimate per pixel is lower, so a job the global estimate refuses fits
+    from service.worker.jobs import Job, run_job
+    from skelprune.budget import BYTES_PER_PIXEL, BYTES_PER_PIXEL_LOCAL, estimate, resident_bytes
+    from skelprune.errors import JobTooLargeError
+    from skelprune.options import PruneOptions
+
+    mask = np.zeros((4096, 4096), np.uint8)
+    mask[1000:1012, 100:4000] = 255  # a long straight road and a crossing one
+    mask[200:3900, 2000:2010] = 255
+    buf = io.BytesIO()
+    Image.fromarray(mask).save(buf, format="PNG")
+    local, whole = estimate(mask > 0, scope="local"), estimate(mask > 0)
+    assert whole.bytes - local.bytes == (BYTES_PER_PIXEL - BYTES_PER_PIXEL_LOCAL) * mask.size
+    budget = resident_bytes() + (local.bytes + whole.bytes) // 2
+    job = Job(media="json", kind="image", data=buf.getvalue(), memory_budget=budget)
+    with pytest.raises(JobTooLargeError, match="memory budget"):
+        run_job(job)
+    answer = run_job(dataclasses.replace(job, options=PruneOptions(scope="local")))
+    assert answer.media_type == "application/json"

@@ -33,7 +33,7 @@ from service.logs import JsonFormatter
 from service.settings import Settings
 from service.worker.jobs import Job, run_job
 from skelprune.errors import InvalidImageError, InvalidOptionError
-from skelprune.options import RasterOptions
+from skelprune.options import RasterOptions, VolumeOptions
 from testkit import DATA, REPO
 from testkit.realserver import running_server, stop
 
@@ -230,14 +230,15 @@ def test_cors_for_configured_origins_only(locked: TestClient) -> None:
 # -------------------------------------------------------------------- file paths
 def test_no_option_can_name_a_path() -> None:
     """Every option is a number, a boolean or one of fixed words: none can carry a path;
-    but ``crs``, a text whose check admits an authority code or its URN only."""
+    but ``crs``, a text whose check admits an authority code or its URN only, and
+    ``spacing``, a text whose check admits three numbers only."""
     for model in (PruneQuery, PolygonJob):
         for name, info in model.model_fields.items():
             if name == "geojson":
                 continue
             kinds = {a for a in get_args(info.annotation) or (info.annotation,)}
             for kind in kinds - {type(None)}:
-                if kind is str and name == "crs":
+                if kind is str and name in ("crs", "spacing"):
                     continue
                 literal = getattr(kind, "__origin__", None) is not None or get_args(kind)
                 assert kind in (bool, int, float) or literal, (model.__name__, name, kind)
@@ -245,6 +246,8 @@ def test_no_option_can_name_a_path() -> None:
     for path in ("/etc/passwd", "../../etc/hostname", str(REPO / "README.md"), "+init=x:y"):
         with pytest.raises(InvalidOptionError, match="not a CRS name"):
             RasterOptions(crs=path)
+        with pytest.raises(InvalidOptionError, match="three finite numbers"):
+            VolumeOptions(spacing=path)
 
 
 @pytest.mark.parametrize("path", ["/etc/passwd", "../../etc/hostname", str(REPO / "README.md")])

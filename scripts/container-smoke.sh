@@ -280,6 +280,40 @@ print(f"{len(comps)} component(s), endpoints {[len(c['skeleton']['endpoints']) f
 EOF
 log "prune response is a skeleton document"
 
+# A volume: a .npy of a bar written without numpy (the host's python3 may not have it).
+python3 - "$WORK/bar.npy" <<'EOF' || die "could not write the test volume"
+import sys
+
+depth, height, width = 10, 12, 40
+header = "{'descr': '|b1', 'fortran_order': False, 'shape': (%d, %d, %d), }" % (
+    depth, height, width)
+header += " " * (-(10 + len(header) + 1) % 64) + "\n"
+voxels = bytearray(depth * height * width)
+for z in range(3, 7):
+    for y in range(3, 9):
+        for x in range(3, 37):
+            voxels[(z * height + y) * width + x] = 1
+with open(sys.argv[1], "wb") as f:
+    f.write(b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode())
+    f.write(bytes(voxels))
+EOF
+log "POST a .npy volume to /v1/prune"
+code=$(curl -sS -m 120 -o "$WORK/volume.json" -w '%{http_code}' \
+    -H 'Content-Type: application/x-npy' --data-binary "@$WORK/bar.npy" \
+    "http://127.0.0.1:$PORT/v1/prune?spacing=2,1,1") || { show_logs; die "POST a volume failed"; }
+[[ $code == 200 ]] || { head -c 2000 "$WORK/volume.json" >&2; show_logs; die "POST a volume: HTTP $code"; }
+python3 - "$WORK/volume.json" <<'EOF' || die "unexpected volume response"
+import json
+import sys
+
+doc = json.load(open(sys.argv[1]))
+assert doc["dimensions"] == 3 and doc["spacing"] == [2.0, 1.0, 1.0], "not a volume's document"
+(comp,) = doc["components"]
+assert len(comp["skeleton"]["endpoints"]) == 2, "a bar's skeleton has two ends"
+print(f"volume: {len(comp['skeleton']['endpoints'])} endpoints", file=sys.stderr)
+EOF
+log "volume response is a 3-D skeleton document"
+
 # --- graceful stop -----------------------------------------------------------------------
 log "SIGTERM"
 # (podman without systemd logs an error about its healthcheck timer here: harmless)

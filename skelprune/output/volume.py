@@ -161,7 +161,8 @@ class VolumeComponent:
             },
             "skeleton": {
                 "length": self.skeleton.length,
-                "endpoints": self.skeleton.n_endpoints,
+                # as in an image's document: the ids of the end nodes
+                "endpoints": [n["id"] for n in nodes if n["kind"] == "endpoint"],
                 "nodes": nodes,
                 "branches": branches,
             },
@@ -179,7 +180,7 @@ class VolumeResult:
     >>> res = skelprune.prune(v, spacing=(2.0, 1.0, 1.0))
     >>> doc = res.to_dict()
     >>> doc["spacing"], len(doc["components"]), doc["components"][0]["skeleton"]["endpoints"]
-    ([2.0, 1.0, 1.0], 1, 2)
+    ([2.0, 1.0, 1.0], 1, [0, 1])
     >>> res.to_swc().splitlines()[1].split()[1:]   # the root: type, x, y, z, radius, parent
     ['0', '5', '7', '14', '3', '-1']
     """

@@ -172,13 +172,13 @@ def test_a_voxel_a_torus_and_a_hollow_ball_give_documents() -> None:
     voxel = np.zeros((3, 3, 3), bool)
     voxel[1, 1, 1] = True
     (comp,) = skelprune.prune(voxel, spacing=(1, 1, 1)).to_dict()["components"]
-    assert comp["skeleton"]["endpoints"] == 1 and comp["steps"] == 0
+    assert len(comp["skeleton"]["endpoints"]) == 1 and comp["steps"] == 0
     assert comp["skeleton"]["branches"][0]["points"] == [[1.0, 1.0, 1.0, 1.0]]
 
     res = skelprune.prune(torus().volume())
     (comp,) = res.to_dict()["components"]
     (loop,) = comp["skeleton"]["branches"]  # one tunnel: one cycle, nothing to prune
-    assert loop["source"] is None and comp["skeleton"]["endpoints"] == 0
+    assert loop["source"] is None and comp["skeleton"]["endpoints"] == []
     g = res.to_networkx()
     assert g.number_of_edges() == 1 and nx_self_loops(g) == 1
     swc = [line.split() for line in res.to_swc().splitlines()[1:]]
@@ -302,3 +302,17 @@ def test_volume_bytes_that_are_not_a_volume_are_refused_by_name() -> None:
         buf = io.BytesIO()
         np.save(buf, np.ones((6, 6, 6), np.uint16))
         read_volume(buf.getvalue()[:-10])
+
+
+def test_a_volumes_document_speaks_as_an_images() -> None:
+    # the graph's keys mean the same in 2-D and 3-D: endpoints are the end nodes' ids
+    image = np.zeros((30, 60), bool)
+    image[5:25, 5:55] = True
+    flat = skelprune.prune(image).to_dict()["components"][0]["skeleton"]
+    deep = skelprune.prune(y_tubes(radius=2.5, arm=14.0).volume()).to_dict()
+    sk = deep["components"][0]["skeleton"]
+    assert set(sk) == set(flat)
+    assert sk["endpoints"] == [n["id"] for n in sk["nodes"] if n["kind"] == "endpoint"]
+    assert len(sk["endpoints"]) == 3
+    for key in ("nodes", "branches"):
+        assert set(sk[key][0]) - {"z"} == set(flat[key][0])

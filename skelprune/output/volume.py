@@ -8,6 +8,7 @@ counted in voxels.
 
 from __future__ import annotations
 
+import csv
 import io
 import math
 from dataclasses import dataclass, field
@@ -23,6 +24,28 @@ from ..pruning.bayesian import PruningSequence, target
 from ..pruning.margin import Margins
 
 __all__ = ["VolumeComponent", "VolumeResult"]
+
+
+#: The columns of a volume's branch table, in order.
+VOLUME_BRANCH_COLUMNS = (
+    "component",
+    "label",
+    "branch",
+    "kind",
+    "length",
+    "voxels",
+    "mean_width",
+    "min_width",
+    "max_width",
+    "x0",
+    "y0",
+    "z0",
+    "x1",
+    "y1",
+    "z1",
+    "margin",
+    "removed_at",
+)
 
 
 @dataclass
@@ -212,11 +235,18 @@ class VolumeResult:
         }
 
     def summary(self) -> Any:
-        """The branch table (a pandas ``DataFrame``): one row per branch of the answer,
-        its length, its width (twice the ball radius: mean, least, largest) and its two
-        ends, all in the units of ``spacing``."""
-        import pandas as pd
+        """The branch table: one row per branch of the answer, its length, its width
+        (twice the ball radius: mean, least, largest) and its two ends, all in the units
+        of ``spacing``; a pandas ``DataFrame`` when pandas is installed, else a list of
+        row dicts (as an image's :meth:`~skelprune.output.document.PruneResult.summary`)."""
+        rows = self._branch_rows()
+        try:
+            import pandas as pd
+        except ImportError:
+            return rows
+        return pd.DataFrame(rows, columns=list(VOLUME_BRANCH_COLUMNS))
 
+    def _branch_rows(self) -> list[dict[str, Any]]:
         dz, dy, dx = self.spacing
         rows = []
         for i, comp in enumerate(self.components):
@@ -251,7 +281,7 @@ class VolumeResult:
                         "removed_at": br["removed_at"],
                     }
                 )
-        return pd.DataFrame(rows)
+        return rows
 
     @property
     def warnings(self) -> list[dict[str, Any]]:
@@ -259,8 +289,14 @@ class VolumeResult:
         return []
 
     def to_csv(self) -> str:
-        """:meth:`summary` as CSV."""
-        return str(self.summary().to_csv(index=False))
+        """:meth:`summary` as CSV text (a header row; empty cells for null), with or
+        without pandas."""
+        buf = io.StringIO()
+        writer = csv.DictWriter(buf, fieldnames=list(VOLUME_BRANCH_COLUMNS), lineterminator="\n")
+        writer.writeheader()
+        for row in self._branch_rows():
+            writer.writerow({k: ("" if v is None else v) for k, v in row.items()})
+        return buf.getvalue()
 
     def to_networkx(self) -> Any:
         """The skeleton as a ``networkx.MultiGraph``: nodes ``(component, node id)`` with

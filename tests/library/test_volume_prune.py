@@ -3,6 +3,8 @@ the 3-D document, table, networkx, SWC and overlay (docs/volumes.md)."""
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import pytest
 from scipy import ndimage
@@ -316,3 +318,20 @@ def test_a_volumes_document_speaks_as_an_images() -> None:
     assert len(sk["endpoints"]) == 3
     for key in ("nodes", "branches"):
         assert set(sk[key][0]) - {"z"} == set(flat[key][0])
+
+
+def test_a_volumes_table_without_pandas(monkeypatch: pytest.MonkeyPatch) -> None:
+    # the service installs no pandas: the CSV and the rows come without it
+    res = skelprune.prune(y_tubes(radius=2.5, arm=14.0).volume())
+    with_pandas = res.to_csv()
+    monkeypatch.setitem(sys.modules, "pandas", None)  # import pandas raises ImportError
+    assert res.to_csv() == with_pandas
+    rows = res.summary()
+    assert isinstance(rows, list) and len(rows) == 3
+    assert with_pandas.splitlines()[0].split(",")[:5] == [
+        "component",
+        "label",
+        "branch",
+        "kind",
+        "length",
+    ]

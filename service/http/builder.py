@@ -218,7 +218,7 @@ def job_builder(
     """
     opts = _gather(query, body, polygon, media)
     if match:
-        unused = list(_group(opts, OutputOptions))
+        unused = list(_group(opts, OutputOptions)) + list(_group(opts, VolumeOptions))
         if unused:
             raise InvalidOptionError(f"option(s) {', '.join(unused)} do not apply to /v1/match")
     if (

@@ -115,6 +115,8 @@ def test_errors(client: TestClient) -> None:
     assert "endpoint" in body["detail"]
     problem(post_pngs(client, HAMMER, BIRD, beta=-1), 422, "validation-error")
     problem(post_pngs(client, HAMMER, BIRD, overlay="true"), 422, "invalid-option")
+    body = problem(post_pngs(client, HAMMER, BIRD, spacing="2,1,1"), 422, "invalid-option")
+    assert "spacing" in body["detail"]
     problem(
         client.post("/v1/match", content=HAMMER, headers={"content-type": "image/png"}),
         415,

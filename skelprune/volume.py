@@ -14,7 +14,7 @@ from __future__ import annotations
 import io
 import os
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -25,12 +25,12 @@ from .errors import (
     InvalidOptionError,
     SkelpruneError,
 )
-from .grid3d.skeleton import VolumeSkeleton
-from .grid3d.tips import trim_volume_tips
 from .options import OutputOptions, PruneOptions, VolumeOptions
-from .output.volume import VolumeComponent, VolumeResult
 from .pruning.bayesian import pruning_sequence
 from .pruning.choice import chosen_step
+
+if TYPE_CHECKING:  # the volume grid is imported when a volume is pruned, not before
+    from .output.volume import VolumeComponent, VolumeResult
 from .pruning.margin import branch_margins
 
 __all__ = [
@@ -273,6 +273,10 @@ def prune_volume_component(
     spacing: tuple[float, float, float],
 ) -> VolumeComponent:
     """The curve skeleton of one padded component crop and its pruning."""
+    from .grid3d.skeleton import VolumeSkeleton
+    from .grid3d.tips import trim_volume_tips
+    from .output.volume import VolumeComponent
+
     axis = VolumeSkeleton.curve_skeleton(crop, spacing, origin)
     norm = axis.normalisation(options.beta)
     seq = pruning_sequence(axis, norm.alpha, norm.lbar)
@@ -322,6 +326,8 @@ def prune_volume(
     if not volume.any():
         raise EmptyMaskError("the volume has no voxel inside")
     spacing = volume_options.spacing
+    from .output.volume import VolumeResult
+
     result = VolumeResult(
         shape=(int(volume.shape[0]), int(volume.shape[1]), int(volume.shape[2])),
         spacing=spacing,

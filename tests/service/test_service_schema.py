@@ -3,9 +3,15 @@ answer that breaks the documented schema (bounded number of generated requests).
 
 from __future__ import annotations
 
+import io
+from collections.abc import Callable
+
+import numpy as np
 import pytest
 import schemathesis
+import tifffile
 from hypothesis import HealthCheck, settings
+from hypothesis import strategies as st
 from schemathesis.checks import not_a_server_error
 from schemathesis.specs.openapi.checks import (
     content_type_conformance,
@@ -34,6 +40,39 @@ def test_openapi_md_is_up_to_date() -> None:
     current = (REPO / "openapi.md").read_text(encoding="utf-8")
     assert current == expected, "openapi.md is stale: run `make openapi`"
 
+
+def _file(write: Callable[[io.BytesIO], object]) -> bytes:
+    buf = io.BytesIO()
+    write(buf)
+    return buf.getvalue()
+
+
+def _bodies(valid: list[bytes], signature: bytes) -> st.SearchStrategy[bytes]:
+    """Valid files, their truncations and arbitrary bytes behind the format's signature:
+    the raw bodies schemathesis cannot make from a schema."""
+    return st.one_of(
+        st.sampled_from(valid),
+        st.tuples(st.sampled_from(valid), st.integers(1, 200)).map(lambda t: t[0][: -t[1]]),
+        st.binary(max_size=300).map(lambda b: signature + b),
+    )
+
+
+_BAR = np.zeros((6, 8, 20), np.uint8)
+_BAR[2:4, 3:5, 2:18] = 1
+schemathesis.openapi.media_type(
+    "image/tiff",
+    _bodies(
+        [
+            _file(lambda f: tifffile.imwrite(f, _BAR[2] * 255)),  # an image
+            _file(lambda f: tifffile.imwrite(f, _BAR, photometric="minisblack")),  # a stack
+        ],
+        b"II*\x00",
+    ),
+)
+schemathesis.openapi.media_type(
+    "application/x-npy",
+    _bodies([_file(lambda f: np.save(f, _BAR.astype(bool)))], b"\x93NUMPY"),
+)
 
 # Small limits so that generated inputs stay cheap to prune. Loaded from the dict, not
 # from the app, so the pool only starts (lazily, on the first call) when this test runs.

@@ -346,7 +346,8 @@ def _format(data: bytes) -> str:
         b"\x00\x00\x27\x0a": "a Shapefile",
         b"%PDF": "a PDF",
         b"PK\x03\x04": "a ZIP archive",
-        b"\x93NUMPY": "a NumPy .npy file",
+        # a volume: skelprune.prune, `skelprune prune` and the service read it, as a volume
+        b"\x93NUMPY": "a NumPy .npy file: a volume, which skelprune.prune reads, not an image",
     }
     what = next((name for sig, name in known.items() if data.startswith(sig)), None)
     if what is None and data[4:8] == b"ftyp":
@@ -355,8 +356,8 @@ def _format(data: bytes) -> str:
         what = "empty" if not data else "a format not recognised"
     raise InvalidImageError(
         f"not a PNG or TIFF file: neither the PNG signature nor the TIFF one ({what}); "
-        "skelprune reads "
-        f"{' and '.join(IMAGE_FORMATS)} images and GeoJSON polygons (.geojson, .json)"
+        f"images are read from {' and '.join(IMAGE_FORMATS)} files, polygons from GeoJSON "
+        "(.geojson, .json)"
     )
 
 

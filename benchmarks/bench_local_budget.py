@@ -33,22 +33,17 @@ def _mask(kind: str, size: int) -> np.ndarray:
     return network(kind, size, seed=1).mask
 
 
-def _resident() -> int:
-    with open("/proc/self/statm") as f:
-        return int(f.read().split()[1]) * resource.getpagesize()
-
-
 def _case(kind: str, size: int, out: mp.Queue) -> None:
     from service.worker.jobs import warmup
     from skelprune.api import prune_input
-    from skelprune.budget import estimate
+    from skelprune.budget import estimate, resident_bytes
     from skelprune.io.input import read_input
     from skelprune.options import PruneOptions, ReadOptions
 
     warmup()
     mask = _mask(kind, size)
     clean = 0 if kind == "noise" else 64
-    base = _resident()
+    base = resident_bytes()
     t0 = time.perf_counter()
     shape = read_input(mask, read=ReadOptions(fill_holes=clean, min_area=clean))
     cost = estimate(shape.mask, scope="local")

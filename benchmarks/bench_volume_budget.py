@@ -35,20 +35,15 @@ def _volume(kind: str, n: int) -> np.ndarray:
     return ndimage.binary_opening(np.random.default_rng(0).random((n, n, n)) < 0.5)
 
 
-def _resident() -> int:
-    with open("/proc/self/statm") as f:
-        return int(f.read().split()[1]) * resource.getpagesize()
-
-
 def _case(kind: str, n: int, out: mp.Queue) -> None:
     from service.worker.jobs import warmup
-    from skelprune.budget import volume_estimate
+    from skelprune.budget import resident_bytes, volume_estimate
     from skelprune.options import PruneOptions, VolumeOptions
     from skelprune.volume import prune_volume
 
     warmup()
     volume = _volume(kind, n)
-    base = _resident()
+    base = resident_bytes()
     cost = volume_estimate(volume)
     t0 = time.perf_counter()
     prune_volume(volume, PruneOptions(), VolumeOptions()).to_dict()

@@ -233,14 +233,9 @@ def _run_job(job: Job) -> JobResult:
     headers: dict[str, str] = {}
     if job.media == "png":
         body = res.overlay_png()
-        headers = {"X-Skelprune-Components": str(len(res.components))}
-        if len(res.components) <= PNG_HEADER_COMPONENTS:
-            for name, key in PNG_HEADERS.items():
-                headers[name] = ",".join(repr(float(getattr(c, key))) for c in res.components)
-        else:  # headers stay small: the values are in the JSON document
-            headers["X-Skelprune-Values"] = (
-                f"omitted: more than {PNG_HEADER_COMPONENTS} components; ask for application/json"
-            )
+        headers = png_headers(
+            [{k: getattr(c, k) for k in PNG_HEADERS.values()} for c in res.components]
+        )
         if res.warnings:  # a polygon the raster does not hold as it is
             headers["X-Skelprune-Warnings"] = str(len(res.warnings))
     elif job.media == "geojson":
@@ -258,6 +253,7 @@ def _run_job(job: Job) -> JobResult:
 
 def _run_volume_job(job: Job) -> JobResult:
     """A volume's job: its voxels count against the pixel limit and the budgets."""
+    from skelprune.output.volume import auto_volume_scale
     from skelprune.volume import prune_volume, read_volume
 
     if job.read != ReadOptions():
@@ -280,7 +276,7 @@ def _run_volume_job(job: Job) -> JobResult:
     answer = 0
     if job.media == "png":
         z, y, x = volume.shape
-        scale = job.output.overlay_scale or max(1, min(16, -(-512 // max(volume.shape))))
+        scale = job.output.overlay_scale or auto_volume_scale(volume.shape)
         answer = (y + z + 4) * (x + z + 4) * scale * scale
     cost = volume_estimate(volume, answer)
     check_budget(cost, job.memory_budget, job.time_budget, VOLUME_BASIS)
@@ -290,15 +286,7 @@ def _run_volume_job(job: Job) -> JobResult:
     headers: dict[str, str] = {}
     if job.media == "png":
         body = res.overlay_png()
-        headers = {"X-Skelprune-Components": str(len(res.components))}
-        if len(res.components) <= PNG_HEADER_COMPONENTS:
-            docs = [c.to_dict() for c in res.components]
-            for name, key in PNG_HEADERS.items():
-                headers[name] = ",".join(repr(float(d[key])) for d in docs)
-        else:
-            headers["X-Skelprune-Values"] = (
-                f"omitted: more than {PNG_HEADER_COMPONENTS} components; ask for application/json"
-            )
+        headers = png_headers([c.to_dict() for c in res.components])
     elif job.media == "csv":
         body = res.to_csv().encode()
     else:
@@ -306,6 +294,21 @@ def _run_volume_job(job: Job) -> JobResult:
     return JobResult(
         body=body, media_type=MEDIA_TYPES[job.media], prune_seconds=elapsed, headers=headers
     )
+
+
+def png_headers(values: list[Any]) -> dict[str, str]:
+    """The PNG answer's headers from each component's numbers (a mapping with the keys of
+    :data:`PNG_HEADERS`): the values up to :data:`PNG_HEADER_COMPONENTS` components,
+    past them a pointer to the JSON document, so that headers stay small."""
+    headers = {"X-Skelprune-Components": str(len(values))}
+    if len(values) <= PNG_HEADER_COMPONENTS:
+        for name, key in PNG_HEADERS.items():
+            headers[name] = ",".join(repr(float(v[key])) for v in values)
+    else:
+        headers["X-Skelprune-Values"] = (
+            f"omitted: more than {PNG_HEADER_COMPONENTS} components; ask for application/json"
+        )
+    return headers
 
 
 def dumps(doc: Any) -> bytes:

@@ -26,6 +26,12 @@ from ..pruning.margin import Margins
 __all__ = ["VolumeComponent", "VolumeResult"]
 
 
+def auto_volume_scale(shape: tuple[int, ...]) -> int:
+    """The overlay's default scale: the volume's longer side drawn at least 512 px
+    (1 to 16)."""
+    return max(1, min(16, -(-512 // max(shape))))
+
+
 #: The columns of a volume's branch table, in order.
 VOLUME_BRANCH_COLUMNS = (
     "component",
@@ -423,7 +429,7 @@ class VolumeResult:
         from PIL import Image
 
         if scale is None:
-            scale = self.output.overlay_scale or max(1, min(16, -(-512 // max(self.shape))))
+            scale = self.output.overlay_scale or auto_volume_scale(self.shape)
         buf = io.BytesIO()
         Image.fromarray(self.render_overlay(scale)).save(buf, format="PNG")
         return buf.getvalue()

@@ -26,7 +26,7 @@ from skelprune.matching import (
     SkeletonDescriptor,
     UnmatchableShapeError,
     describe,
-    describe_skeleton,
+    describe_table,
     distance_matrix,
 )
 from skelprune.output.document import ComponentResult
@@ -98,15 +98,8 @@ def baseline_descriptor(mask: np.ndarray, min_length: float = BASELINE_CUT) -> S
         chosen_step=0,
         ma_rer=0.0,
     )
-    nodes, branches = comp.skeleton_table()
-    keep = graph.alive_points()
     na, nd = graph.length_counts()
-    length = float(na + np.sqrt(2.0) * nd)
-    return describe_skeleton(
-        {"nodes": nodes, "branches": branches, "length": length},
-        own,
-        float(np.sqrt(r2[keep].astype(float)).mean()),
-    )
+    return describe_table(comp.table, float(na + np.sqrt(2.0) * nd), own)
 
 
 def _descriptor(args: tuple[np.ndarray, dict[str, object] | None]) -> SkeletonDescriptor | None:

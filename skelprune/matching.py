@@ -19,14 +19,13 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
 import cv2
 import numpy as np
 from numba import njit
-from scipy import ndimage
 from scipy.optimize import linear_sum_assignment
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
@@ -34,7 +33,8 @@ from scipy.sparse.csgraph import dijkstra
 from .api import prune
 from .errors import InvalidImageError, SkelpruneError
 from .io.frame import IDENTITY, PixelFrame
-from .output.document import PruneResult, branch_line
+from .output.document import PruneResult
+from .output.table import ENDPOINT, BranchTable
 
 __all__ = [
     "LENGTH_WEIGHT",
@@ -44,6 +44,7 @@ __all__ = [
     "SkeletonDescriptor",
     "UnmatchableShapeError",
     "describe",
+    "describe_table",
     "distance_matrix",
     "match",
     "path_distance",
@@ -147,13 +148,15 @@ class Match:
 # -- describing a skeleton ------------------------------------------------------------
 
 
-def _boundary_order(mask: np.ndarray, positions: np.ndarray) -> np.ndarray:
+def _boundary_order(mask: np.ndarray, origin: tuple[int, int], positions: np.ndarray) -> np.ndarray:
     """Order of endpoints along the outer boundary of the mask's largest shape (each
-    endpoint placed at its nearest boundary pixel; ties by position)."""
+    endpoint placed at its nearest boundary pixel; ties by position). ``mask[0, 0]`` is
+    the image's pixel ``origin`` (row, column); ``positions`` are image ``x, y``."""
     contours, _ = cv2.findContours(
         np.ascontiguousarray(mask, np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE
     )
     ring = max(contours, key=len)[:, 0, :].astype(float)  # (n, 2) x, y
+    ring += (origin[1], origin[0])
     d2 = ((positions[:, None, :] - ring[None, :, :]) ** 2).sum(-1)
     at = d2.argmin(1)
     return np.lexsort((positions[:, 1], positions[:, 0], at))
@@ -168,23 +171,24 @@ def _sample(line: np.ndarray, samples: int) -> tuple[np.ndarray, float]:
     return np.interp(np.linspace(0.0, length, samples), s, line[:, 2]), length
 
 
-def describe_skeleton(
-    skeleton: Mapping[str, Any],
+def describe_table(
+    table: BranchTable,
+    length: float,
     mask: np.ndarray,
-    mean_radius: float,
+    origin: tuple[int, int] = (0, 0),
     component: int = 0,
     samples: int = SAMPLES,
 ) -> SkeletonDescriptor:
-    """The path table of a document's skeleton (``{"nodes", "branches", "length"}``, in
-    pixel coordinates) and the mask it came from.
+    """The path table of a skeleton's branch table (in image pixel coordinates), whose
+    total length is ``length``, and of the shape it came from: ``mask``, whose pixel
+    ``[0, 0]`` is the image's pixel ``origin`` (row, column).
 
     Raises
     ------
     UnmatchableShapeError
         When the skeleton has fewer than two endpoints or more than :data:`MAX_ENDPOINTS`.
     """
-    nodes = skeleton["nodes"]
-    ends = [n["id"] for n in nodes if n["kind"] == "endpoint"]
+    ends = np.flatnonzero(table.node_kind == ENDPOINT).tolist()
     if len(ends) < 2:
         raise UnmatchableShapeError(
             f"the skeleton has {len(ends)} endpoint{'s' * (len(ends) != 1)}: path "
@@ -199,16 +203,15 @@ def describe_skeleton(
         )
     # the node graph: one edge per branch (the shortest of parallel ones), no loops
     best: dict[tuple[int, int], tuple[float, np.ndarray]] = {}
-    for br in skeleton["branches"]:
-        u, v = br["source"], br["target"]
+    lines = table.lines()
+    for u, v, line in zip(table.source.tolist(), table.target.tolist(), lines, strict=True):
         if u == v:
             continue
-        line = np.asarray(branch_line(skeleton, br), float)
-        _r, length = _sample(line, 2)
+        _r, along = _sample(line, 2)
         key = (min(u, v), max(u, v))
-        if key not in best or length < best[key][0]:
-            best[key] = (length, line if u < v else line[::-1])
-    n = len(nodes)
+        if key not in best or along < best[key][0]:
+            best[key] = (along, line if u < v else line[::-1])
+    n = table.n_nodes
     keys = list(best)
     w = np.array([best[k][0] for k in keys] + [best[k][0] for k in keys])
     # an edge of length 0 would vanish from a sparse matrix
@@ -218,8 +221,9 @@ def describe_skeleton(
     graph = coo_matrix((w, (iu, iv)), shape=(n, n)).tocsr()
     dist, pred = dijkstra(graph, indices=ends, return_predecessors=True)
 
-    positions = np.array([[nodes[e]["x"], nodes[e]["y"]] for e in ends], float)
-    order = _boundary_order(mask, positions)
+    at = table.node_point[ends]
+    positions = np.column_stack([table.x[at], table.y[at]]).astype(float)
+    order = _boundary_order(mask, origin, positions)
     ends = [ends[k] for k in order]
     dist, pred, positions = dist[order], pred[order], positions[order]
     k = len(ends)
@@ -237,15 +241,15 @@ def describe_skeleton(
             for u, v in itertools.pairwise(hops):
                 line = best[(min(u, v), max(u, v))][1]
                 parts.append(line if u < v else line[::-1])
-            r, length = _sample(np.concatenate(parts), samples)
+            r, along = _sample(np.concatenate(parts), samples)
             radii[i, j], radii[j, i] = r, r[::-1]
-            lengths[i, j] = lengths[j, i] = length
-    total = float(skeleton["length"])
+            lengths[i, j] = lengths[j, i] = along
+    mean_radius = float(table.radius[table.pixels()].mean())
     return SkeletonDescriptor(
         node_ids=np.array(ends, np.int64),
         positions=positions,
         radii=radii / mean_radius if mean_radius > 0 else radii,
-        lengths=lengths / total if total > 0 else lengths,
+        lengths=lengths / length if length > 0 else lengths,
         component=component,
     )
 
@@ -271,19 +275,11 @@ def describe(shape: PruneResult | SkeletonDescriptor | Any) -> SkeletonDescripto
         )
     ci = int(np.argmax([c.area for c in result.components]))
     comp = result.components[ci]
-    skeleton = comp.to_dict(curve=False)["skeleton"]
-    _rows, _cols, r2 = comp.points()
-    mean_radius = float(np.sqrt(r2.astype(float)).mean())
-    # the component alone, so that the boundary is its own
-    rows, cols = comp.image_coordinates(comp.skeleton.graph.rows[:1], comp.skeleton.graph.cols[:1])
-    own = _component_mask(result.mask, int(rows[0]), int(cols[0]))
-    return replace(describe_skeleton(skeleton, own, mean_radius, component=ci), frame=result.frame)
-
-
-def _component_mask(mask: np.ndarray, row: int, col: int) -> np.ndarray:
-    """The 8-connected component of ``mask`` holding pixel (row, col)."""
-    labels, _n = ndimage.label(mask, structure=np.ones((3, 3), bool))
-    return labels == labels[row, col]
+    # the component alone, from its own crop, so that the boundary is its own
+    sk = comp.skeleton
+    crop = sk.orientation.unapply(sk.mask)
+    described = describe_table(comp.table, comp.chosen_point()[0], crop, sk.origin, ci)
+    return replace(described, frame=result.frame)
 
 
 # -- comparing ------------------------------------------------------------------------

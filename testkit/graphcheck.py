@@ -15,7 +15,7 @@ import numpy as np
 from scipy import ndimage
 
 from skelprune.grid.reconstruction import reconstruction
-from skelprune.output.document import branch_line
+from testkit.document_oracle import branch_line
 
 EIGHT = np.ones((3, 3), bool)
 
@@ -112,7 +112,7 @@ def network(skeleton: dict[str, Any]) -> nx.Graph:
     for n in skeleton["nodes"]:
         g.add_node((n["x"], n["y"]))
     for br in skeleton["branches"]:
-        line = [tuple(p[:2]) for p in branch_line(skeleton, br)]
+        line = [tuple(p[:2]) for p in branch_line(skeleton["nodes"], br)]
         g.add_edges_from((a, b) for a, b in pairwise(line) if a != b)
     return g
 
@@ -122,7 +122,7 @@ def check_network(mask: np.ndarray, comp: dict[str, Any]) -> None:
     as many independent cycles as the component has holes."""
     sk = comp["skeleton"]
     for br in sk["branches"]:
-        line = branch_line(sk, br)
+        line = branch_line(sk["nodes"], br)
         src, dst = sk["nodes"][br["source"]], sk["nodes"][br["target"]]
         assert line[0][:2] == [src["x"], src["y"]] and line[-1][:2] == [dst["x"], dst["y"]]
         assert len(line) >= 2

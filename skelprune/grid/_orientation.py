@@ -39,6 +39,14 @@ class Orientation:
             a = a[:, ::-1]
         return a
 
+    def unapply(self, a: np.ndarray) -> np.ndarray:
+        """``a``, seen in this orientation, back in the original one (a view)."""
+        if self.flip_cols:
+            a = a[:, ::-1]
+        if self.flip_rows:
+            a = a[::-1]
+        return a.T if self.swap else a
+
     def points_back(
         self, rows: np.ndarray, cols: np.ndarray, shape: tuple[int, ...]
     ) -> tuple[np.ndarray, np.ndarray]:

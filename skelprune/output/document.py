@@ -9,7 +9,6 @@ plain JSON types (:mod:`skelprune.output.schema`).
 from __future__ import annotations
 
 import base64
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING, Any, cast
@@ -36,7 +35,7 @@ from .schema import BranchDoc, ComponentDoc, NodeDoc, SequenceDoc
 from .table import BranchTable, branch_table, frame_distances
 from .views import branch_dicts, node_dicts, sequence_dict, to_networkx
 
-__all__ = ["ComponentResult", "PruneResult", "branch_line"]
+__all__ = ["ComponentResult", "PruneResult"]
 
 
 @dataclass(frozen=True)
@@ -211,24 +210,6 @@ class ComponentResult:
         if sequence:
             doc["sequence"] = self.sequence_table(frame)
         return doc
-
-
-def branch_line(skeleton: Mapping[str, Any], branch: Mapping[str, Any]) -> list[list[float]]:
-    """A branch of a document as a polyline ``[x, y, radius]`` from its source node to
-    its target node.
-
-    The path's points, with the source node's position before them and the target
-    node's after them where the path does not already end there, so that the lines of
-    a skeleton meet exactly at its nodes. A loop's line is closed; a single-point
-    branch gets two equal positions, as a LineString needs two.
-    """
-    nodes = skeleton["nodes"]
-    line = [list(p) for p in branch["points"]]
-    for end, nid in ((0, branch["source"]), (-1, branch["target"])):
-        node = nodes[nid]
-        if line[end][:2] != [node["x"], node["y"]] or (end == -1 and len(line) == 1):
-            line.insert(len(line) if end == -1 else 0, [node["x"], node["y"], node["radius"]])
-    return line
 
 
 @dataclass
@@ -458,7 +439,7 @@ class PruneResult:
         Nodes are ``(component, node id)`` with the document's node fields (``x``, ``y``,
         ``radius``, ``kind``, ``points``) as attributes; each branch is an edge, keyed by
         its id, with ``length``, ``points`` (its path from ``source`` to ``target``),
-        ``off_path`` and ``line`` (:func:`branch_line`). A loop is a self-loop edge.
+        ``off_path`` and ``line`` (:meth:`~.table.BranchTable.lines`). A loop is a self-loop edge.
 
         Examples
         --------

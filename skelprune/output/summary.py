@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from ..io.frame import IDENTITY, PixelFrame
-from .table import BranchTable
+from .table import ENDPOINT, JUNCTION, LOOP, BranchTable
 
 #: A :class:`~skelprune.output.document.PruneResult` (which imports this module).
 PruneResult = Any
@@ -92,7 +92,6 @@ COMPONENT_COLUMNS = (
 SMOOTH = 2
 #: A branch's direction at a node is read this many node radii along it (at least 3 px).
 ANGLE_RADII = 3.0
-_ENDPOINT, _JUNCTION, _LOOP = 0, 1, 2
 
 
 def unit_of(result: PruneResult) -> tuple[float, str]:
@@ -130,7 +129,7 @@ def _ends(t: BranchTable, j: int, idx: np.ndarray) -> np.ndarray:
     xy = np.column_stack([t.x[idx], t.y[idx]])
     parts = [xy]
     for end, node in ((0, t.source[j]), (-1, t.target[j])):
-        if t.node_kind[node] != _JUNCTION:
+        if t.node_kind[node] != JUNCTION:
             continue
         m = t.members[t.member_offsets[node] : t.member_offsets[node + 1]]
         cluster = np.column_stack([t.x[m], t.y[m]])
@@ -236,7 +235,7 @@ def _component_branches(
         leaving.setdefault(int(t.target[j]), []).append((j, 1, b))
 
     def junction_angle(node: int, j: int, end: int, angle: float) -> float | None:
-        if kinds[node] != _JUNCTION:
+        if kinds[node] != JUNCTION:
             return None
         others = [
             abs((angle - a + 180.0) % 360.0 - 180.0)
@@ -253,9 +252,9 @@ def _component_branches(
         ks, kd = kinds[s], kinds[d]
         kind = (
             "loop"
-            if loop or _LOOP in (ks, kd)
+            if loop or LOOP in (ks, kd)
             else {0: "end-end", 1: "end-junction", 2: "junction-junction"}[
-                int(ks == _JUNCTION) + int(kd == _JUNCTION)
+                int(ks == JUNCTION) + int(kd == JUNCTION)
             ]
         )
         full = paths[j]
@@ -322,8 +321,8 @@ def component_rows(result: PruneResult) -> list[dict[str, Any]]:
                 "area": float(c.area * scale * scale) if unit != "px" else c.area,
                 "length": float(sum(b["length"] for b in mine)),
                 "branches": t.n_branches,
-                "ends": int((kinds == _ENDPOINT).sum()),
-                "junctions": int((kinds == _JUNCTION).sum()),
+                "ends": int((kinds == ENDPOINT).sum()),
+                "junctions": int((kinds == JUNCTION).sum()),
                 "cycles": t.n_branches - t.n_nodes + 1,
                 "width_mean": float(width.mean()) if width.size else None,
                 "rer": float(c.rer),

@@ -36,7 +36,10 @@ if TYPE_CHECKING:
     from ..skeleton import Skeleton
 
 __all__ = [
+    "ENDPOINT",
+    "JUNCTION",
     "KINDS",
+    "LOOP",
     "BranchTable",
     "branch_table",
     "frame_distances",
@@ -48,7 +51,7 @@ __all__ = [
 #: A node's kind, as the document names it.
 NodeKind = Literal["endpoint", "junction", "loop"]
 KINDS: tuple[NodeKind, ...] = ("endpoint", "junction", "loop")
-_ENDPOINT, _JUNCTION, _LOOP = range(3)
+ENDPOINT, JUNCTION, LOOP = range(3)
 
 
 def _csr(parts: list[list[int]]) -> tuple[np.ndarray, np.ndarray]:
@@ -158,6 +161,11 @@ class BranchTable:
         """Each node's kind, as the document names it."""
         return [KINDS[k] for k in self.node_kind.tolist()]
 
+    def pixels(self) -> np.ndarray:
+        """Indices of the skeleton's pixels (paths, pixels beside them and junction
+        clusters), sorted."""
+        return np.unique(np.concatenate([self.paths, self.off_path, self.members]))
+
     def xyr(self) -> np.ndarray:
         """``(n, 3)`` x, y and radius of every pixel."""
         return np.column_stack([self.x, self.y, self.radius])
@@ -225,7 +233,7 @@ def branch_table(sk: Skeleton, margins: Margins | None) -> BranchTable:
         pts = sorted(junc.points)
         junction_node[j] = len(node_point)
         node_point.append(min(pts, key=lambda p: (neg_r2[p], grow[p], gcol[p])))
-        node_kind.append(_JUNCTION)
+        node_kind.append(JUNCTION)
         node_junction.append(j)
         members.append(pts)
 
@@ -251,7 +259,7 @@ def branch_table(sk: Skeleton, margins: Margins | None) -> BranchTable:
             continue
         path = br.path()
         if br.loop:
-            src = dst = new_node(path[0], _LOOP)
+            src = dst = new_node(path[0], LOOP)
         else:
             ends: list[int] = []
             for e, p in ((0, path[0]), (1, path[-1])):
@@ -261,7 +269,7 @@ def branch_table(sk: Skeleton, margins: Margins | None) -> BranchTable:
                 elif e == 1 and len(path) == 1 and br.node[0] is None:
                     ends.append(ends[0])  # a single point: one node
                 else:
-                    ends.append(new_node(p, _ENDPOINT))
+                    ends.append(new_node(p, ENDPOINT))
             src, dst = ends
         source.append(src)
         target.append(dst)

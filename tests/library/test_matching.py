@@ -170,3 +170,16 @@ def test_skeleton_with_too_many_endpoints_is_refused():
     assert ends > skelprune.matching.MAX_ENDPOINTS
     with pytest.raises(skelprune.UnmatchableShapeError, match="more than"):
         skelprune.match(res, res)
+
+
+def test_a_label_is_described_by_its_own_boundary():
+    """Two touching labels: the larger one's endpoints are ordered along its own outline,
+    as for the label alone, not along the outline of both together."""
+    labels = np.zeros((90, 150), np.uint8)
+    labels[20:70, 10:100] = 1  # the larger label, touching the next one
+    labels[5:85, 100:112] = 2
+    labels[40:50, 112:140] = 2
+    alone = describe(skelprune.prune(labels == 1))
+    within = describe(skelprune.prune(labels, labels=True))
+    np.testing.assert_array_equal(within.positions, alone.positions)
+    np.testing.assert_array_equal(within.radii, alone.radii)

@@ -70,8 +70,7 @@ def skeleton_geojson(
         simple = map_lines(chosen, simplify, mask, polygon, exact)
         source, target = t.source.tolist(), t.target.tolist()
         length = frame_distances(frame, t.length).tolist()
-        margin = [None if m != m else m for m in t.margin.tolist()]
-        removed = [None if k < 0 else k for k in t.removed_at.tolist()]
+        margin, removed = t.margins(), t.removal_steps()
         used: set[int] = set()
         for i, line in zip(kept, simple, strict=True):
             fx, fy = _placed(frame, projection, line[:, 0], line[:, 1])

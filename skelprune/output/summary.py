@@ -212,9 +212,10 @@ def _strahler(t: BranchTable) -> list[int | None]:
 
 
 def _component_branches(
-    t: BranchTable, ci: int, label: int | None, margin_of: np.ndarray, scale: float, unit: str
+    t: BranchTable, ci: int, label: int | None, scale: float, unit: str
 ) -> list[dict[str, Any]]:
     rows = []
+    margins = t.margins()
     strahler = _strahler(t)
     kinds = t.node_kind
     node_r = t.radius[t.node_point]
@@ -261,7 +262,6 @@ def _component_branches(
         length = _length(full) * scale
         chord = float(np.hypot(*(full[-1] - full[0]))) * scale
         a, b = angles[j]
-        m = margin_of[j]
         rows.append(
             {
                 "component": ci,
@@ -283,7 +283,7 @@ def _component_branches(
                 "junction_angle_source": None if loop else junction_angle(s, j, 0, a),
                 "junction_angle_target": None if loop else junction_angle(d, j, 1, b),
                 "strahler": strahler[j],
-                "margin": None if np.isnan(m) else float(m),
+                "margin": margins[j],
                 "unit": unit,
             }
         )
@@ -300,7 +300,7 @@ def branch_rows(
     out: list[dict[str, Any]] = []
     for ci, c in enumerate(result.components):
         t = c.table
-        out += _component_branches(t, ci, c.label, t.margin, scale, unit)
+        out += _component_branches(t, ci, c.label, scale, unit)
     return out
 
 
@@ -310,7 +310,7 @@ def component_rows(result: PruneResult) -> list[dict[str, Any]]:
     out = []
     for ci, c in enumerate(result.components):
         t = c.table
-        mine = _component_branches(t, ci, c.label, t.margin, scale, unit)
+        mine = _component_branches(t, ci, c.label, scale, unit)
         idx = t.paths
         width = 2.0 * t.radius[idx] * scale
         kinds = t.node_kind

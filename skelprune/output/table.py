@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -44,6 +44,7 @@ __all__ = [
     "branch_table",
     "frame_distances",
     "frame_points",
+    "nullable",
     "round_like_python",
 ]
 
@@ -59,6 +60,16 @@ def _csr(parts: list[list[int]]) -> tuple[np.ndarray, np.ndarray]:
     ends = list(itertools.accumulate(map(len, parts), initial=0))
     flat = np.fromiter(itertools.chain.from_iterable(parts), np.int64, ends[-1])
     return flat, np.array(ends, np.int64)
+
+
+def nullable(values: np.ndarray, missing: float) -> list[Any]:
+    """``values`` as a list with None where a value is ``missing`` (NaN for NaN): the one
+    place where an array's missing values become the document's nulls."""
+    gone = np.isnan(values) if missing != missing else values == missing
+    out = values.tolist()
+    for i in np.flatnonzero(gone).tolist():
+        out[i] = None
+    return out
 
 
 def frame_points(frame: PixelFrame, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -165,6 +176,14 @@ class BranchTable:
         """Indices of the skeleton's pixels (paths, pixels beside them and junction
         clusters), sorted."""
         return np.unique(np.concatenate([self.paths, self.off_path, self.members]))
+
+    def margins(self) -> list[float | None]:
+        """Each branch's margin, None where it has none."""
+        return nullable(self.margin, np.nan)
+
+    def removal_steps(self) -> list[int | None]:
+        """The step that removes each branch, None where none does."""
+        return nullable(self.removed_at, -1)
 
     def xyr(self) -> np.ndarray:
         """``(n, 3)`` x, y and radius of every pixel."""

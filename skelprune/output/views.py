@@ -14,7 +14,7 @@ import numpy as np
 
 from ..io.frame import PixelFrame
 from ..pruning.replay import replay, start_repaint
-from .table import BranchTable, branch_table, frame_points
+from .table import BranchTable, branch_table, frame_points, nullable
 
 if TYPE_CHECKING:
     from ..pruning.bayesian import PruningSequence
@@ -26,15 +26,6 @@ __all__ = ["branch_dicts", "node_dicts", "sequence_dict", "to_networkx"]
 
 def _slices(values: list[Any], offsets: np.ndarray) -> list[list[Any]]:
     return [values[s:e] for s, e in itertools.pairwise(offsets.tolist())]
-
-
-def _null(values: np.ndarray, none: float) -> list[Any]:
-    """``values`` as a list, with None where a value is ``none`` (NaN for NaN)."""
-    gone = np.isnan(values) if none != none else values == none
-    out = values.tolist()
-    for i in np.flatnonzero(gone).tolist():
-        out[i] = None
-    return out
 
 
 def node_dicts(t: BranchTable) -> list[NodeDoc]:
@@ -60,7 +51,7 @@ def branch_dicts(t: BranchTable, margins: bool = True) -> list[BranchDoc]:
         for j, (s, d, L, p, o) in enumerate(rows)
     ]
     if margins:
-        for b, m, k in zip(out, _null(t.margin, np.nan), _null(t.removed_at, -1), strict=True):
+        for b, m, k in zip(out, t.margins(), t.removal_steps(), strict=True):
             b["margin"] = m
             b["removed_at"] = k
     return out
@@ -93,12 +84,12 @@ def sequence_dict(
     gb = table.graph_branch
 
     def ids(graph_ids: np.ndarray) -> list[int | None]:
-        return _null(np.where(graph_ids >= 0, doc_branch[graph_ids], -1), -1)
+        return nullable(np.where(graph_ids >= 0, doc_branch[graph_ids], -1), -1)
 
     for b, k, a, into in zip(
         branches,
-        _null(ev.removed_at[gb], -1),
-        _null(ev.absorbed_at[gb], -1),
+        nullable(ev.removed_at[gb], -1),
+        nullable(ev.absorbed_at[gb], -1),
         ids(ev.absorbed_into[gb]),
         strict=True,
     ):
@@ -107,8 +98,8 @@ def sequence_dict(
     jid = table.node_junction[junctions]
     for i, k, d, into in zip(
         junctions.tolist(),
-        _null(ev.junction_removed_at[jid], -1),
-        _null(ev.dissolved_at[jid], -1),
+        nullable(ev.junction_removed_at[jid], -1),
+        nullable(ev.dissolved_at[jid], -1),
         ids(ev.dissolved_into[jid]),
         strict=True,
     ):

@@ -50,6 +50,7 @@ from .options import (
 from .output.document import ComponentResult, GraphSummary, PruneResult
 from .pipeline import prune_component, prune_components
 from .pruning.bayesian import PruningSequence
+from .pruning.log import RemovalLog
 from .pruning.tips import trim_tips
 from .skeleton import Normalisation, Skeleton, normalisation
 
@@ -417,7 +418,7 @@ def _component_result(
         trim = trim_tips(answer, lost, norm.alpha, norm.lbar)
     seq = PruningSequence(
         start=answer,
-        removed=[],
+        log=RemovalLog(),
         lost=[lost],
         steps=[graph.total_steps()],
         area=area,

@@ -74,7 +74,7 @@ def sequence_dict(
     """
     start = seq.start
     table = branch_table(start, None)
-    ev = replay(start, seq.removed)
+    ev = replay(seq)
     view = table.framed(frame)
     nodes: list[Any] = node_dicts(view)
     branches: list[Any] = branch_dicts(view, margins=False)

@@ -25,6 +25,7 @@ from numba import njit
 
 from ..grid.graph import BranchGraph, step_length
 from .grid import GridAxis, GridGraph, compiled_length, path_lengths
+from .log import RemovalLog
 
 __all__ = [
     "PruningSequence",
@@ -53,12 +54,13 @@ A = TypeVar("A", bound="GridAxis[Any]")
 class PruningSequence(Generic[A]):
     """The greedy removal sequence of one component, on any grid (:mod:`.grid`).
 
-    ``removed[i]`` is the branch removed at step ``i + 1``; the per-step lists have
-    one entry per skeleton ``S(0)``, …, ``S(n)``, ``S(0)`` being ``start``.
+    ``log`` holds what each step removed and merged (:class:`~.log.RemovalLog`); the
+    per-skeleton lists have one entry per skeleton ``S(0)``, …, ``S(n)``, ``S(0)`` being
+    ``start``.
     """
 
     start: A
-    removed: list[int]
+    log: RemovalLog
     lost: list[int]
     #: Per skeleton: its steps of each kind (the grid's :attr:`~.grid.GridAxis.step_weights`
     #: turn them into its length).
@@ -74,8 +76,11 @@ class PruningSequence(Generic[A]):
     #: Per step ``i`` before the last: the end branches of ``S(i)`` and the area each alone
     #: covers (what removing it would lose), as read for the choice; for the margins.
     end_areas: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
-    #: Per step ``i``: ``(kept, absorbed)`` if the removal merged two branches, else None.
-    merges: list[tuple[int, int] | None] = field(default_factory=list)
+
+    @property
+    def removed(self) -> list[int]:
+        """``removed[i]``: the end branch removed at step ``i + 1``."""
+        return self.log.branch
 
     @cached_property
     def length(self) -> np.ndarray:
@@ -103,7 +108,8 @@ class PruningSequence(Generic[A]):
         )
 
     def skeleton_at(self, step: int) -> A:
-        """``S(step)``: the start with the first ``step`` removals made (on a copy)."""
+        """``S(step)``: the start with the first ``step`` removals made (on a copy): the
+        answer's graph as a structure, which only the graph's own edits can give."""
         if step == len(self.removed):
             return self.start.with_graph(self.end)
         graph = self.start.working_graph()
@@ -164,8 +170,9 @@ def pruning_sequence(
     )
     cov = start.coverage(graph, labels, nb + len(graph.junctions) + 1)
     seq = PruningSequence(
-        start, [], [cov.lost], [graph.total_steps()], area, alpha, lbar, end=graph
+        start, RemovalLog(), [cov.lost], [graph.total_steps()], area, alpha, lbar, end=graph
     )
+    log = seq.log
     if uncovered:
         seq.uncovered = cov.uncovered()
     if alpha is None and order is None:
@@ -221,9 +228,10 @@ def pruning_sequence(
         # Coverage works on labels: a branch's points all carry its label, and a merge
         # moves whole owners (the junction cluster and the absorbed branch).
         cov.remove_label(pick + 1)
+        taken = graph.branches[pick].points
         merged = graph.remove_end_branch(pick)
+        log.record(pick, taken, merged)
         is_end[pick] = False
-        seq.merges.append(None if merged is None else (merged[0], merged[1]))
         if merged is not None:
             kept, absorbed, jid = merged
             if guard is not None:
@@ -233,7 +241,6 @@ def pruning_sequence(
             is_end[absorbed] = False
             bsteps[kept] = graph.branch_steps(kept)
             mark_end(kept)
-        seq.removed.append(pick)
         seq.lost.append(cov.lost)
         seq.steps.append(graph.total_steps())
     return seq

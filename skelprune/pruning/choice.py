@@ -66,10 +66,8 @@ def floor_lost(seq: PruningSequence[Skeleton]) -> np.ndarray:
     h, w = shape.shape
     c = cover_counts(h, w, start.rows[idx], start.cols[idx], start.r2[idx])
     lost = [int((deep & (c == 0)).sum())]
-    graph = start.working_graph()
-    for b in seq.removed:
-        pts = np.asarray(graph.branches[b].points, np.int64)
-        graph.remove_end_branch(b)
+    for i in range(len(seq.log)):
+        pts = seq.log.points(i)
         lost.append(
             lost[-1] + uncover_count(c, deep, start.rows[pts], start.cols[pts], start.r2[pts])
         )

@@ -16,7 +16,7 @@ For the answer ``Ŝ = S(k)`` of the greedy sequence and ``λ`` its target (eq. 7
 
 ``removed_at`` is that step ``j`` for every branch (``None``: never removed). Both come
 from the sequence already run: it records, at each step, the area each end branch alone
-covers (what the choice reads anyway) and which branches merged.
+covers (what the choice reads anyway), and its log which branches merged.
 """
 
 from __future__ import annotations
@@ -69,14 +69,14 @@ def branch_margins(
         The answer's graph (not modified).
     seq : PruningSequence
         The sequence ``graph`` is step ``chosen`` of; its recorded end-branch areas and
-        merges are all the margins need.
+        its removal log are all the margins need.
     chosen : int
         The answer's step.
     trim : TrimmedAnswer, optional
         The tips cut from ``S(chosen)``, when ``graph`` is the trimmed skeleton.
     """
     alive = [b for b, br in enumerate(graph.branches) if br.alive]
-    removed_at = _removal_steps(seq, chosen, alive)
+    removed_at = seq.log.removal_steps(alive, chosen)
     alpha = seq.alpha
     if alpha is None or not seq.lbar > 0:
         return Margins({b: None for b in alive}, removed_at)
@@ -108,18 +108,3 @@ def branch_margins(
                 continue
             margin[b] = without(lost + d, b)
     return Margins(margin, removed_at)
-
-
-def _removal_steps(seq: PruningSequence, chosen: int, alive: list[int]) -> dict[int, int | None]:
-    """The step at which the sequence, from step ``chosen`` on, removes each branch."""
-    held = {b: [b] for b in alive}  # running branch -> the answer's branches it holds
-    steps: dict[int, int | None] = {b: None for b in alive}
-    for i in range(chosen, len(seq.removed)):
-        for b in held.pop(seq.removed[i], []):
-            steps[b] = i + 1
-        merged = seq.merges[i]
-        if merged is not None and merged[0] != merged[1]:  # (a loop closing keeps its id)
-            kept, absorbed = merged
-            moved = held.pop(absorbed, [])
-            held.setdefault(kept, []).extend(moved)
-    return steps

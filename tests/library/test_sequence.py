@@ -126,3 +126,20 @@ def test_the_command_line_prints_the_sequence_on_request() -> None:
     assert with_seq["components"][0]["sequence"]["start"] == "coarse"
     del with_seq["components"][0]["sequence"]
     assert with_seq == plain
+
+
+@pytest.mark.parametrize("name", ["bird-10", "camel-12", "elephant-2", "key-1"])
+def test_the_log_records_what_the_graph_did(name: str) -> None:
+    """Each logged step names the points and the merge that removing its branch from a
+    fresh copy of the start gives, so that what reads the log needs no graph."""
+    mask = read_mask(str(DATA / "kimia216" / f"{name}.png"))
+    seq = skelprune.prune(mask, coarse=None).components[0].sequence
+    log = seq.log
+    assert len(log) == len(seq.removed) > 0 and any(k >= 0 for k in log.kept)
+    graph = seq.start.working_graph()
+    for i, b in enumerate(log.branch):
+        points = list(graph.branches[b].points)
+        assert log.points(i).tolist() == points
+        assert log.merge(i) == graph.remove_end_branch(b)
+    taken = np.concatenate([log.points(i) for i in range(len(log))])
+    assert np.intersect1d(taken, graph.alive_points()).size == 0

@@ -65,7 +65,7 @@ def test_some_cases_remove_branches_and_merge() -> None:
         norm = sk.normalisation(9.0)
         seq = pruning_sequence(sk, norm.alpha, norm.lbar)
         removed += len(seq.removed)
-        merges += sum(m is not None for m in seq.merges)
+        merges += sum(seq.log.merge(i) is not None for i in range(len(seq.log)))
     assert removed >= 6 and merges >= 3
 
 

@@ -20,10 +20,9 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 from numba.extending import register_jitable
 
-from ._digital import NEIGHBOURS
+from ._trace import junction_clusters, neighbour_table, point_index, trace_branches
 
 __all__ = ["SQRT2", "Branch", "BranchGraph", "step_length"]
 
@@ -43,160 +42,6 @@ def step_length(na, nd):
     5.82842712474619
     """
     return na + nd * SQRT2
-
-
-@njit(cache=True)
-def _point_index(rows, cols, shape):
-    index = np.full(shape, -1, dtype=np.int64)
-    for k in range(rows.size):
-        index[rows[k], cols[k]] = k
-    return index
-
-
-@njit(cache=True)
-def _neighbours(rows, cols, index):
-    """(n, 8) neighbour point indices (-1 where none) and the degree of each point."""
-    n = rows.size
-    nbr = np.full((n, 8), -1, dtype=np.int64)
-    deg = np.zeros(n, dtype=np.int64)
-    for k in range(n):
-        for i in range(8):
-            q = index[rows[k] + NEIGHBOURS[i, 0], cols[k] + NEIGHBOURS[i, 1]]
-            if q >= 0:
-                nbr[k, i] = q
-                deg[k] += 1
-    return nbr, deg
-
-
-@njit(cache=True)
-def _junction_clusters(nbr, deg):
-    """The 8-connected cluster of each junction pixel (degree 3 or more; -1 for the
-    others), numbered in the order of their first pixel, and the number of clusters."""
-    n = deg.size
-    out = np.full(n, -1, dtype=np.int64)
-    stack = np.empty(n, dtype=np.int64)
-    n_clusters = 0
-    for k in range(n):
-        if deg[k] < 3 or out[k] >= 0:
-            continue
-        out[k] = n_clusters
-        stack[0] = k
-        top = 1
-        while top:
-            top -= 1
-            u = stack[top]
-            for i in range(8):
-                q = nbr[u, i]
-                if q >= 0 and deg[q] >= 3 and out[q] < 0:
-                    out[q] = n_clusters
-                    stack[top] = q
-                    top += 1
-        n_clusters += 1
-    return out, n_clusters
-
-
-@njit(cache=True)
-def _trace(nbr, deg, rows, cols):
-    """Trace all branches.
-
-    Returns the concatenated point lists (``pts``, split at ``starts``) and, per
-    branch, the junction pixel each end attaches to (-1: a free end; -2: the branch
-    is a closed cycle without junction).
-    """
-    n = deg.size
-    junction = deg >= 3
-    visited = np.zeros(n, dtype=np.bool_)
-    pts = np.empty(n, dtype=np.int64)
-    starts = np.zeros(n + 1, dtype=np.int64)
-    att = np.empty((n, 2), dtype=np.int64)
-    used = 0
-    nb = 0
-
-    def walk(prev, cur, used):
-        # Follow degree-2 points from ``cur`` (coming from ``prev``); returns where it ended.
-        while True:
-            visited[cur] = True
-            pts[used] = cur
-            used += 1
-            if deg[cur] != 2:
-                return -1, used
-            nxt = -1
-            for i in range(8):
-                q = nbr[cur, i]
-                if q >= 0 and q != prev:
-                    nxt = q
-                    break
-            if junction[nxt]:
-                return nxt, used
-            if visited[nxt]:
-                return -2, used
-            prev, cur = cur, nxt
-
-    for j in range(n):
-        if not junction[j]:
-            continue
-        for i in range(8):
-            q = nbr[j, i]
-            if q < 0 or junction[q] or visited[q]:
-                continue
-            end, used = walk(j, q, used)
-            att[nb, 0] = j
-            att[nb, 1] = max(end, -1)
-            nb += 1
-            starts[nb] = used
-    for k in range(n):
-        if visited[k] or junction[k] or deg[k] > 1:
-            continue
-        visited[k] = True
-        pts[used] = k
-        used += 1
-        end = -1
-        if deg[k] == 1:
-            first = -1
-            for i in range(8):
-                if nbr[k, i] >= 0:
-                    first = nbr[k, i]
-            if junction[first]:
-                end = first
-            elif not visited[first]:
-                end, used = walk(k, first, used)
-        att[nb, 0] = -1
-        att[nb, 1] = max(end, -1)
-        nb += 1
-        starts[nb] = used
-    for k in range(n):
-        if visited[k] or junction[k]:
-            continue
-        # A cycle of degree-2 points: walk it from its first point.
-        prev = -1
-        for i in range(8):
-            if nbr[k, i] >= 0:
-                prev = nbr[k, i]
-        _, used = walk(prev, k, used)
-        att[nb, 0] = -2
-        att[nb, 1] = -2
-        nb += 1
-        starts[nb] = used
-    # Step counts of each branch, including the steps into its junction pixels and,
-    # for a cycle, the closing step.
-    counts = np.zeros((nb, 2), dtype=np.int64)
-    for b in range(nb):
-        s0, s1 = starts[b], starts[b + 1]
-        prev = att[b, 0] if att[b, 0] >= 0 else (pts[s1 - 1] if att[b, 0] == -2 else -1)
-        for i in range(s0, s1 + 1):
-            if i < s1:
-                cur = pts[i]
-            elif att[b, 1] >= 0:
-                cur = att[b, 1]
-            else:
-                break
-            if prev >= 0 and not (att[b, 0] == -2 and i == s0 and s1 - s0 < 2):
-                if rows[prev] != rows[cur] and cols[prev] != cols[cur]:
-                    counts[b, 1] += 1
-                else:
-                    counts[b, 0] += 1
-            prev = cur
-    return pts[:used], starts[: nb + 1], att[:nb], counts
 
 
 @dataclass
@@ -268,8 +113,8 @@ class BranchGraph:
         self.rows = np.asarray(rows, dtype=np.int64)
         self.cols = np.asarray(cols, dtype=np.int64)
         self.shape = (int(shape[0]), int(shape[1]))
-        index = _point_index(self.rows, self.cols, shape)
-        self.nbr, self.degree = _neighbours(self.rows, self.cols, index)
+        index = point_index(self.rows, self.cols, shape)
+        self.nbr, self.degree = neighbour_table(self.rows, self.cols, index)
         self.extra_na = 0  # steps inside dissolved junction clusters, a running total
         self.extra_nd = 0
         self.branches: list[Branch] = []
@@ -278,11 +123,11 @@ class BranchGraph:
 
     # -- construction -------------------------------------------------------------
     def _build(self) -> None:
-        pts, starts, att, counts = _trace(self.nbr, self.degree, self.rows, self.cols)
+        pts, starts, att, counts = trace_branches(self.nbr, self.degree, self.rows, self.cols)
         # Junction nodes: 8-connected clusters of junction pixels, numbered in the order
         # of their first pixel.
         jpix = np.flatnonzero(self.degree >= 3)
-        junction_of, n_junctions = _junction_clusters(self.nbr, self.degree)
+        junction_of, n_junctions = junction_clusters(self.nbr, self.degree)
         if jpix.size:
             members: list[list[int]] = [[] for _ in range(n_junctions)]
             for p, j in zip(jpix.tolist(), junction_of[jpix].tolist(), strict=True):
@@ -530,7 +375,7 @@ class BranchGraph:
             d, u = heapq.heappop(heap)
             if u == z or d > best[u]:
                 continue
-            # the neighbour slot says the step: even slots are diagonal (NEIGHBOURS)
+            # the neighbour slot says the step: even slots are diagonal (see _digital.NEIGHBOURS)
             for i, q in enumerate(nbr[u].tolist()):
                 if q < 0 or q not in members:
                     continue

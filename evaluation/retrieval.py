@@ -29,7 +29,7 @@ from skelprune.matching import (
     describe_table,
     distance_matrix,
 )
-from skelprune.output.document import ComponentResult
+from skelprune.output.component import ComponentResult
 from skelprune.skeleton import Skeleton
 
 from .baseline import cut_end_branches

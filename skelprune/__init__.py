@@ -59,7 +59,8 @@ if TYPE_CHECKING:
     from .io.frame import PixelFrame
     from .io.input import Input, read_input
     from .matching import Match, SkeletonDescriptor, UnmatchableShapeError, describe, match
-    from .output.document import ComponentResult, PruneResult
+    from .output.component import ComponentResult
+    from .output.document import PruneResult
     from .skeleton import Skeleton
 
 #: Where each lazily imported name lives (a submodule of this package).
@@ -75,7 +76,7 @@ _LAZY = {
     "match": "matching",
     "MedialAxis": "grid.medial_axis",
     "medial_axis": "grid.medial_axis",
-    "ComponentResult": "output.document",
+    "ComponentResult": "output.component",
     "PruneResult": "output.document",
     "reconstruction": "grid.reconstruction",
     "reconstruction_error": "grid.reconstruction",

@@ -47,7 +47,8 @@ from .options import (
     OutputOptions,
     PruneOptions,
 )
-from .output.document import ComponentResult, GraphSummary, PruneResult
+from .output.component import ComponentResult, GraphSummary
+from .output.document import PruneResult
 from .pipeline import prune_component, prune_components
 from .pruning.bayesian import PruningSequence
 from .pruning.log import RemovalLog

@@ -15,7 +15,8 @@ from .errors import EmptyMaskError
 from .grid.reconstruction import count_covered
 from .io.input import Input
 from .options import OutputOptions, PruneOptions
-from .output.document import ComponentResult, GraphSummary, PruneResult
+from .output.component import ComponentResult, GraphSummary
+from .output.document import PruneResult
 from .pruning.bayesian import pruning_sequence, remove_unsupported
 from .pruning.choice import chosen_step
 from .pruning.coarse import coarse_dce

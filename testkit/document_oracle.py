@@ -13,7 +13,7 @@ import numpy as np
 
 from skelprune.grid.reconstruction import reconstruction
 from skelprune.io.frame import IDENTITY, PixelFrame
-from skelprune.output.document import ComponentResult
+from skelprune.output.component import ComponentResult
 from skelprune.pruning.margin import Margins
 from skelprune.skeleton import Skeleton
 

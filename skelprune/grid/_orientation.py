@@ -112,7 +112,7 @@ def oriented(mask: np.ndarray) -> tuple[np.ndarray, Orientation]:
 
     :func:`skelprune.pipeline.prune_component` works in this frame: the graph, the branch ids
     and the ``(row, col)`` tie rules of docs/algorithm.md of a
-    :class:`~skelprune.output.document.ComponentResult` are in it.
+    :class:`~skelprune.output.component.ComponentResult` are in it.
     """
     orientation = canonical_orientation(mask)
     return np.ascontiguousarray(orientation.apply(mask)), orientation

@@ -4,7 +4,8 @@ table (:mod:`.table`) and its views: the document's skeleton parts and the netwo
 image (:mod:`.render`); the document's types (:mod:`.schema`). The last stage of the
 pipeline."""
 
-from .document import ComponentResult, GraphSummary, PruneResult
+from .component import ComponentResult, GraphSummary
+from .document import PruneResult
 from .table import BranchTable
 
 __all__ = ["BranchTable", "ComponentResult", "GraphSummary", "PruneResult"]

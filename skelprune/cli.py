@@ -14,35 +14,62 @@ every other and prints one JSON line per shape with its ``K`` closest.
 
 from __future__ import annotations
 
-import enum
 import importlib.util
 import json
 import os
 import sys
 from collections.abc import Callable
-from dataclasses import fields
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
-import typer.core
 from typer.exceptions import TyperException
 
+from .cli_files import FOLDER_SUFFIXES as FOLDER_SUFFIXES  # importable from here too
+from .cli_files import PROGRESS_AFTER as PROGRESS_AFTER  # importable from here too
+from .cli_files import _expand, _prune, _prune_file
 from .cli_geo import register as register_geo
-from .errors import SkelpruneError
-from .options import (
-    CHOICES,
-    COARSE,
-    FOREGROUND_RULES,
-    METHODS,
-    SCOPES,
-    OutputOptions,
-    PruneOptions,
-    RasterOptions,
-    ReadOptions,
-    VolumeOptions,
-    option_fields,
+from .cli_match import match_command as match_command  # importable from here too
+from .cli_match import register as register_match
+from .cli_match import retrieve_command as retrieve_command  # importable from here too
+from .cli_options import (
+    HELP,
+    BetaOption,
+    Choice,
+    ChoiceOption,
+    Coarse,
+    CoarseOption,
+    CrsOption,
+    CurveOption,
+    CutEndsOption,
+    FillHolesOption,
+    ForegroundOption,
+    LabelsOption,
+    LongestSideOption,
+    MarginOption,
+    Method,
+    MethodOption,
+    MinAreaOption,
+    OverlayScaleOption,
+    PixelBudgetOption,
+    PixelSizeOption,
+    PixelsPerWidthOption,
+    RepairOption,
+    Rule,
+    Scope,
+    ScopeOption,
+    SequenceOption,
+    SimplifyOption,
+    ThresholdOption,
+    TrimOption,
+    WindowOption,
+    _CleanCommand,
+    _options_or_exit,
+    _usage,
+    _volume_or_exit,
 )
+from .errors import SkelpruneError
+from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
 
 # A command imports what it uses, in its own body: `--help` and `--version` load typer and
 # the option definitions only (numpy, numba and the pipeline come with `prune` and co.).
@@ -74,175 +101,6 @@ def _main(
     ] = False,
 ) -> None:
     """Parameter-free Bayesian skeleton pruning."""
-
-
-#: What a folder is searched for (any case).
-FOLDER_SUFFIXES = (".png", ".geojson", ".tif", ".tiff", ".npy")
-
-
-def _prune(
-    path: str,
-    options: PruneOptions,
-    read: ReadOptions,
-    raster: RasterOptions,
-    output: OutputOptions,
-    geojson: bool = False,
-    volume: VolumeOptions | None = None,
-) -> tuple[Any, dict[str, Any]]:
-    """The result and its document (a polygon's in the polygon's own coordinates), or its
-    GeoJSON: the library's one pipeline (``.geojson``/``.json`` files are polygons,
-    ``.npy`` files volumes, pruned with ``volume``'s spacing)."""
-    from .api import prune
-    from .volume import is_volume
-
-    if is_volume(path):
-        res: Any = prune(Path(path), options, output=output, volume=volume or VolumeOptions())
-    else:
-        res = prune(
-            Path(path), options, read=read, raster=raster, output=output, progress=_progress(path)
-        )
-    return res, res.to_geojson() if geojson else res.to_dict()
-
-
-#: A run shows its progress on a terminal once it has taken this long (s): a large image.
-PROGRESS_AFTER = 1.0
-
-
-def _progress(path: str) -> Any:
-    """``progress(done, total)`` drawing a bar on stderr when it is a terminal and the
-    run has taken over :data:`PROGRESS_AFTER` seconds (None otherwise: nothing shown)."""
-    if not sys.stderr.isatty():
-        return None
-    import time
-
-    start = time.monotonic()
-    shown = [False]
-
-    def show(done: int, total: int) -> None:
-        if time.monotonic() - start < PROGRESS_AFTER and not shown[0]:
-            return
-        shown[0] = True
-        filled = 30 * done // max(total, 1)
-        sys.stderr.write(
-            f"\r{Path(path).name}: [{'#' * filled}{'.' * (30 - filled)}] {done}/{total}"
-        )
-        if done == total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
-
-    return show
-
-
-def _prune_file(
-    path: str,
-    options: PruneOptions,
-    read: ReadOptions,
-    raster: RasterOptions,
-    output: OutputOptions,
-    geojson: bool = False,
-    volume: VolumeOptions | None = None,
-) -> dict[str, Any]:
-    try:
-        res, doc = _prune(path, options, read, raster, output, geojson, volume)
-        line = {"file": path, "result": doc}
-        if res.warnings:
-            line["warnings"] = [w["message"] for w in res.warnings]
-        return line
-    except (SkelpruneError, OSError) as exc:
-        return {"file": path, "error": f"{type(exc).__name__}: {exc}"}
-
-
-def _expand(paths: list[Path]) -> list[Path]:
-    files: list[Path] = []
-    for p in paths:
-        if p.is_dir():  # shape.PNG counts as much as shape.png
-            files.extend(
-                sorted(
-                    f for f in p.iterdir() if f.suffix.lower() in FOLDER_SUFFIXES and f.is_file()
-                )
-            )
-        else:
-            files.append(p)
-    return files
-
-
-def _usage(message: str) -> typer.Exit:
-    """A usage error: one line on stderr, exit status 2."""
-    typer.echo(f"error: {message}", err=True)
-    return typer.Exit(2)
-
-
-def _no_type(ctx: Any) -> str:
-    """A parameter's type as --help shows it: not at all."""
-    return ""
-
-
-class _CleanCommand(typer.core.TyperCommand):
-    """``--help`` without typer's type labels where they say nothing: none for flags and
-    for the file arguments (``<list[Path]>``), ``FILE...`` in the usage line."""
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
-        # typer has no setting for these: each parameter's own methods are replaced
-        for param in self.params:
-            if isinstance(param, typer.core.TyperArgument):
-                setattr(param, "display_type", _no_type)  # noqa: B010
-                name = f"{param.metavar or (param.name or '').upper()}..."
-                setattr(param, "_usage_display_name", lambda name=name: name)  # noqa: B010
-            elif getattr(param, "is_flag", False):
-                setattr(param, "display_type", _no_type)  # noqa: B010
-
-    def get_help_option(self, ctx: Any) -> Any:
-        option = super().get_help_option(ctx)
-        if option is not None:
-            setattr(option, "display_type", _no_type)  # noqa: B010
-        return option
-
-
-HELP = {
-    name: text
-    for name, _, text, _ in option_fields(
-        PruneOptions, OutputOptions, ReadOptions, RasterOptions, VolumeOptions
-    )
-}
-
-
-def _geojson_only(name: str) -> str:
-    return "GeoJSON input: " + HELP[name][0].lower() + HELP[name][1:]
-
-
-# the choices as typer shows them (it lists an Enum's values in --help); made from the
-# tuples of skelprune.options, where each is defined once, which mypy cannot read
-Method = enum.Enum("Method", {name: name for name in METHODS}, type=str)  # type: ignore[misc]
-Coarse = enum.Enum("Coarse", {name: name for name in COARSE}, type=str)  # type: ignore[misc]
-Rule = enum.Enum("Rule", {n: n for n in FOREGROUND_RULES}, type=str)  # type: ignore[misc]
-# the options every pruning command takes, declared once
-BetaOption = Annotated[float, typer.Option(help=HELP["beta"])]
-MethodOption = Annotated[Method, typer.Option(help=HELP["method"])]
-CoarseOption = Annotated[Coarse, typer.Option(help=HELP["coarse"])]
-ThresholdOption = Annotated[float | None, typer.Option(help=HELP["dce_threshold"])]
-MarginOption = Annotated[float | None, typer.Option(help=HELP["min_margin"])]
-TrimOption = Annotated[bool, typer.Option(help=HELP["trim"])]
-Choice = enum.Enum("Choice", {name: name for name in CHOICES}, type=str)  # type: ignore[misc]
-ChoiceOption = Annotated[Choice, typer.Option(help=HELP["choice"])]
-ForegroundOption = Annotated[Rule, typer.Option(help=HELP["foreground"])]
-LabelsOption = Annotated[bool, typer.Option(help=HELP["labels"])]
-FillHolesOption = Annotated[int, typer.Option(help=HELP["fill_holes"])]
-MinAreaOption = Annotated[int, typer.Option(help=HELP["min_area"])]
-CurveOption = Annotated[bool, typer.Option(help=HELP["curve"])]
-SequenceOption = Annotated[bool, typer.Option(help=HELP["sequence"])]
-PixelSizeOption = Annotated[float | None, typer.Option(help=HELP["pixel_size"])]
-LongestSideOption = Annotated[int | None, typer.Option(help=_geojson_only("longest_side"))]
-PixelsPerWidthOption = Annotated[float, typer.Option(help=_geojson_only("pixels_per_width"))]
-PixelBudgetOption = Annotated[int, typer.Option(help=_geojson_only("pixel_budget"))]
-RepairOption = Annotated[bool, typer.Option(help=_geojson_only("repair"))]
-CrsOption = Annotated[str | None, typer.Option(help=_geojson_only("crs"))]
-SimplifyOption = Annotated[float, typer.Option(help=HELP["simplify"])]
-CutEndsOption = Annotated[bool, typer.Option(help=HELP["cut_ends"])]
-OverlayScaleOption = Annotated[int | None, typer.Option(help=HELP["overlay_scale"])]
-Scope = enum.Enum("Scope", {name: name for name in SCOPES}, type=str)  # type: ignore[misc]
-ScopeOption = Annotated[Scope, typer.Option(help=HELP["scope"])]
-WindowOption = Annotated[int | None, typer.Option(help=HELP["window"])]
 
 
 @app.command("prune", cls=_CleanCommand)
@@ -375,134 +233,9 @@ def prune_command(
         raise typer.Exit(1)
 
 
-def _describe_file(path: str, options: PruneOptions, read: ReadOptions) -> Any:
-    from .matching import describe
-
-    try:
-        return describe(_prune(path, options, read, RasterOptions(), OutputOptions())[0])
-    except (SkelpruneError, OSError) as exc:
-        return f"{type(exc).__name__}: {exc}"
-
-
-def _volume_or_exit(spacing: str | None) -> VolumeOptions:
-    """``--spacing DZ,DY,DX`` as volume options (checked by their class)."""
-    if spacing is None:
-        return VolumeOptions()
-    try:
-        values = tuple(float(v) for v in spacing.split(","))
-    except ValueError:
-        raise _usage(f"--spacing is three numbers DZ,DY,DX, got {spacing!r}") from None
-    try:
-        return VolumeOptions(spacing=values)  # type: ignore[arg-type]
-    except SkelpruneError as exc:
-        raise _usage(str(exc)) from None
-
-
-def _options_or_exit(params: dict[str, Any], *groups: type) -> tuple[Any, ...]:
-    """One value of each options class, from the command's parameters of its fields'
-    names (a choice's Enum read as its value): the classes check them, once."""
-    values = {k: v.value if isinstance(v, enum.Enum) else v for k, v in params.items()}
-    try:
-        return tuple(
-            group(**{f.name: values[f.name] for f in fields(group) if f.name in values})
-            for group in groups
-        )
-    except SkelpruneError as exc:
-        raise _usage(str(exc)) from None
-
-
-@app.command("match")
-def match_command(
-    a: Annotated[Path, typer.Argument(help="PNG mask a.")],
-    b: Annotated[Path, typer.Argument(help="PNG mask b.")],
-    beta: BetaOption = PruneOptions.beta,
-    method: MethodOption = Method(PruneOptions.method),
-    coarse: CoarseOption = Coarse("dce"),
-    dce_threshold: ThresholdOption = None,
-    min_margin: MarginOption = None,
-    choice: ChoiceOption = Choice(PruneOptions.choice),
-    trim: TrimOption = PruneOptions.trim,
-    foreground: ForegroundOption = Rule(ReadOptions.foreground),
-) -> None:
-    """Match the skeletons of two shapes (path similarity) and print distance and
-    endpoint correspondence as JSON."""
-    from .matching import match
-
-    options, read = _options_or_exit(locals(), PruneOptions, ReadOptions)
-    try:
-        shapes = [
-            _prune(str(p), options, read, RasterOptions(), OutputOptions())[0] for p in (a, b)
-        ]
-        res = match(*shapes)
-    except (SkelpruneError, OSError) as exc:
-        typer.echo(f"error: {exc}", err=True)
-        raise typer.Exit(1) from None
-    json.dump(res.to_dict(), sys.stdout)
-    sys.stdout.write("\n")
-
-
-@app.command("retrieve")
-def retrieve_command(
-    folder: Annotated[list[Path], typer.Argument(help="Folders of PNG masks, or PNG files.")],
-    top: Annotated[int, typer.Option(min=1, help="Closest shapes listed per shape.")] = 10,
-    beta: BetaOption = PruneOptions.beta,
-    method: MethodOption = Method(PruneOptions.method),
-    coarse: CoarseOption = Coarse("dce"),
-    dce_threshold: ThresholdOption = None,
-    min_margin: MarginOption = None,
-    choice: ChoiceOption = Choice(PruneOptions.choice),
-    trim: TrimOption = PruneOptions.trim,
-    foreground: ForegroundOption = Rule(ReadOptions.foreground),
-    workers: Annotated[int, typer.Option(help="Worker processes (0: one a core).")] = 0,
-) -> None:
-    """Match every shape with every other and print, per shape, its closest ones as JSON
-    lines: {"file", "top": [{"file", "distance"}, ...]} (or {"file", "error"})."""
-    from concurrent.futures import ProcessPoolExecutor
-
-    import numpy as np
-    from tqdm import tqdm
-
-    from .matching import distance_matrix
-
-    options, read = _options_or_exit(locals(), PruneOptions, ReadOptions)
-    inputs = _expand(folder)
-    if not inputs:
-        typer.echo("error: no PNG file given", err=True)
-        raise typer.Exit(2)
-    n = workers or os.cpu_count() or 1
-    k = len(inputs)
-    with ProcessPoolExecutor(max_workers=n) as pool:
-        described = list(
-            tqdm(
-                pool.map(_describe_file, [str(p) for p in inputs], [options] * k, [read] * k),
-                total=k,
-                file=sys.stderr,
-                unit="shape",
-            )
-        )
-    good = [i for i, d in enumerate(described) if not isinstance(d, str)]
-    dist = distance_matrix([described[i] for i in good], workers=n)
-    np.fill_diagonal(dist, np.inf)
-    failed = 0
-    row = {i: r for r, i in enumerate(good)}
-    for i, path in enumerate(inputs):
-        if i not in row:
-            failed += 1
-            sys.stdout.write(json.dumps({"file": str(path), "error": described[i]}) + "\n")
-            continue
-        d = dist[row[i]]
-        order = np.argsort(d, kind="stable")[: min(top, len(good) - 1)]
-        sys.stdout.write(
-            json.dumps(
-                {
-                    "file": str(path),
-                    "top": [{"file": str(inputs[good[j]]), "distance": float(d[j])} for j in order],
-                }
-            )
-            + "\n"
-        )
-    if failed:
-        raise typer.Exit(1)
+# skelprune match A B, skelprune retrieve FOLDER: here, for --help lists the commands in
+# the order they are added
+register_match(app)
 
 
 @app.command("prune-many", cls=_CleanCommand)

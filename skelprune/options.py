@@ -9,16 +9,32 @@ objects from what they were sent, as titiler builds its dependencies once).
 - :class:`RasterOptions`: how a polygon becomes pixels (polygon input only);
 - :class:`PruneOptions`: how :func:`skelprune.prune` prunes;
 - :class:`OutputOptions`: what the document holds.
+
+The input's classes (read, raster, volume) and their limits are defined in
+:mod:`skelprune.options_input`, the checks in :mod:`skelprune.options_checks`; every
+option is imported from here.
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field, fields, replace
+from collections.abc import Mapping
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
-from .errors import InvalidOptionError, shown
+from .errors import InvalidOptionError
+from .options_checks import _check_fields, _choice, _flag, _integer, _number, _option
+from .options_input import (
+    ARRAY_FOREGROUND,
+    DEFAULT_LONGEST_SIDE,
+    DEFAULT_PIXEL_BUDGET,
+    DEFAULT_PIXELS_PER_WIDTH,
+    FOREGROUND_RULES,
+    LONGEST_SIDE_RANGE,
+    MAX_CLEAN_AREA,
+    RasterOptions,
+    ReadOptions,
+    VolumeOptions,
+)
 
 __all__ = [
     "ARRAY_FOREGROUND",
@@ -55,8 +71,6 @@ __all__ = [
 METHODS = ("bayesian", "dce")
 #: The largest β accepted: far past any useful weight, and far from a float overflow.
 MAX_BETA = 1_000_000_000
-#: The foreground rules (:mod:`skelprune.io.foreground`).
-FOREGROUND_RULES = ("auto", "nonzero", "zero")
 #: Spellings of ``coarse``: the name ``"none"`` is the full medial axis (``None``).
 COARSE = ("dce", "none")
 #: The margin below which the answer's end branches go unless told otherwise: chosen by
@@ -65,9 +79,6 @@ DEFAULT_MIN_MARGIN = 0.01
 #: The DCE stop of ``method="dce"`` on relevance (scale-free: lengths over the perimeter,
 #: angle in radians): docs/dce.md gives the evidence.
 DEFAULT_DCE_THRESHOLD = 0.01
-#: The foreground rule of an array given without one: an array is a mask, its non-zero
-#: pixels the shape (an image file's default is ``auto``, :class:`ReadOptions`).
-ARRAY_FOREGROUND = "nonzero"
 #: The tables of :meth:`PruneResult.summary` (docs/tables.md).
 TABLES = ("branch", "component")
 #: How the answer is chosen from the sequence (:mod:`skelprune.pruning.choice`).
@@ -82,155 +93,6 @@ LOCAL_WINDOW_WIDTHS = 64
 LOCAL_WINDOW_RANGE = (128, 8192)
 #: The halo grown around each window's core, as a fraction of the window.
 LOCAL_HALO_FRACTION = 0.25
-#: The largest area (pixels) ``fill_holes`` and ``min_area`` take: a 2¹⁶ × 2¹⁶ image.
-MAX_CLEAN_AREA = 1 << 32
-#: Pixels across the longer side of a polygon's bounding box at the least (a polygon's
-#: narrow parts may ask for more) ...
-DEFAULT_LONGEST_SIDE = 512
-#: ... and the range it may be set to: fewer pixels cannot hold a skeleton worth the
-#: name; for more, give a pixel_size.
-LONGEST_SIDE_RANGE = (8, 16384)
-#: Pixels across a polygon's narrowest part when the pixel size comes from the polygon
-#: (where the answer stops changing on generated rivers: docs/gis.md) ...
-DEFAULT_PIXELS_PER_WIDTH = 3.0
-#: ... within this many raster pixels (a 2048 × 2048 image).
-DEFAULT_PIXEL_BUDGET = 2048 * 2048
-
-
-def _option(
-    default: Any,
-    help: str,
-    check: Callable[[str, Any], Any],
-    choices: tuple[str, ...] | None = None,
-) -> Any:
-    return field(default=default, metadata={"help": help, "choices": choices, "check": check})
-
-
-def _with_schema(check: Callable[[str, Any], Any], **schema: Any) -> Callable[[str, Any], Any]:
-    """Attach the check's bounds as a JSON-schema fragment, for documents that show them."""
-    check.schema = schema  # type: ignore[attr-defined]
-    return check
-
-
-def _number(low: float, strict: bool, high: float | None = None) -> Callable[[str, Any], float]:
-    def check(name: str, value: Any) -> float:
-        try:
-            finite = (
-                not isinstance(value, bool)
-                and isinstance(value, int | float)
-                and math.isfinite(value)
-            )
-        except OverflowError:  # an integer too large for a float
-            finite = False
-        if (
-            not finite
-            or value < low
-            or (strict and value == low)
-            or (high is not None and value > high)
-        ):
-            upper = "" if high is None else f" and <= {high:g}"
-            raise InvalidOptionError(
-                f"{name} must be a finite number {'>' if strict else '>='} {low:g}{upper}, "
-                f"got {shown(value)}"
-            )
-        return float(value)
-
-    schema: dict[str, float] = {"exclusiveMinimum" if strict else "minimum": low}
-    if high is not None:
-        schema["maximum"] = high
-    return _with_schema(check, **schema)
-
-
-def _integer(low: int, high: int) -> Callable[[str, Any], int]:
-    def check(name: str, value: Any) -> int:
-        if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-            raise InvalidOptionError(
-                f"{name} must be an integer from {low} to {high}, got {shown(value)}"
-            )
-        return value
-
-    return _with_schema(check, minimum=low, maximum=high)
-
-
-def _choice(choices: tuple[str, ...]) -> Callable[[str, Any], str]:
-    def check(name: str, value: Any) -> str:
-        if value not in choices:
-            raise InvalidOptionError(
-                f"{name} must be one of {', '.join(choices)}; got {shown(value)}"
-            )
-        return value
-
-    return check
-
-
-def _flag(name: str, value: Any) -> bool:
-    if not isinstance(value, bool):
-        raise InvalidOptionError(f"{name} must be true or false, got {shown(value)}")
-    return value
-
-
-def _crs_name(name: str, value: Any) -> str:
-    if not isinstance(value, str):
-        raise InvalidOptionError(f"{name} must be a CRS name (e.g. EPSG:4326), got {shown(value)}")
-    from .io.crs import PLANAR, is_geographic
-
-    if value == PLANAR:
-        return value
-    is_geographic(value)  # an authority code pyproj knows, or the error says which not
-    return value
-
-
-def _check_fields(options: Any) -> None:
-    """Check (and normalise) every field of a frozen options object in place; a field
-    whose default is None may be left unset. Every refused field is named in the error
-    (:attr:`InvalidOptionError.errors`), not only the first."""
-    errors: list[tuple[str, str]] = []
-    for f in fields(options):
-        value = getattr(options, f.name)
-        if value is None and f.default is None:
-            continue
-        try:
-            object.__setattr__(options, f.name, f.metadata["check"](f.name, value))
-        except InvalidOptionError as exc:
-            errors.append((f.name, str(exc)))
-    if errors:
-        raise InvalidOptionError("; ".join(message for _, message in errors), errors)
-
-
-@dataclass(frozen=True)
-class ReadOptions:
-    """Which pixels of an image are the shape (image input only)."""
-
-    foreground: str = _option(
-        "auto",
-        "Which pixels are the shape: auto (the grey side not holding most of the "
-        "image border, split at mid-grey; the opaque part of a transparent image), nonzero "
-        "or zero.",
-        _choice(FOREGROUND_RULES),
-        FOREGROUND_RULES,
-    )
-    # label images and cleaning (docs/graph.md#label-images, #cleaning)
-    labels: bool = _option(
-        False,
-        "Label image: every distinct non-zero value of an integer image is its own shape, "
-        "pruned on its own even where two labels touch; each component carries its label.",
-        _flag,
-    )
-    fill_holes: int = _option(
-        0,
-        "Fill the shape's holes of fewer pixels than this, a whole number from 0 to "
-        f"{MAX_CLEAN_AREA} (default 0: every hole kept).",
-        _integer(0, MAX_CLEAN_AREA),
-    )
-    min_area: int = _option(
-        0,
-        "Drop the components of fewer pixels than this, a whole number from 0 to "
-        f"{MAX_CLEAN_AREA} (default 0: every component kept).",
-        _integer(0, MAX_CLEAN_AREA),
-    )
-
-    def __post_init__(self) -> None:
-        _check_fields(self)
 
 
 @dataclass(frozen=True)
@@ -393,127 +255,6 @@ class OutputOptions:
 
     def __post_init__(self) -> None:
         _check_fields(self)
-
-
-@dataclass(frozen=True)
-class RasterOptions:
-    """How a GeoJSON polygon becomes a raster (polygon input only).
-
-    Examples
-    --------
-    >>> RasterOptions(pixel_size=0.5)  # doctest: +NORMALIZE_WHITESPACE
-    RasterOptions(pixel_size=0.5, longest_side=None, pixels_per_width=3.0,
-                  pixel_budget=4194304, repair=True, crs=None)
-    >>> RasterOptions(pixel_size=0.5, longest_side=100)
-    Traceback (most recent call last):
-    ...
-    skelprune.errors.InvalidOptionError: give pixel_size or longest_side, not both
-    """
-
-    pixel_size: float | None = _option(
-        None,
-        "Raster pixel size in the polygon's units, > 0 (default: fitted to the polygon, "
-        "see pixels_per_width). For an image: the side of a pixel in your units, which "
-        "the tables (summary, CSV) measure in (default: pixels).",
-        _number(0, strict=True),
-    )
-    longest_side: int | None = _option(
-        None,
-        "Pixels across the longer side of the bounding box, a whole number from "
-        f"{LONGEST_SIDE_RANGE[0]} to {LONGEST_SIDE_RANGE[1]} (instead of pixel_size; "
-        "default: fitted to the polygon).",
-        _integer(*LONGEST_SIDE_RANGE),
-    )
-    pixels_per_width: float = _option(
-        DEFAULT_PIXELS_PER_WIDTH,
-        "When neither pixel_size nor longest_side is given: pixels across the polygon's "
-        f"narrowest part, >= 1 (default {DEFAULT_PIXELS_PER_WIDTH:g}); the raster is never "
-        f"coarser than {DEFAULT_LONGEST_SIDE} px along the longer side and holds at most "
-        "pixel_budget pixels.",
-        _number(1, strict=False),
-    )
-    pixel_budget: int = _option(
-        DEFAULT_PIXEL_BUDGET,
-        "Most pixels of a raster fitted to the polygon, a whole number from 4096 to "
-        f"{1 << 28} (default {DEFAULT_PIXEL_BUDGET}).",
-        _integer(4096, 1 << 28),
-    )
-    repair: bool = _option(
-        True,
-        "Repair self-intersections with shapely's make_valid (true) or refuse them.",
-        _flag,
-    )
-    crs: str | None = _option(
-        None,
-        "The coordinates' CRS, an authority code pyproj knows or its URN (EPSG:4326, "
-        "OGC:CRS84 for RFC 7946 GeoJSON, EPSG:32633, urn:ogc:def:crs:EPSG::32633), or "
-        "planar: coordinates used as they are. Default: the GeoJSON's crs member; "
-        "without one, longitude/latitude (OGC:CRS84, with a warning) if every coordinate "
-        "lies within its bounds and the polygon is 1e-6 to 1 degree across, else planar. "
-        "Longitude/latitude is pruned in a local equidistant projection: "
-        "pixel_size, lengths and radii in metres, lines back in longitude/latitude. Needs "
-        "the geo extra (pyproj).",
-        _crs_name,
-    )
-
-    def __post_init__(self) -> None:
-        _check_fields(self)
-        if self.pixel_size is not None and self.longest_side is not None:
-            raise InvalidOptionError("give pixel_size or longest_side, not both")
-
-
-def _spacing(name: str, value: Any) -> tuple[float, float, float]:
-    try:
-        if isinstance(value, str):  # "dz,dy,dx", as a query or the CLI writes it
-            values: tuple[Any, ...] = tuple(float(v) for v in value.split(","))
-        else:
-            values = tuple(value)
-    except (TypeError, ValueError):
-        values = ()
-    if len(values) != 3 or not all(
-        not isinstance(v, bool) and isinstance(v, int | float) and math.isfinite(v) and v > 0
-        for v in values
-    ):
-        raise InvalidOptionError(
-            f"{name} must be three finite numbers > 0 (dz, dy, dx), got {shown(value)}"
-        )
-    return (float(values[0]), float(values[1]), float(values[2]))
-
-
-_with_schema(
-    _spacing,
-    type="array",
-    items={"type": "number", "exclusiveMinimum": 0},
-    minItems=3,
-    maxItems=3,
-)
-
-
-@dataclass(frozen=True)
-class VolumeOptions:
-    """How a 3-D volume's voxels measure (volume input only: a 3-D array, a ``.npy`` or a
-    TIFF stack).
-
-    Examples
-    --------
-    >>> VolumeOptions(spacing=(3, 1, 1)).spacing, VolumeOptions(spacing="2,1,1").spacing
-    ((3.0, 1.0, 1.0), (2.0, 1.0, 1.0))
-    >>> VolumeOptions(spacing=(1, 0, 1))  # doctest: +ELLIPSIS
-    Traceback (most recent call last):
-    ...
-    skelprune.errors.InvalidOptionError: spacing must be three finite numbers > 0 ...
-    """
-
-    spacing: tuple[float, float, float] = _option(
-        (1.0, 1.0, 1.0),
-        "Volume input: the physical size of a voxel along z, y and x (the array's first, "
-        "second and last axis), three numbers > 0 (default 1, 1, 1). Distances, radii, "
-        "lengths and widths are in its units; volumes are counted in voxels.",
-        _spacing,
-    )
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "spacing", _spacing("spacing", self.spacing))
 
 
 GROUPS: tuple[type, ...] = (PruneOptions, OutputOptions, ReadOptions, RasterOptions)

@@ -9,6 +9,10 @@ two cannot drift. A key that may be absent is ``NotRequired`` (annotations are
 evaluated, so that ``__required_keys__`` says so at run time too). Each type's name, less a
 trailing ``Doc``, is its name in the OpenAPI schema.
 
+The document's types are defined in :mod:`.schema_document`, the GeoJSON's in
+:mod:`.schema_geojson`; every one is importable from here, with :func:`problems`, the
+check of a value against them.
+
 Examples
 --------
 >>> from typing import get_type_hints
@@ -21,19 +25,59 @@ Examples
 import functools
 import math
 import types
-from dataclasses import dataclass
 from typing import (
     Annotated,
     Any,
     Literal,
     NotRequired,
-    TypedDict,
     Union,
     get_args,
     get_origin,
     get_type_hints,
     is_typeddict,
 )
+
+# every type of the document and the GeoJSON, importable from here
+from .schema_document import DCE_THRESHOLD_APPLIED as DCE_THRESHOLD_APPLIED
+from .schema_document import MIN_MARGIN_APPLIED as MIN_MARGIN_APPLIED
+from .schema_document import SCOPE_APPLIED as SCOPE_APPLIED
+from .schema_document import WINDOW_APPLIED as WINDOW_APPLIED
+from .schema_document import BranchDoc as BranchDoc
+from .schema_document import Choice as Choice
+from .schema_document import Coarse as Coarse
+from .schema_document import ComponentDoc as ComponentDoc
+from .schema_document import CurveStepDoc as CurveStepDoc
+from .schema_document import Doc as Doc
+from .schema_document import ForegroundTakenDoc as ForegroundTakenDoc
+from .schema_document import GeoreferenceDoc as GeoreferenceDoc
+from .schema_document import Len as Len
+from .schema_document import MedialAxisSummaryDoc as MedialAxisSummaryDoc
+from .schema_document import Method as Method
+from .schema_document import NodeDoc as NodeDoc
+from .schema_document import NodeKind as NodeKind
+from .schema_document import Point2 as Point2
+from .schema_document import Point3 as Point3
+from .schema_document import PruneDocument as PruneDocument
+from .schema_document import RasterInfoDoc as RasterInfoDoc
+from .schema_document import RasterWarningItemDoc as RasterWarningItemDoc
+from .schema_document import Scope as Scope
+from .schema_document import SequenceBranchDoc as SequenceBranchDoc
+from .schema_document import SequenceDoc as SequenceDoc
+from .schema_document import SequenceFrameDoc as SequenceFrameDoc
+from .schema_document import SequenceNodeDoc as SequenceNodeDoc
+from .schema_document import SkeletonDoc as SkeletonDoc
+from .schema_document import VersionsDoc as VersionsDoc
+from .schema_geojson import BranchFeatureDoc as BranchFeatureDoc
+from .schema_geojson import BranchPropertiesDoc as BranchPropertiesDoc
+from .schema_geojson import CollectionPropertiesDoc as CollectionPropertiesDoc
+from .schema_geojson import ComponentSummaryDoc as ComponentSummaryDoc
+from .schema_geojson import CrsDoc as CrsDoc
+from .schema_geojson import CrsNamePropertiesDoc as CrsNamePropertiesDoc
+from .schema_geojson import LineStringDoc as LineStringDoc
+from .schema_geojson import NodeFeatureDoc as NodeFeatureDoc
+from .schema_geojson import NodePropertiesDoc as NodePropertiesDoc
+from .schema_geojson import PointGeometryDoc as PointGeometryDoc
+from .schema_geojson import SkeletonGeoJSON as SkeletonGeoJSON
 
 __all__ = [
     "BranchDoc",
@@ -48,473 +92,6 @@ __all__ = [
 ]
 
 
-@dataclass(frozen=True)
-class Doc:
-    """A field's (or a list item's) description."""
-
-    text: str
-
-
-@dataclass(frozen=True)
-class Len:
-    """Bounds of a list's length (None: no bound)."""
-
-    min: int | None = None
-    max: int | None = None
-
-
-Point3 = Annotated[list[float], Len(3, 3), Doc("[x, y, radius]")]
-Point2 = Annotated[list[float], Len(2, 2), Doc("[x, y]")]
-NodeKind = Literal["endpoint", "junction", "loop"]
-Method = Literal["bayesian", "dce"]
-Coarse = Literal["dce"] | None
-Choice = Literal["argmin", "noise-floor"]
-Scope = Literal["global", "local"]
-
-
-# ------------------------------------------------------------------------ the document
-class NodeDoc(TypedDict):
-    id: int
-    x: float
-    y: float
-    radius: float
-    kind: NodeKind
-    points: Annotated[list[Point3], Doc("Pixels of a junction cluster; empty otherwise.")]
-
-
-class BranchDoc(TypedDict):
-    id: int
-    source: int
-    target: int
-    length: Annotated[
-        float,
-        Doc(
-            "Step length of the path (1 axial, √2 diagonal), "
-            "with the step into each junction cluster and a loop's closing step."
-        ),
-    ]
-    points: Annotated[
-        list[Point3],
-        Doc(
-            "The path, in order from the source node to the "
-            "target node; consecutive points are 8-neighbours."
-        ),
-    ]
-    off_path: Annotated[
-        list[Point3],
-        Doc(
-            "Skeleton pixels of the branch beside its path "
-            "(kept for reconstruction), sorted by (x, y)."
-        ),
-    ]
-    margin: Annotated[
-        float | None,
-        Doc(
-            "How clearly the trade-off keeps the branch: "
-            "λ(Ŝ − E) − λ(Ŝ) for an end branch E, λ at the step that "
-            "removes it minus λ(Ŝ) for an inner one; null if never "
-            "removed, for method=dce and degenerate shapes."
-        ),
-    ]
-    removed_at: Annotated[
-        int | None,
-        Doc("Step of the pruning sequence that removes the branch (null: never)."),
-    ]
-
-
-class SkeletonDoc(TypedDict):
-    length: float
-    nodes: list[NodeDoc]
-    branches: list[BranchDoc]
-    endpoints: list[int]
-
-
-class MedialAxisSummaryDoc(TypedDict):
-    rer: float
-    length: float
-    endpoints: int
-    branches: int
-
-
-class CurveStepDoc(TypedDict):
-    step: int
-    length: float
-    ar: float
-    lr: float
-    objective: float
-
-
-class SequenceNodeDoc(NodeDoc):
-    """A node of the sequence's starting skeleton S(0), and what the sequence does to it."""
-
-    removed_at: NotRequired[
-        Annotated[
-            int | None,
-            Doc("Junctions only: step whose removal takes the cluster's pixels (null: never)."),
-        ]
-    ]
-    dissolved_at: NotRequired[
-        Annotated[
-            int | None,
-            Doc("Junctions only: step at which it stops being a junction (two branch ends left)."),
-        ]
-    ]
-    dissolved_into: NotRequired[
-        Annotated[int | None, Doc("Junctions only: the sequence branch its pixels then belong to.")]
-    ]
-
-
-class SequenceBranchDoc(TypedDict):
-    """A branch of S(0) and what the sequence does to it."""
-
-    id: int
-    source: int
-    target: int
-    length: float
-    points: Annotated[list[Point3], Doc("Its path in S(0), from source to target.")]
-    off_path: list[Point3]
-    removed_at: Annotated[
-        int | None,
-        Doc(
-            "Step whose removal takes its pixels "
-            "(its own, or that of the branch it became part of); "
-            "null: never."
-        ),
-    ]
-    absorbed_at: Annotated[
-        int | None,
-        Doc(
-            "Step at which it became part of another "
-            "branch (a junction dissolved between them); null: never."
-        ),
-    ]
-    absorbed_into: Annotated[int | None, Doc("The branch it became part of.")]
-
-
-class SequenceFrameDoc(TypedDict):
-    """Pixel centre (col, row) -> (x, y) of this document: x = x0 + col·pixel_size,
-    y = y0 ∓ row·pixel_size (minus when flip_y)."""
-
-    x0: float
-    y0: float
-    pixel_size: float
-    flip_y: bool
-
-
-class SequenceDoc(TypedDict):
-    """The pruning sequence S(0) … S(n), one entry per step of ``curve``: S(k) is S(0)
-    without the pixels of every branch and junction whose ``removed_at`` ≤ k."""
-
-    start: Annotated[
-        Literal["medial_axis", "coarse"],
-        Doc("What S(0) is: the medial axis, or the coarse skeleton (coarse=dce)."),
-    ]
-    nodes: list[SequenceNodeDoc]
-    branches: list[SequenceBranchDoc]
-    uncovered: Annotated[
-        list[Point2], Doc("Pixels of the shape S(0) does not reconstruct (the error of step 0).")
-    ]
-    coarse_removed: Annotated[
-        list[Point3],
-        Doc(
-            "Medial-axis pixels the coarse stage "
-            "removed before step 0 (empty if S(0) is the "
-            "medial axis)."
-        ),
-    ]
-    frame: SequenceFrameDoc
-
-
-class ComponentDoc(TypedDict):
-    label: NotRequired[
-        Annotated[int, Doc("The component's label (label images only, labels=true).")]
-    ]
-    area: Annotated[int, Doc("Λ(D) in pixels of the raster.")]
-    alpha: float | None
-    rer: float
-    ss: float
-    objective: float
-    medial_axis: MedialAxisSummaryDoc
-    skeleton: SkeletonDoc
-    curve: NotRequired[Annotated[list[CurveStepDoc], Doc("Absent when curve=false.")]]
-    chosen_step: int
-    sequence: NotRequired[Annotated[SequenceDoc, Doc("Only with sequence=true.")]]
-
-
-class ForegroundTakenDoc(TypedDict):
-    """What was taken as the shape."""
-
-    rule: Annotated[
-        Literal["auto", "nonzero", "zero"] | None,
-        Doc("The rule asked for; null for polygon input."),
-    ]
-    shape: Annotated[
-        Literal["nonzero", "zero", "light", "dark", "opaque", "polygon", "labels"],
-        Doc(
-            "Pixels taken: non-zero / zero ones, grey values above (`light`) or at "
-            "or below (`dark`) `threshold`, alpha above `threshold` (`opaque`), the polygon, "
-            "or every non-zero value its own shape (`labels`, with labels=true)."
-        ),
-    ]
-    threshold: Annotated[float | None, Doc("The mid-range split, for light/dark/opaque.")]
-    border: Annotated[
-        float | None, Doc("Share of the image border on the background side (auto, grey values).")
-    ]
-    fill_holes: NotRequired[
-        Annotated[int, Doc("Holes of fewer pixels than this were filled (only when given).")]
-    ]
-    min_area: NotRequired[
-        Annotated[int, Doc("Components of fewer pixels than this were dropped (only when given).")]
-    ]
-
-
-class VersionsDoc(TypedDict):
-    """What made an answer."""
-
-    library: Annotated[str, Doc("The skelprune package version.")]
-    algorithm: Annotated[
-        str,
-        Doc(
-            "The results' version: it changes whenever the same "
-            "input and options may give a different skeleton or numbers."
-        ),
-    ]
-
-
-#: The pruning options the document records as applied: the method's default filled in,
-#: null where the method does not use the option.
-SCOPE_APPLIED = (
-    "Where the trade-off was taken: local (over windows, stitched); absent for the "
-    "paper's global scope."
-)
-WINDOW_APPLIED = "scope=local: the window's side in pixels, as applied (its halo a quarter of it)."
-MIN_MARGIN_APPLIED = (
-    "As applied: the margin below which the answer's end branches went "
-    "(method=bayesian; null for method=dce)."
-)
-DCE_THRESHOLD_APPLIED = "As applied: the DCE stop threshold (method=dce; null for method=bayesian)."
-
-
-class RasterInfoDoc(TypedDict):
-    """How a polygon was rasterised (polygon input only)."""
-
-    pixel_size: Annotated[float, Doc("Side of a pixel, in the polygon's units.")]
-    width: int
-    height: int
-    fitted: Annotated[
-        bool,
-        Doc(
-            "True when the pixel size was fitted to the polygon (neither "
-            "pixel_size nor longest_side given)."
-        ),
-    ]
-    parts: Annotated[int, Doc("Parts of the (repaired) polygon.")]
-    longest_side: Annotated[int | None, Doc("The option as given (null: not given).")]
-    pixels_per_width: Annotated[float, Doc("The option (used when fitted).")]
-    pixel_budget: Annotated[int, Doc("The option (used when fitted).")]
-    repair: Annotated[bool, Doc("Whether invalid geometry was to be repaired.")]
-    crs: Annotated[str | None, Doc("The coordinates' CRS (null: none given, planar).")]
-    projection: NotRequired[
-        Annotated[
-            str,
-            Doc(
-                "Geographic coordinates: the local azimuthal equidistant projection (PROJ "
-                "string) the polygon was pruned in; the document's coordinates, lengths and "
-                "radii are in its metres, the GeoJSON's lines back in the input's CRS."
-            ),
-        ]
-    ]
-
-
-class RasterWarningItemDoc(TypedDict):
-    """A part of the polygon that the raster does not hold as it is."""
-
-    kind: Literal["vanished", "split", "merged", "holes", "skipped", "crs"]
-    message: str
-    part: Annotated[int | None, Doc("The polygon part meant, if one is.")]
-    pixel_size: Annotated[
-        float | None, Doc("A pixel size that holds it (null: none found within the limits).")
-    ]
-
-
-class GeoreferenceDoc(TypedDict):
-    """Where a GeoTIFF mask's pixels lie on the map."""
-
-    crs: Annotated[str | None, Doc("The raster's CRS (EPSG:…; null: none recorded).")]
-    transform: Annotated[
-        list[float],
-        Doc(
-            "The affine map from a pixel's corner (col, row) to map coordinates, in GDAL's "
-            "order [a, b, c, d, e, f]: x = a·col + b·row + c, y = d·col + e·row + f. The "
-            "document's coordinates stay the raster's pixels; the GeoJSON answer's are "
-            "the map's."
-        ),
-    ]
-
-
-class PruneDocument(TypedDict):
-    """The output document."""
-
-    version: VersionsDoc
-    width: int
-    height: int
-    method: Method
-    beta: float
-    coarse: Coarse
-    choice: Annotated[Choice, Doc("How the answer was chosen from the pruning sequence.")]
-    trim: Annotated[bool, Doc("Whether the answer's end branches were cut back at their tips.")]
-    min_margin: Annotated[float | None, Doc(MIN_MARGIN_APPLIED)]
-    dce_threshold: Annotated[float | None, Doc(DCE_THRESHOLD_APPLIED)]
-    scope: NotRequired[Annotated[Scope, Doc(SCOPE_APPLIED)]]
-    window: NotRequired[Annotated[int, Doc(WINDOW_APPLIED)]]
-    foreground: ForegroundTakenDoc
-    components: list[ComponentDoc]
-    raster: NotRequired[Annotated[RasterInfoDoc, Doc("Polygon input only.")]]
-    georeference: NotRequired[Annotated[GeoreferenceDoc, Doc("GeoTIFF input only.")]]
-    warnings: NotRequired[
-        Annotated[
-            list[RasterWarningItemDoc],
-            Doc(
-                "Polygon input only: parts the raster does not hold as they are "
-                "(vanished, split, merged with another, holes lost or added); empty when it "
-                "holds them all."
-            ),
-        ]
-    ]
-    overlay_png: NotRequired[Annotated[str, Doc("Base64 PNG; only with overlay=true.")]]
-    hint: NotRequired[
-        Annotated[
-            str,
-            Doc(
-                "What the reader noticed and an option would change: an image read by the "
-                "foreground rule that looks like a label image (then labels=true)."
-            ),
-        ]
-    ]
-
-
-# ------------------------------------------------------------------------- the GeoJSON
-class LineStringDoc(TypedDict):
-    type: Literal["LineString"]
-    coordinates: Annotated[list[Annotated[list[float], Len(2, 2)]], Len(2)]
-
-
-class PointGeometryDoc(TypedDict):
-    type: Literal["Point"]
-    coordinates: Annotated[list[float], Len(2, 2)]
-
-
-class BranchPropertiesDoc(TypedDict):
-    component: int
-    kind: Literal["branch"]
-    id: int
-    source: int
-    target: int
-    length: float
-    radii: list[float]
-    margin: float | None
-    removed_at: int | None
-    rer: Annotated[float, Doc("RER of the feature's component.")]
-    ss: Annotated[float, Doc("SS of the feature's component.")]
-    # the branch table's numbers (docs/tables.md), in the result's unit
-    label: NotRequired[Annotated[int, Doc("The component's label (label images only).")]]
-    branch_kind: Annotated[
-        Literal["end-end", "end-junction", "junction-junction", "loop"],
-        Doc("The branch's kind by its nodes (the table's `kind`)."),
-    ]
-    chord: float
-    tortuosity: Annotated[float | None, Doc("Smoothed length / chord; null for a loop.")]
-    width_mean: float
-    width_median: float
-    width_min: float
-    width_max: float
-    width_std: float
-    angle_source: Annotated[float | None, Doc("Degrees, leaving the source node.")]
-    angle_target: Annotated[float | None, Doc("Degrees, leaving the target node.")]
-    junction_angle_source: float | None
-    junction_angle_target: float | None
-    strahler: Annotated[int | None, Doc("Horton–Strahler order (a tree's branches only).")]
-
-
-class NodePropertiesDoc(TypedDict):
-    component: int
-    kind: NodeKind
-    id: int
-    radius: float
-    rer: Annotated[float, Doc("RER of the feature's component.")]
-    ss: Annotated[float, Doc("SS of the feature's component.")]
-    label: NotRequired[Annotated[int, Doc("The component's label (label images only).")]]
-
-
-class BranchFeatureDoc(TypedDict):
-    type: Literal["Feature"]
-    geometry: LineStringDoc
-    properties: BranchPropertiesDoc
-
-
-class NodeFeatureDoc(TypedDict):
-    type: Literal["Feature"]
-    geometry: PointGeometryDoc
-    properties: NodePropertiesDoc
-
-
-class ComponentSummaryDoc(TypedDict):
-    component: int
-    area: int
-    alpha: float | None
-    rer: float
-    ss: float
-    objective: float
-
-
-class CollectionPropertiesDoc(TypedDict):
-    """The document's options and numbers (a foreign member of the collection)."""
-
-    width: int
-    height: int
-    method: Method
-    beta: float
-    coarse: Coarse
-    choice: Choice
-    trim: bool
-    min_margin: Annotated[float | None, Doc(MIN_MARGIN_APPLIED)]
-    dce_threshold: Annotated[float | None, Doc(DCE_THRESHOLD_APPLIED)]
-    scope: NotRequired[Annotated[Scope, Doc(SCOPE_APPLIED)]]
-    window: NotRequired[Annotated[int, Doc(WINDOW_APPLIED)]]
-    simplify: Annotated[float, Doc("How far each line was simplified, in pixels.")]
-    cut_ends: Annotated[bool, Doc("Whether cut reaches end straight across.")]
-    components: list[ComponentSummaryDoc]
-    warnings: NotRequired[
-        Annotated[list[RasterWarningItemDoc], Doc("Polygon input only, as in the JSON document.")]
-    ]
-    crs: NotRequired[
-        Annotated[str, Doc("The coordinates' CRS, where the input named one (else absent).")]
-    ]
-
-
-class CrsNamePropertiesDoc(TypedDict):
-    name: str
-
-
-class CrsDoc(TypedDict):
-    """The 2008 GeoJSON ``crs`` member, which GDAL and geopandas read."""
-
-    type: Literal["name"]
-    properties: CrsNamePropertiesDoc
-
-
-class SkeletonGeoJSON(TypedDict):
-    """The skeleton as GeoJSON: branches as LineStrings, nodes as Points."""
-
-    type: Literal["FeatureCollection"]
-    properties: CollectionPropertiesDoc
-    features: list[BranchFeatureDoc | NodeFeatureDoc]
-    crs: NotRequired[
-        Annotated[CrsDoc, Doc("The coordinates' CRS, where the input named one (else absent).")]
-    ]
-
-
-# ------------------------------------------------------------------------- the check
 @functools.cache
 def _hints(td: Any) -> dict[str, Any]:
     return get_type_hints(td, include_extras=True)

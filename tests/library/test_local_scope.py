@@ -146,21 +146,21 @@ def test_progress_is_reported() -> None:
 def test_cli_draws_a_bar_on_a_terminal(monkeypatch: pytest.MonkeyPatch) -> None:
     import io
 
-    from skelprune import cli
+    from skelprune import cli_files
 
     class Terminal(io.StringIO):
         def isatty(self) -> bool:
             return True
 
     err = Terminal()
-    monkeypatch.setattr(cli.sys, "stderr", err)
-    monkeypatch.setattr(cli, "PROGRESS_AFTER", 0.0)
-    show = cli._progress("roads.png")
+    monkeypatch.setattr(cli_files.sys, "stderr", err)
+    monkeypatch.setattr(cli_files, "PROGRESS_AFTER", 0.0)
+    show = cli_files._progress("roads.png")
     for k in range(1, 5):
         show(k, 4)
     assert err.getvalue().endswith("roads.png: [" + "#" * 30 + "] 4/4\n")
-    monkeypatch.setattr(cli.sys, "stderr", io.StringIO())  # not a terminal: no bar
-    assert cli._progress("roads.png") is None
+    monkeypatch.setattr(cli_files.sys, "stderr", io.StringIO())  # not a terminal: no bar
+    assert cli_files._progress("roads.png") is None
 
 
 def test_overlay_marks_fit_a_large_network() -> None:

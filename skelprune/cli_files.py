@@ -1,0 +1,102 @@
+"""What the commands do with the files they are given: a folder's files found, one file
+pruned by the library's pipeline (its result and document, with a progress bar on a
+terminal), or, in a worker process, its JSON line with the result or the error.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any
+
+from .errors import SkelpruneError
+from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions, VolumeOptions
+
+#: What a folder is searched for (any case).
+FOLDER_SUFFIXES = (".png", ".geojson", ".tif", ".tiff", ".npy")
+
+
+def _prune(
+    path: str,
+    options: PruneOptions,
+    read: ReadOptions,
+    raster: RasterOptions,
+    output: OutputOptions,
+    geojson: bool = False,
+    volume: VolumeOptions | None = None,
+) -> tuple[Any, dict[str, Any]]:
+    """The result and its document (a polygon's in the polygon's own coordinates), or its
+    GeoJSON: the library's one pipeline (``.geojson``/``.json`` files are polygons,
+    ``.npy`` files volumes, pruned with ``volume``'s spacing)."""
+    from .api import prune
+    from .volume import is_volume
+
+    if is_volume(path):
+        res: Any = prune(Path(path), options, output=output, volume=volume or VolumeOptions())
+    else:
+        res = prune(
+            Path(path), options, read=read, raster=raster, output=output, progress=_progress(path)
+        )
+    return res, res.to_geojson() if geojson else res.to_dict()
+
+
+#: A run shows its progress on a terminal once it has taken this long (s): a large image.
+PROGRESS_AFTER = 1.0
+
+
+def _progress(path: str) -> Any:
+    """``progress(done, total)`` drawing a bar on stderr when it is a terminal and the
+    run has taken over :data:`PROGRESS_AFTER` seconds (None otherwise: nothing shown)."""
+    if not sys.stderr.isatty():
+        return None
+    import time
+
+    start = time.monotonic()
+    shown = [False]
+
+    def show(done: int, total: int) -> None:
+        if time.monotonic() - start < PROGRESS_AFTER and not shown[0]:
+            return
+        shown[0] = True
+        filled = 30 * done // max(total, 1)
+        sys.stderr.write(
+            f"\r{Path(path).name}: [{'#' * filled}{'.' * (30 - filled)}] {done}/{total}"
+        )
+        if done == total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+
+    return show
+
+
+def _prune_file(
+    path: str,
+    options: PruneOptions,
+    read: ReadOptions,
+    raster: RasterOptions,
+    output: OutputOptions,
+    geojson: bool = False,
+    volume: VolumeOptions | None = None,
+) -> dict[str, Any]:
+    try:
+        res, doc = _prune(path, options, read, raster, output, geojson, volume)
+        line = {"file": path, "result": doc}
+        if res.warnings:
+            line["warnings"] = [w["message"] for w in res.warnings]
+        return line
+    except (SkelpruneError, OSError) as exc:
+        return {"file": path, "error": f"{type(exc).__name__}: {exc}"}
+
+
+def _expand(paths: list[Path]) -> list[Path]:
+    files: list[Path] = []
+    for p in paths:
+        if p.is_dir():  # shape.PNG counts as much as shape.png
+            files.extend(
+                sorted(
+                    f for f in p.iterdir() if f.suffix.lower() in FOLDER_SUFFIXES and f.is_file()
+                )
+            )
+        else:
+            files.append(p)
+    return files

@@ -1,12 +1,13 @@
 """Every user option, defined once: for the library, the command line and the service.
 
-Each option is a field of one of three frozen dataclasses, with its default, its help
+Each option is a field of one of five frozen dataclasses, with its default, its help
 text and, for a choice, its spellings (``field(metadata=...)``). Constructing one checks
 it: that check is the only one, whoever asks (the CLI and the service build these
 objects from what they were sent, as titiler builds its dependencies once).
 
 - :class:`ReadOptions`: which pixels of an image are the shape (image input only);
 - :class:`RasterOptions`: how a polygon becomes pixels (polygon input only);
+- :class:`VolumeOptions`: the voxel spacing of a volume (volume input only);
 - :class:`PruneOptions`: how :func:`skelprune.prune` prunes;
 - :class:`OutputOptions`: what the document holds.
 

@@ -28,9 +28,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 
 from ..grid.graph import BranchGraph
-from ..grid.medial_axis import squared_distance
+from ..grid.medial_axis import _squared_edt
 from ._rowcover import cover_counts, uncover
 
 __all__ = ["MIN_LIMB_AREA", "RIM", "LimbGuard"]
@@ -92,24 +93,9 @@ class LimbGuard:
             h, w = self.mask.shape
             self.counts = cover_counts(h, w, g.rows[alive], g.cols[alive], self.r2[alive])
         pts = self._points(b)
-        rows, cols, r2 = self.graph.rows[pts], self.graph.cols[pts], self.r2[pts]
-        deep = r2 > RIM
-        if deep.sum() < 4:  # 2·r > 2·√2: at least 4 points are needed
-            return False
-        # The box of the branch's disks and one pixel more: what it alone covers lies
-        # inside, with a pixel it does not cover all around (for the distances).
-        rad = np.ceil(np.sqrt(r2)).astype(np.int64)
-        h, w = self.mask.shape
-        top, left = max(int((rows - rad).min()), 0), max(int((cols - rad).min()), 0)
-        bottom = min(int((rows + rad).max()) + 1, h)
-        right = min(int((cols + rad).max()) + 1, w)
-        before = self.counts[top:bottom, left:right]
-        after = before.copy()
-        uncover(after, rows - top, cols - left, r2)
-        only = (after == 0) & (before > 0)
-        d2 = squared_distance(only)
-        whole = d2[rows[deep] - top, cols[deep] - left] >= r2[deep]
-        found = bool(whole.any() and whole.sum() >= 2.0 * math.sqrt(float(r2[deep][whole].max())))
+        g = self.graph
+        whole, widest = _whole_disks(self.counts, g.rows[pts], g.cols[pts], self.r2[pts])
+        found = whole > 0 and whole >= 2.0 * math.sqrt(float(widest))
         self.limb[b] = found
         return found
 
@@ -123,3 +109,41 @@ class LimbGuard:
     def merged(self, kept: int, absorbed: int) -> None:
         """``absorbed`` became part of ``kept``: a limb in it keeps ``kept`` a limb."""
         self.limb[kept] |= self.limb[absorbed]
+
+
+@njit(cache=True)
+def _whole_disks(counts, rows, cols, r2):
+    """How many of a branch's points deeper than the rim have their whole disk covered
+    by the branch alone, and the largest squared radius among them (0, 0 when fewer than
+    4 points are deeper than the rim: ``2·r > 2·√2`` needs at least 4).
+
+    ``counts``: the disk counts of the current skeleton, the branch's disks included.
+    """
+    deep = 0
+    for k in range(r2.size):
+        if r2[k] > RIM:
+            deep += 1
+    if deep < 4:
+        return 0, 0
+    # The box of the branch's disks and one pixel more: what it alone covers lies
+    # inside, with a pixel it does not cover all around (for the distances).
+    h, w = counts.shape
+    top, left, bottom, right = h, w, 0, 0
+    for k in range(rows.size):
+        rad = math.ceil(math.sqrt(r2[k]))
+        top = min(top, rows[k] - rad)
+        left = min(left, cols[k] - rad)
+        bottom = max(bottom, rows[k] + rad + 1)
+        right = max(right, cols[k] + rad + 1)
+    top, left = max(top, 0), max(left, 0)
+    bottom, right = min(bottom, h), min(right, w)
+    before = counts[top:bottom, left:right]
+    after = before.copy()
+    uncover(after, rows - top, cols - left, r2)
+    d2 = _squared_edt((after == 0) & (before > 0))
+    whole = widest = 0
+    for k in range(rows.size):
+        if r2[k] > RIM and d2[rows[k] - top, cols[k] - left] >= r2[k]:
+            whole += 1
+            widest = max(widest, r2[k])
+    return whole, widest

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, TypeVar
 
 import numpy as np
@@ -164,7 +164,9 @@ def _volume_answer(item: Item, job: Job) -> dict[str, Any]:
     before it is read), its estimate within the budget, then pruned."""
     from ..volume import prune_volume, read_volume, refuse_image_options
 
-    refuse_image_options(job.read, job.output)
+    # a label-image run's volumes: each label is a shape of its own already
+    read = None if job.read is None else replace(job.read, labels=False)
+    refuse_image_options(read, job.output)
     volume = read_volume(item.source, max_voxels=job.budget.max_pixels)
     check_budget(volume_estimate(volume), job.memory, job.budget.seconds, VOLUME_BASIS)
     res = prune_volume(volume, job.options, job.volume or VolumeOptions(), job.output)

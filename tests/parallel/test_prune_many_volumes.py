@@ -184,5 +184,7 @@ def test_image_options_fail_a_volume_alone_and_label_runs_keep_volumes_whole(
     }
     labelled = expand(files["labels"], labels=True)
     assert [(it.name, it.source) for it in labelled] == [("labels", str(files["labels"]))]
+    (done,) = run_batch(list(enumerate(labelled)), Job(read=ReadOptions(labels=True)))
+    assert done.payload == document_bytes(skelprune.prune(files["labels"]).to_dict())
     with pytest.raises(TypeError, match="not both"):
         prune_many(files["fork"], volume=VolumeOptions(), spacing=SPACING)

@@ -14,7 +14,7 @@ import numpy as np
 from ..budget import VOLUME_BASIS, check_budget, estimate, out_of_memory, volume_estimate
 from ..errors import JobTooLargeError, SkelpruneError, problem_kind
 from ..options import OutputOptions, PruneOptions, RasterOptions, ReadOptions, VolumeOptions
-from ..volume import is_volume
+from ..volume import is_volume, prune_volume, read_volume, refuse_image_options
 from .items import Feature, Item, LabelObject
 
 __all__ = [
@@ -162,8 +162,6 @@ def _is_volume(item: Item, job: Job) -> bool:
 def _volume_answer(item: Item, job: Job) -> dict[str, Any]:
     """A volume's document: its voxels within ``max_pixels`` (a file's from its header,
     before it is read), its estimate within the budget, then pruned."""
-    from ..volume import prune_volume, read_volume, refuse_image_options
-
     # a label-image run's volumes: each label is a shape of its own already
     read = None if job.read is None else replace(job.read, labels=False)
     refuse_image_options(read, job.output)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import fields
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -18,8 +17,8 @@ from .options import (
     RasterOptions,
     ReadOptions,
     VolumeOptions,
-    options_value,
     resolve_options,
+    volume_value,
 )
 from .output.document import PruneResult
 from .pipeline import prune_component, prune_components
@@ -129,12 +128,12 @@ def prune(
     >>> line["type"], all(0 <= x <= 1000 and 0 <= y <= 20 for x, y in line["coordinates"])
     ('LineString', True)
     """
-    given = {f.name: keywords.pop(f.name) for f in fields(VolumeOptions) if f.name in keywords}
+    volume = volume_value(volume, keywords)
     options, read, raster, output = resolve_options(options, read, raster, output, keywords)
-    if volume is not None or given or is_volume(source):
+    if volume is not None or is_volume(source):
         if read is not None or raster is not None:
             raise TypeError("read and raster options apply to images and polygons, not volumes")
-        return prune_volume(source, options, options_value(VolumeOptions, volume, given), output)
+        return prune_volume(source, options, volume or VolumeOptions(), output)
     if isinstance(source, Input):
         if read is not None or raster is not None:
             raise TypeError("read and raster options apply to reading; this input is read")

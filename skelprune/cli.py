@@ -60,6 +60,7 @@ from .cli_options import (
     ScopeOption,
     SequenceOption,
     SimplifyOption,
+    SpacingOption,
     ThresholdOption,
     TrimOption,
     WindowOption,
@@ -160,9 +161,7 @@ def prune_command(
     workers: Annotated[
         int, typer.Option(help="Worker processes for several files, >= 0 (0: one a CPU core).")
     ] = 0,
-    spacing: Annotated[
-        str | None, typer.Option(help=HELP["spacing"] + " Written DZ,DY,DX.")
-    ] = None,
+    spacing: SpacingOption = None,
 ) -> None:
     """Prune the skeleton of each shape (or volume, from a .npy file) and print the result
     as JSON."""
@@ -244,8 +243,9 @@ def prune_many_command(
         list[str],
         typer.Argument(
             metavar="INPUTS",
-            help="PNG masks or GeoJSON polygons, folders of them (*.png, *.geojson, *.json) "
-            "or globs ('masks/**/*.png', quoted).",
+            help="PNG or TIFF masks, GeoJSON polygons, volumes (.npy, TIFF stacks), folders "
+            "of them (*.png, *.tif, *.tiff, *.geojson, *.json, *.npy) or globs "
+            "('masks/**/*.png', quoted).",
         ),
     ],
     out: Annotated[
@@ -278,6 +278,7 @@ def prune_many_command(
     pixels_per_width: PixelsPerWidthOption = RasterOptions.pixels_per_width,
     pixel_budget: PixelBudgetOption = RasterOptions.pixel_budget,
     repair: RepairOption = RasterOptions.repair,
+    spacing: SpacingOption = None,
 ) -> None:
     """Prune a whole data set on Dask: one NAME.json an input under --out, written as each
     finishes; failed inputs on stderr and in problems.jsonl; a second run skips what is
@@ -285,6 +286,7 @@ def prune_many_command(
     options, read, raster, output = _options_or_exit(
         locals(), PruneOptions, ReadOptions, RasterOptions, OutputOptions
     )
+    volume = _volume_or_exit(spacing)
     if jobs is not None and scheduler is not None:
         raise _usage("give --jobs (a local cluster) or --scheduler (a running one), not both")
     if jobs is not None and jobs < 1:
@@ -300,6 +302,7 @@ def prune_many_command(
         read=read,
         raster=raster,
         output=output,
+        volume=volume,
         client=scheduler,
         jobs=jobs,
     )

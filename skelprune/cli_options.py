@@ -106,6 +106,7 @@ OverlayScaleOption = Annotated[int | None, typer.Option(help=HELP["overlay_scale
 Scope = enum.Enum("Scope", {name: name for name in SCOPES}, type=str)  # type: ignore[misc]
 ScopeOption = Annotated[Scope, typer.Option(help=HELP["scope"])]
 WindowOption = Annotated[int | None, typer.Option(help=HELP["window"])]
+SpacingOption = Annotated[str | None, typer.Option(help=HELP["spacing"] + " Written DZ,DY,DX.")]
 
 
 def _volume_or_exit(spacing: str | None) -> VolumeOptions:

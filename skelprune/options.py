@@ -67,6 +67,7 @@ __all__ = [
     "options_value",
     "resolve_options",
     "split_options",
+    "volume_value",
 ]
 
 METHODS = ("bayesian", "dce")
@@ -321,6 +322,20 @@ def options_value(cls: type, given: Any, keywords: Mapping[str, Any]) -> Any:
     if not isinstance(given, cls):
         raise TypeError(f"expected {cls.__name__}, got {type(given).__name__}")
     return given
+
+
+def volume_value(volume: VolumeOptions | None, keywords: dict[str, Any]) -> VolumeOptions | None:
+    """A call's volume options: ``volume``, or one built from its fields among
+    ``keywords`` (taken out of them), never both; None when the call gives neither.
+
+    >>> kw = {"spacing": (3, 1, 1), "beta": 2.0}
+    >>> volume_value(None, kw).spacing, kw, volume_value(None, {})
+    ((3.0, 1.0, 1.0), {'beta': 2.0}, None)
+    """
+    given = {f.name: keywords.pop(f.name) for f in fields(VolumeOptions) if f.name in keywords}
+    if volume is None and not given:
+        return None
+    return options_value(VolumeOptions, volume, given)
 
 
 def resolve_options(

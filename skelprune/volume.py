@@ -14,7 +14,7 @@ from __future__ import annotations
 import io
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import IO, TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -25,7 +25,7 @@ from .errors import (
     InvalidOptionError,
     SkelpruneError,
 )
-from .options import OutputOptions, PruneOptions, VolumeOptions
+from .options import OutputOptions, PruneOptions, ReadOptions, VolumeOptions
 from .pruning.bayesian import pruning_sequence
 from .pruning.choice import chosen_step
 
@@ -40,6 +40,7 @@ __all__ = [
     "is_volume",
     "prune_volume",
     "read_volume",
+    "refuse_image_options",
     "volume_components",
 ]
 
@@ -91,9 +92,9 @@ def _stack_pages(path: Any) -> int:
         return n if n > 1 else int(getattr(tif.pages.first, "imagedepth", 1))
 
 
-def _read_stack(path: Any) -> np.ndarray:
+def _read_stack(path: Any, max_voxels: int) -> np.ndarray:
     """A multi-page TIFF as a ``(pages, height, width)`` array: one-channel pages of one
-    size, at most :data:`MAX_VOLUME_VOXELS` voxels by the header, before decoding."""
+    size, at most ``max_voxels`` voxels by the header, before decoding."""
     import tifffile
 
     try:
@@ -106,9 +107,9 @@ def _read_stack(path: Any) -> np.ndarray:
                     f"{'x'.join(map(str, shape))}"
                 )
             voxels = shape[0] * shape[1] * shape[2]
-            if voxels > MAX_VOLUME_VOXELS:
+            if voxels > max_voxels:
                 raise ImageTooLargeError(
-                    f"the stack has {voxels} voxels, more than the {MAX_VOLUME_VOXELS} read"
+                    f"the stack has {voxels} voxels, more than the {max_voxels} read"
                 )
             return np.asarray(series.asarray())
     except SkelpruneError:
@@ -158,7 +159,7 @@ def check_volume_size(data: bytes, max_voxels: int | None) -> tuple[int, int, in
     return dims
 
 
-def _npy_header(f: io.BytesIO) -> tuple[tuple[int, ...], bool, np.dtype[Any]]:
+def _npy_header(f: IO[bytes]) -> tuple[tuple[int, ...], bool, np.dtype[Any]]:
     """A ``.npy`` header: shape, Fortran order, dtype (refused: no header, objects)."""
     try:
         version = np.lib.format.read_magic(f)
@@ -195,45 +196,79 @@ def _npy_bytes(data: bytes, max_voxels: int) -> np.ndarray:
     return arr.reshape(shape, order="F" if fortran else "C")
 
 
+def _read_npy(path: str | os.PathLike[str], max_voxels: int) -> np.ndarray:
+    """A ``.npy`` file's array, mapped rather than read: its header is checked (no
+    pickles, at most ``max_voxels`` voxels) before the file is mapped, so a header
+    promising too many voxels is refused whatever follows it."""
+    try:
+        with open(path, "rb") as f:
+            shape, _, _ = _npy_header(f)
+    except OSError as exc:
+        raise InvalidImageError(f"cannot read {os.fspath(path)!r} as a .npy array: {exc}") from None
+    voxels = int(np.prod(shape, dtype=np.int64))
+    if voxels > max_voxels:
+        raise ImageTooLargeError(f"the array has {voxels} voxels, more than the {max_voxels} read")
+    try:
+        return np.load(Path(path), mmap_mode="r", allow_pickle=False)
+    except (OSError, ValueError) as exc:  # a body shorter than its header says
+        raise InvalidImageError(f"cannot read {os.fspath(path)!r} as a .npy array: {exc}") from None
+
+
+def refuse_image_options(read: ReadOptions | None, output: OutputOptions) -> None:
+    """Refuse the options that hold for images only, given for a volume (what the service
+    and a data-set run answer for a volume).
+
+    Raises
+    ------
+    InvalidOptionError
+        Read options other than the defaults, or an ``overlay``, ``sequence`` or
+        ``overlay_legend`` asked of the document.
+    """
+    if read is not None and read != ReadOptions():
+        raise InvalidOptionError(
+            "read options (foreground, labels, fill_holes, min_area) apply to images; a "
+            "volume's non-zero voxels are its shapes, each label its own"
+        )
+    shown = [k for k in ("overlay", "sequence", "overlay_legend") if getattr(output, k)]
+    if shown:
+        raise InvalidOptionError(
+            f"option(s) {', '.join(shown)} apply to images; a volume's JSON document is its "
+            "graph, and its picture the image/png answer"
+        )
+
+
 def read_volume(source: Any, max_voxels: int | None = None) -> np.ndarray:
     """A volume as an array: ``source`` itself, a ``.npy`` file (no pickles) or a
     multi-page TIFF (its pages along ``z``), as a path or as the file's bytes; files of
     more than ``max_voxels`` voxels (default :data:`MAX_VOLUME_VOXELS`) are refused from
-    their header.
+    their header, and so are arrays when ``max_voxels`` is given.
 
     Raises
     ------
     InvalidImageError
         Not a 3-D array of booleans or integers, or an unreadable file.
     ImageTooLargeError
-        A file declaring more than :data:`MAX_VOLUME_VOXELS` voxels.
+        A file declaring more voxels than ``max_voxels``.
     """
-    if max_voxels is None:
-        max_voxels = MAX_VOLUME_VOXELS
+    limit = MAX_VOLUME_VOXELS if max_voxels is None else max_voxels
     if isinstance(source, bytes | bytearray | memoryview):
         data = bytes(source)
         if data[:6] == NPY_MAGIC:
-            arr = _npy_bytes(data, max_voxels)
+            arr = _npy_bytes(data, limit)
         else:
             from .io.tiff import read_tiff_stack
 
-            arr = read_tiff_stack(data, max_voxels=max_voxels)
+            arr = read_tiff_stack(data, max_voxels=limit)
     elif isinstance(source, str | os.PathLike) and str(source).lower().endswith(TIFF_SUFFIXES):
-        arr = _read_stack(source)
+        arr = _read_stack(source, limit)
     elif isinstance(source, str | os.PathLike):
-        try:
-            # mapped, not read: the header's size is checked before the voxels are touched
-            arr = np.load(Path(source), mmap_mode="r", allow_pickle=False)
-        except (OSError, ValueError) as exc:
-            raise InvalidImageError(
-                f"cannot read {os.fspath(source)!r} as a .npy array: {exc}"
-            ) from None
-        if arr.size > max_voxels:
+        arr = _read_npy(source, limit)
+    else:
+        arr = np.asarray(source)
+        if max_voxels is not None and arr.size > max_voxels:
             raise ImageTooLargeError(
                 f"the array has {arr.size} voxels, more than the {max_voxels} read"
             )
-    else:
-        arr = np.asarray(source)
     if arr.ndim != 3:
         raise InvalidImageError(f"a volume is a 3-D array; this one has {arr.ndim} dimensions")
     if not (arr.dtype == np.bool_ or np.issubdtype(arr.dtype, np.integer)):

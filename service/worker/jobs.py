@@ -254,19 +254,9 @@ def _run_job(job: Job) -> JobResult:
 def _run_volume_job(job: Job) -> JobResult:
     """A volume's job: its voxels count against the pixel limit and the budgets."""
     from skelprune.output.volume import auto_volume_scale
-    from skelprune.volume import prune_volume, read_volume
+    from skelprune.volume import prune_volume, read_volume, refuse_image_options
 
-    if job.read != ReadOptions():
-        raise InvalidOptionError(
-            "read options (foreground, labels, fill_holes, min_area) apply to images; a "
-            "volume's non-zero voxels are its shapes, each label its own"
-        )
-    shown = [k for k in ("overlay", "sequence", "overlay_legend") if getattr(job.output, k)]
-    if shown:
-        raise InvalidOptionError(
-            f"option(s) {', '.join(shown)} apply to images; a volume's JSON document is its "
-            "graph, and its picture the image/png answer"
-        )
+    refuse_image_options(job.read, job.output)
     if job.media in ("geojson", "graphml"):
         raise InvalidOptionError(
             f"a volume has no {MEDIA_TYPES[job.media]} answer; ask for application/json, "

@@ -9,6 +9,7 @@ the exception: its objects are found here, so that each task gets a batch of the
 from __future__ import annotations
 
 import glob
+import itertools
 import os
 import re
 from collections import Counter
@@ -20,12 +21,13 @@ from typing import Any
 import numpy as np
 
 from ..errors import InvalidImageError, InvalidOptionError
+from ..volume import is_volume
 
 __all__ = ["FILE_SUFFIXES", "Item", "Labels", "expand"]
 
-#: What a folder (or a glob's folder) is searched for, any case; a file named as such is
-#: taken whatever its ending.
-FILE_SUFFIXES = (".png", ".geojson", ".json")
+#: What a folder is searched for, any case (a ``.npy`` or a multi-page TIFF is a volume);
+#: a file named as such, or a glob's match, is taken whatever its ending.
+FILE_SUFFIXES = (".png", ".geojson", ".json", ".tif", ".tiff", ".npy")
 #: Names no input may take: the run's own files under ``out``.
 RESERVED = ("problems",)
 _UNSAFE = re.compile(r"[^\w.+-]+")
@@ -176,7 +178,8 @@ def expand(inputs: Any, labels: bool = False) -> list[Item]:
     an array; a :class:`Labels`; a GeoDataFrame (each row a feature of the table
     ``NAME.jsonl``, ``NAME`` its ``name`` attribute or ``table``); a mapping of names to
     any of these; or a list of them. Arrays in a list are named by their position
-    (``0000`` ...). With ``labels``, integer files and arrays are label images.
+    (``0000`` ...). With ``labels``, integer files and arrays are label images (a volume
+    stays one input: each of its labels is pruned on its own already).
 
     Raises
     ------
@@ -195,15 +198,17 @@ def expand(inputs: Any, labels: bool = False) -> list[Item]:
             items.extend(_table_items(x, name or getattr(x, "name", None) or "table"))
         elif isinstance(x, str | os.PathLike):
             found = _files(os.fspath(x))
-            if labels:
-                for p in found:
+            if labels:  # a volume's labels are its shapes already: it stays one input
+                volume = [is_volume(p) for p in found]
+                for p in itertools.compress(found, [not v for v in volume]):
                     items.extend(Labels(p, name).items())
-            elif name is not None and len(found) == 1:
+                found = list(itertools.compress(found, volume))
+            if name is not None and len(found) == 1:
                 items.append(Item(name, str(found[0])))
             else:
                 files.extend(found)
                 items.extend(Item("", str(p)) for p in found)
-        elif labels:
+        elif labels and not is_volume(x):
             items.extend(Labels(x, name).items())
         else:
             arr = np.asarray(x)

@@ -19,7 +19,9 @@ from ..options import (
     PruneOptions,
     RasterOptions,
     ReadOptions,
+    VolumeOptions,
     resolve_options,
+    volume_value,
 )
 from .items import Item, expand
 from .store import Store
@@ -125,6 +127,7 @@ def iter_prune_many(
     read: ReadOptions | None = None,
     raster: RasterOptions | None = None,
     output: OutputOptions | None = None,
+    volume: VolumeOptions | None = None,
     client: Client | str | None = None,
     out: str | os.PathLike[str] | None = None,
     jobs: int | None = None,
@@ -142,8 +145,9 @@ def iter_prune_many(
             isinstance(value, bool) or not isinstance(value, int) or value < 1
         ):
             raise InvalidOptionError(f"{name} must be a whole number >= 1, got {shown(value)}")
+    volume = volume_value(volume, keywords)
     options, read, raster, output = resolve_options(options, read, raster, output, keywords)
-    job = Job(options, read, raster, output, budget=budget or Budget())
+    job = Job(options, read, raster, output, volume, budget or Budget())
     # label images, once the read options know them: every object is its own shape
     items = expand(inputs, labels=bool(getattr(job.read, "labels", False)))
     store = None if out is None else Store(out)
@@ -250,6 +254,7 @@ def prune_many(
     read: ReadOptions | None = None,
     raster: RasterOptions | None = None,
     output: OutputOptions | None = None,
+    volume: VolumeOptions | None = None,
     client: Client | str | None = None,
     out: str | os.PathLike[str] | None = None,
     ordered: bool = False,
@@ -264,11 +269,15 @@ def prune_many(
     ----------
     inputs : path, glob, folder, array, Labels, GeoDataFrame, mapping or list of them
         What :func:`skelprune.parallel.items.expand` takes: files (a folder's ``*.png``,
-        ``*.geojson`` and ``*.json``; a glob's matches), arrays, label images (each
-        object its own document), a GeoDataFrame (each row a feature of one table), a
-        mapping of names to inputs, or a list.
-    options, read, raster, output, **keywords
-        As for :func:`skelprune.prune`, the same for every input.
+        ``*.geojson``, ``*.json``, ``*.tif``, ``*.tiff`` and ``*.npy``; a glob's
+        matches), arrays, label images (each object its own document), a GeoDataFrame
+        (each row a feature of one table), a mapping of names to inputs, or a list.
+        Volumes (a ``.npy`` file, a multi-page TIFF, a 3-D array) are pruned as
+        :func:`skelprune.prune` prunes them, their document a volume's.
+    options, read, raster, output, volume, **keywords
+        As for :func:`skelprune.prune`, the same for every input (``spacing=`` or
+        ``volume=VolumeOptions(...)``: the volumes' voxel size; read options hold for
+        images, and a volume given them fails as ``invalid-option``).
     client : distributed.Client or str, optional
         Where to run: a client, or a scheduler's address (``tcp://host:8786``). Default:
         a local cluster of ``jobs`` one-thread worker processes (one a core), closed at
@@ -284,7 +293,8 @@ def prune_many(
         Outcomes in the inputs' order (default: as they finished, skipped ones first).
     budget : Budget, optional
         Each input's memory and time budget and size limits (the service's, by
-        default): an input over it fails as ``job-too-large``, and a local cluster's
+        default; a volume's voxels count against ``max_pixels``): an input over it fails
+        as ``job-too-large`` (over a size limit: ``image-too-large``), and a local cluster's
         workers are restarted past it, so one input cannot sink a worker.
     batch_size : int, optional
         Inputs a task (default: up to 32, some eight tasks a worker).
@@ -316,6 +326,7 @@ def prune_many(
         read=read,
         raster=raster,
         output=output,
+        volume=volume,
         client=client,
         out=out,
         jobs=jobs,

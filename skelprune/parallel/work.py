@@ -6,14 +6,15 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, TypeVar
 
 import numpy as np
 
-from ..budget import check_budget, estimate, out_of_memory
+from ..budget import VOLUME_BASIS, check_budget, estimate, out_of_memory, volume_estimate
 from ..errors import JobTooLargeError, SkelpruneError, problem_kind
-from ..options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
+from ..options import OutputOptions, PruneOptions, RasterOptions, ReadOptions, VolumeOptions
+from ..volume import is_volume, prune_volume, read_volume, refuse_image_options
 from .items import Feature, Item, LabelObject
 
 __all__ = [
@@ -51,7 +52,8 @@ class Budget:
     estimate (:mod:`skelprune.budget`) is over it is refused before any work
     (``job-too-large``), and so is one that runs out all the same. ``seconds``: the time
     an input may be expected to take (the same estimate). ``max_pixels`` and
-    ``max_vertices``: the largest image or raster, and polygon. ``None``: no limit.
+    ``max_vertices``: the largest image, raster or volume (its voxels, checked from a
+    file's header before it is read), and polygon. ``None``: no limit.
     """
 
     memory_mb: int | None = 2048
@@ -62,13 +64,23 @@ class Budget:
 
 @dataclass(frozen=True)
 class Job:
-    """Everything a task needs besides its items: the options and the budget."""
+    """Everything a task needs besides its items: the options and the budget.
+
+    ``volume``: the voxel spacing of the volumes among the items (``.npy`` files, TIFF
+    stacks, 3-D arrays); given, any 3-D array is a volume, as for :func:`skelprune.prune`.
+    """
 
     options: PruneOptions = field(default_factory=PruneOptions)
     read: ReadOptions | None = None
     raster: RasterOptions | None = None
     output: OutputOptions = field(default_factory=OutputOptions)
+    volume: VolumeOptions | None = None
     budget: Budget = field(default_factory=Budget)
+
+    @property
+    def memory(self) -> int | None:
+        """The memory budget of one input, bytes."""
+        return None if self.budget.memory_mb is None else self.budget.memory_mb * 2**20
 
 
 @dataclass(frozen=True)
@@ -137,13 +149,35 @@ def _read(item: Item, job: Job) -> Any:
     )
 
 
+def _is_volume(item: Item, job: Job) -> bool:
+    """Whether an item is a volume: by :func:`skelprune.volume.is_volume`'s rule, or any
+    3-D array when the run gives volume options (what :func:`skelprune.prune` does)."""
+    source = item.source
+    if isinstance(source, LabelObject | Feature):
+        return False
+    given_3d = job.volume is not None and isinstance(source, np.ndarray) and source.ndim == 3
+    return given_3d or is_volume(source)
+
+
+def _volume_answer(item: Item, job: Job) -> dict[str, Any]:
+    """A volume's document: its voxels within ``max_pixels`` (a file's from its header,
+    before it is read), its estimate within the budget, then pruned."""
+    # a label-image run's volumes: each label is a shape of its own already
+    read = None if job.read is None else replace(job.read, labels=False)
+    refuse_image_options(read, job.output)
+    volume = read_volume(item.source, max_voxels=job.budget.max_pixels)
+    check_budget(volume_estimate(volume), job.memory, job.budget.seconds, VOLUME_BASIS)
+    res = prune_volume(volume, job.options, job.volume or VolumeOptions(), job.output)
+    return res.to_dict()
+
+
 def _answer(item: Item, job: Job) -> dict[str, Any]:
     from ..api import prune_input
 
+    if _is_volume(item, job):
+        return _volume_answer(item, job)
     shape = _read(item, job)
-    budget = job.budget
-    memory = None if budget.memory_mb is None else budget.memory_mb * 2**20
-    check_budget(estimate(shape.mask, scope=job.options.scope), memory, budget.seconds)
+    check_budget(estimate(shape.mask, scope=job.options.scope), job.memory, job.budget.seconds)
     res = prune_input(shape, job.options, job.output)
     if isinstance(item.source, Feature):
         line = {"row": item.source.row, "index": _plain(item.source.index)}
@@ -166,8 +200,7 @@ def run_item(
     try:
         return encode(_answer(item, job)), None
     except MemoryError:
-        budget = job.budget.memory_mb
-        err: JobTooLargeError = out_of_memory(None if budget is None else budget * 2**20)
+        err: JobTooLargeError = out_of_memory(job.memory)
         return None, (err.kind, str(err))
     except SkelpruneError as exc:
         return None, (problem_kind(exc) or SkelpruneError.kind, str(exc))

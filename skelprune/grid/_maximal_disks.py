@@ -99,7 +99,9 @@ def _dominated_by(r2, need, vectors, kind, r, c, v, i) -> bool:
     return r2[rr, cc] >= need[v, kind[i]]
 
 
-@njit(cache=True)
+# inline="always": called from the medial axis's compiled pass and, in tests, from
+# Python (see skelprune.grid._disk_counts.coverage on returned arrays).
+@njit(cache=True, inline="always")
 def _anchors(r2: np.ndarray, need: np.ndarray, vectors: np.ndarray, kind: np.ndarray) -> np.ndarray:
     """Centres of maximal disks: pixels whose disk no nearby pixel's disk contains.
 

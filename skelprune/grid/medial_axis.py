@@ -134,17 +134,6 @@ _FIRST_CAP = 4
 _LAST_CAP = 64
 
 
-def thinning_cap(r2s: np.ndarray, pixels: int) -> int:
-    """The first cap on the thinning's counts for disks ``r2s`` on a grid of ``pixels``.
-
-    Capped counts (see :func:`_thin`) cost about the pixels, exact ones the disks'
-    heights: capped where the heights outweigh the pixels (a blob's axis, few removals
-    and disks of hundreds of pixels' radius), exact otherwise.
-    """
-    heights = float(np.sum(2.0 * np.sqrt(r2s.astype(np.float64)) + 1.0))
-    return _FIRST_CAP if heights > pixels else 0
-
-
 @njit(cache=True)
 def _counts(inside, rows, cols, r2s, cap):
     """The thinning's disk counts: capped at ``cap`` (:func:`capped_coverage`), exact if 0."""
@@ -353,16 +342,67 @@ def oriented_medial_axis(padded: np.ndarray, r2: np.ndarray) -> MedialAxis:
 def _medial_axis_pixels(padded: np.ndarray, r2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rows and columns of the medial axis, computed in the given frame."""
     need = _domination_table(r2)  # sized by the maximum: no need to select the shape
-    anchor = _anchors(r2, need, VECTORS, VECTOR_KIND)
-    ar, ac = np.nonzero(anchor)
-    order = np.lexsort((ac, ar, r2[ar, ac]))
-    drop_redundant_anchors(anchor, r2, ar[order].astype(np.int64), ac[order].astype(np.int64))
+    return _axis_pixels(
+        np.asarray(padded, dtype=np.bool_), r2, need, VECTORS, VECTOR_KIND, SIMPLE, DEGREE
+    )
+
+
+@njit(cache=True)
+def _by_radius(fg, r2):
+    """The pixels of ``fg``, smallest ``r2`` first, ties in raster order (a stable sort
+    of the raster order by radius, as ``np.lexsort((cols, rows, r2[rows, cols]))``)."""
+    h, w = fg.shape
+    n = 0
+    for r in range(h):
+        for c in range(w):
+            if fg[r, c]:
+                n += 1
+    rows = np.empty(n, dtype=np.int64)
+    cols = np.empty(n, dtype=np.int64)
+    vals = np.empty(n, dtype=np.int64)
+    k = 0
+    for r in range(h):
+        for c in range(w):
+            if fg[r, c]:
+                rows[k], cols[k], vals[k] = r, c, r2[r, c]
+                k += 1
+    order = np.argsort(vals, kind="mergesort")  # stable
+    return rows[order], cols[order]
+
+
+@njit(cache=True)
+def _axis_pixels(padded, r2, need, vectors, kind, simple, degree):
+    """:func:`_medial_axis_pixels`'s stages in one compiled call: the anchors (centres of
+    maximal disks), the redundant ones dropped, the distance-ordered thinning, the
+    thinning pass and the ends extended; returns the axis's rows and columns, in raster
+    order."""
+    anchor = _anchors(r2, need, vectors, kind)
+    ar, ac = _by_radius(anchor, r2)
+    drop_redundant_anchors(anchor, r2, ar, ac)
     fg = padded.copy()
-    _ordered_thinning(fg, r2, anchor, SIMPLE)
-    rows, cols = np.nonzero(fg)
-    order = np.lexsort((cols, rows, r2[rows, cols]))  # smallest radius first
-    rows, cols = rows[order].astype(np.int64), cols[order].astype(np.int64)
-    _thin(fg, r2, rows, cols, SIMPLE, DEGREE, thinning_cap(r2[rows, cols], r2.size))
-    _extend_ends(fg, r2, DEGREE)
-    rows, cols = np.nonzero(fg)
-    return rows.astype(np.int64), cols.astype(np.int64)
+    _ordered_thinning(fg, r2, anchor, simple)
+    rows, cols = _by_radius(fg, r2)  # smallest radius first
+    # The first cap on the thinning's counts: capped counts (see _thin) cost about the
+    # pixels, exact ones the disks' heights; capped where the heights outweigh the
+    # pixels (a blob's axis, few removals and disks of hundreds of pixels' radius),
+    # exact otherwise. Either gives the same axis.
+    heights = 0.0
+    for k in range(rows.size):
+        heights += 2.0 * np.sqrt(np.float64(r2[rows[k], cols[k]])) + 1.0
+    _thin(fg, r2, rows, cols, simple, degree, _FIRST_CAP if heights > r2.size else 0)
+    _extend_ends(fg, r2, degree)
+    h, w = fg.shape
+    n = 0
+    for r in range(h):
+        for c in range(w):
+            if fg[r, c]:
+                n += 1
+    out_r = np.empty(n, dtype=np.int64)
+    out_c = np.empty(n, dtype=np.int64)
+    k = 0
+    for r in range(h):
+        for c in range(w):
+            if fg[r, c]:
+                out_r[k], out_c[k] = r, c
+                k += 1
+    return out_r, out_c

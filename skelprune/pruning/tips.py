@@ -75,6 +75,20 @@ class Trim:
         return self.na, self.nd
 
 
+@dataclass(frozen=True)
+class _Tip:
+    """One tip's candidate cuts (:meth:`_Tips.candidates`)."""
+
+    points: list[int]
+    drop: np.ndarray
+    lost: np.ndarray
+    cut: np.ndarray
+    allowed: np.ndarray
+    box: tuple[int, int, int, int]
+    only: int
+    best: int
+
+
 class _Tips:
     """The disk counts the cuts share (``c``: per pixel, how many disks of the skeleton
     left so far cover it)."""
@@ -86,34 +100,77 @@ class _Tips:
         self.c = cover_counts(h, w, sk.rows[idx], sk.cols[idx], sk.r2[idx])
 
     def candidates(
-        self, b: int, e: int
-    ) -> tuple[
-        list[int], np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int], int, np.ndarray
-    ]:
-        """The tip's points, their drop indices, per cut ``k = 0 … len − 1`` of the path
+        self,
+        ends: list[tuple[int, int]],
+        lost: int,
+        na: int,
+        nd: int,
+        area: int,
+        alpha: float,
+        lbar: float,
+    ) -> list[_Tip]:
+        """Each tip's points, their drop indices, per cut ``k = 0 … len − 1`` of the path
         (``len − 2`` on a single path) the pixels lost and the (axial, diagonal) steps
-        dropped, the box the tip's disks can reach, the pixels only they cover, and per
-        cut whether it cuts a remnant only (:data:`RULE`)."""
+        dropped, whether it cuts a remnant only (:data:`RULE`), the box the tip's disks
+        can reach, the pixels only they cover, and the best cut on a skeleton with
+        ``lost``, ``na`` and ``nd``: all tips in one compiled call."""
         sk, graph = self.sk, self.graph
-        points, drop, steps = graph.tip(b, e)
-        # a single path keeps two points: one would be a single endpoint
-        m = len(steps) + (0 if graph.branches[b].node[1 - e] is None else 1)
-        pts = np.asarray(points, np.int64)
-        dr = np.asarray(drop, np.int64)
-        lost, cut, box, only = cut_counts(
+        pts: list[int] = []
+        drop: list[int] = []
+        diag: list[int] = []
+        npts, nsteps, m = [], [], []
+        points = []
+        for b, e in ends:
+            p, d, steps = graph.tip(b, e)
+            points.append(p)
+            pts += p
+            drop += d
+            diag += steps
+            npts.append(len(p))
+            nsteps.append(len(steps))
+            # a single path keeps two points: one would be a single endpoint
+            m.append(len(steps) + (0 if graph.branches[b].node[1 - e] is None else 1))
+        pts_a = np.asarray(pts, np.int64)
+        drop_a = np.asarray(drop, np.int64)
+        off, cl, cs, allowed, box, only, best = _tip_cuts(
             sk.mask,
             self.c,
             sk.rows,
             sk.cols,
             sk.r2,
-            pts,
-            dr,
-            np.asarray(steps, np.int64),
-            m,
+            pts_a,
+            drop_a,
+            np.asarray(diag, np.int64),
+            np.asarray(npts, np.int64),
+            np.asarray(nsteps, np.int64),
+            np.asarray(m, np.int64),
+            RULES.index(RULE),
+            lost,
+            na,
+            nd,
+            area,
+            alpha,
+            lbar,
         )
-        box_ = (int(box[0]), int(box[1]), int(box[2]), int(box[3]))
-        allowed = remnant_cuts(sk.rows, sk.cols, sk.r2, pts, dr, lost, RULES.index(RULE))
-        return points, dr, lost, cut, box_, int(only), allowed
+        out = []
+        start = 0
+        offs, boxes, onlys, bests = off.tolist(), box.tolist(), only.tolist(), best.tolist()
+        for i, n in enumerate(npts):
+            a, z = offs[i], offs[i + 1]
+            out.append(
+                _Tip(
+                    points[i],
+                    drop_a[start : start + n],
+                    cl[a:z],
+                    cs[a:z],
+                    allowed[a:z],
+                    tuple(boxes[i]),  # type: ignore[arg-type]
+                    onlys[i],
+                    bests[i],
+                )
+            )
+            start += n
+        return out
 
     def exclusive(self, b: int) -> int:
         """Pixels only branch ``b``'s disks cover."""
@@ -188,6 +245,63 @@ def _best(lost0, na0, nd0, cand_lost, cand_steps, allowed, area, alpha, lbar):
     return best
 
 
+@njit(cache=True)
+def _tip_cuts(
+    mask,
+    c,
+    rows,
+    cols,
+    r2,
+    pts,
+    drop,
+    diag,
+    npts,
+    nsteps,
+    m,
+    rule,
+    lost0,
+    na0,
+    nd0,
+    area,
+    alpha,
+    lbar,
+):
+    """:func:`~skelprune.pruning._rowcover.cut_counts`, :func:`remnant_cuts` and
+    :func:`_best` for tips one after another (tip ``i``: the next ``npts[i]`` of ``pts``
+    and ``drop``, the next ``nsteps[i]`` of ``diag``, ``m[i]`` cuts), in one call.
+
+    Returns the offsets of each tip's cuts, their lost pixels, dropped steps and whether
+    allowed (concatenated), and per tip the box, the pixels only it covers and the best
+    cut.
+    """
+    n = m.size
+    off = np.zeros(n + 1, np.int64)
+    for i in range(n):
+        off[i + 1] = off[i] + m[i]
+    lost = np.zeros(off[n], np.int64)
+    cut = np.zeros((off[n], 2), np.int64)
+    allowed = np.zeros(off[n], np.bool_)
+    box = np.empty((n, 4), np.int64)
+    only = np.empty(n, np.int64)
+    best = np.empty(n, np.int64)
+    p0 = d0 = 0
+    for i in range(n):
+        p = pts[p0 : p0 + npts[i]]
+        d = drop[p0 : p0 + npts[i]]
+        g = diag[d0 : d0 + nsteps[i]]
+        lo, ct, bx, on = cut_counts(mask, c, rows, cols, r2, p, d, g, m[i])
+        ok = remnant_cuts(rows, cols, r2, p, d, lo, rule)
+        lost[off[i] : off[i + 1]] = lo
+        cut[off[i] : off[i + 1]] = ct
+        allowed[off[i] : off[i + 1]] = ok
+        box[i] = bx
+        only[i] = on
+        best[i] = _best(lost0, na0, nd0, lo, ct, ok, area, alpha, lbar)
+        p0 += npts[i]
+        d0 += nsteps[i]
+    return off, lost, cut, allowed, box, only, best
+
+
 def _disk_box(rows: np.ndarray, cols: np.ndarray, r2: np.ndarray) -> tuple[int, int, int, int]:
     """The box (top, left, bottom, right) these points' disks can reach, as
     :func:`~skelprune.pruning._rowcover.cut_counts` bounds a tip's."""
@@ -241,15 +355,15 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
     # The order: longest cut on Ŝ alone first, then endpoint (row, col).
     keyed = []
     first = {}
-    for b, e in ends:
-        cand = tips.candidates(b, e)
-        cl, cs = cand[2], cand[3]
-        k = _best(lost, graph.na, graph.nd, cl, cs, cand[6], area, alpha, lbar)
+    for (b, e), tip in zip(
+        ends, tips.candidates(ends, lost, graph.na, graph.nd, area, alpha, lbar), strict=True
+    ):
         p = graph.free_end_point(b, e)
-        first[b, e] = cand
+        first[b, e] = tip
+        cs = tip.cut
         keyed.append(
             (
-                -step_length(int(cs[k, 0]), int(cs[k, 1])),
+                -step_length(int(cs[tip.best, 0]), int(cs[tip.best, 1])),
                 int(graph.rows[p]),
                 int(graph.cols[p]),
                 b,
@@ -264,14 +378,19 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
     # how many changes that count has seen
     kept: dict[int, tuple[int, tuple[int, int, int, int], int]] = {}
     for *_, b, e in keyed:
-        points, drop, cl, cs, box, only, allowed = first[b, e]
-        if b in cut_branches or any(_meet(box, c) for c in changed):
+        tip = first[b, e]
+        if b in cut_branches or any(_meet(tip.box, c) for c in changed):
             # an earlier cut changed what this tip's disks share: count again
-            points, drop, cl, cs, box, only, allowed = tips.candidates(b, e)
-        k = _best(lost, graph.na, graph.nd, cl, cs, allowed, area, alpha, lbar)
+            (tip,) = tips.candidates([(b, e)], lost, graph.na, graph.nd, area, alpha, lbar)
+            k = tip.best
+        elif changed:  # counted before a cut changed the length and the lost pixels
+            k = _best(lost, graph.na, graph.nd, tip.lost, tip.cut, tip.allowed, area, alpha, lbar)
+        else:
+            k = tip.best
+        points, drop, cl, cs = tip.points, tip.drop, tip.lost, tip.cut
         cuts.append((b, e, k))
         # a pixel only the kept points cover had all its disks in the tip, one kept
-        kept[b] = (only - int(cl[k]), box, len(changed) + (k > 0))
+        kept[b] = (tip.only - int(cl[k]), tip.box, len(changed) + (k > 0))
         if k == 0:
             continue
         gone = np.asarray(

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -75,11 +76,10 @@ class Trim:
         return self.na, self.nd
 
 
-@dataclass(frozen=True)
-class _Tip:
+class _Tip(NamedTuple):
     """One tip's candidate cuts (:meth:`_Tips.candidates`)."""
 
-    points: list[int]
+    points: np.ndarray
     drop: np.ndarray
     lost: np.ndarray
     cut: np.ndarray
@@ -119,10 +119,8 @@ class _Tips:
         drop: list[int] = []
         diag: list[int] = []
         npts, nsteps, m = [], [], []
-        points = []
         for b, e in ends:
             p, d, steps = graph.tip(b, e)
-            points.append(p)
             pts += p
             drop += d
             diag += steps
@@ -159,7 +157,7 @@ class _Tips:
             a, z = offs[i], offs[i + 1]
             out.append(
                 _Tip(
-                    points[i],
+                    pts_a[start : start + n],
                     drop_a[start : start + n],
                     cl[a:z],
                     cs[a:z],
@@ -302,16 +300,48 @@ def _tip_cuts(
     return off, lost, cut, allowed, box, only, best
 
 
-def _disk_box(rows: np.ndarray, cols: np.ndarray, r2: np.ndarray) -> tuple[int, int, int, int]:
-    """The box (top, left, bottom, right) these points' disks can reach, as
+def _cut(
+    c: np.ndarray,
+    rows: np.ndarray,
+    cols: np.ndarray,
+    r2: np.ndarray,
+    points: np.ndarray,
+    drop: np.ndarray,
+    k: int,
+) -> tuple[list[int], tuple[int, int, int, int]]:
+    """Cut ``k`` of a tip: its dropped points' disks taken off the counts ``c``; returns
+    those points and the box (top, left, bottom, right) their disks can reach, as
     :func:`~skelprune.pruning._rowcover.cut_counts` bounds a tip's."""
-    rad = np.sqrt(r2).astype(np.int64) + 1
-    return (
-        int((rows - rad).min()),
-        int((cols - rad).min()),
-        int((rows + rad).max()),
-        int((cols + rad).max()),
-    )
+    gone, box = _cut_kernel(c, rows, cols, r2, points, drop, k)
+    b = box.tolist()
+    return gone.tolist(), (b[0], b[1], b[2], b[3])
+
+
+@njit(cache=True)
+def _cut_kernel(c, rows, cols, r2, points, drop, k):
+    """:func:`_cut` in one compiled call."""
+    n = 0
+    for j in range(points.size):
+        if drop[j] < k:
+            n += 1
+    gone = np.empty(n, np.int64)
+    n = 0
+    for j in range(points.size):
+        if drop[j] < k:
+            gone[n] = points[j]
+            n += 1
+    gr, gc, g2 = rows[gone], cols[gone], r2[gone]
+    uncover(c, gr, gc, g2)
+    box = np.empty(4, np.int64)
+    box[0] = box[1] = np.iinfo(np.int64).max
+    box[2] = box[3] = np.iinfo(np.int64).min
+    for j in range(n):
+        rad = int(math.sqrt(g2[j])) + 1
+        box[0] = min(box[0], gr[j] - rad)
+        box[1] = min(box[1], gc[j] - rad)
+        box[2] = max(box[2], gr[j] + rad)
+        box[3] = max(box[3], gc[j] + rad)
+    return gone, box
 
 
 def _meet(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> bool:
@@ -393,18 +423,14 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
         kept[b] = (tip.only - int(cl[k]), tip.box, len(changed) + (k > 0))
         if k == 0:
             continue
-        gone = np.asarray(
-            [p for p, d in zip(points, drop.tolist(), strict=True) if d < k], np.int64
-        )
-        gr, gc, g2 = answer.rows[gone], answer.cols[gone], answer.r2[gone]
-        uncover(tips.c, gr, gc, g2)
         # Only the dropped points' disks changed the counts: their box, not the whole
         # tip's (whose large disks near the junction reach most of a small shape), so
         # that fewer later tips are counted again.
-        changed.append(_disk_box(gr, gc, g2))
+        gone, dropped_box = _cut(tips.c, answer.rows, answer.cols, answer.r2, points, drop, k)
+        changed.append(dropped_box)
         cut_branches.add(b)
         lost += int(cl[k])
-        graph.cut_tip(b, e, gone.tolist(), int(cs[k, 0]), int(cs[k, 1]))
+        graph.cut_tip(b, e, gone, int(cs[k, 0]), int(cs[k, 1]))
     exclusive = {}
     for b in graph.end_branches():
         if b in kept and not any(_meet(kept[b][1], c) for c in changed[kept[b][2] :]):

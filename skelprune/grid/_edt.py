@@ -35,7 +35,10 @@ def squared_distance(padded: np.ndarray) -> np.ndarray:
     return _squared_edt(padded)
 
 
-@njit(cache=True)
+# inline="always": also called inside compiled code (the limb test), and a cached callee
+# that returns an array must not also be entered from Python (see
+# skelprune.grid._disk_counts.coverage).
+@njit(cache=True, inline="always")
 def _squared_edt(fg: np.ndarray) -> np.ndarray:
     """Exact squared Euclidean distance transform in integers (Meijster, Roerdink &
     Hesselink 2000): the distance along each column, then the lower envelope of the

@@ -31,7 +31,7 @@ import numpy as np
 
 from ..grid.graph import BranchGraph
 from ..grid.medial_axis import squared_distance
-from ._rowcover import cover_counts, uncover
+from ._rowcover import cover_counts, limb_cover, uncover
 
 __all__ = ["MIN_LIMB_AREA", "RIM", "LimbGuard"]
 
@@ -92,6 +92,11 @@ class LimbGuard:
             h, w = self.mask.shape
             self.counts = cover_counts(h, w, g.rows[alive], g.cols[alive], self.r2[alive])
         pts = self._points(b)
+        # the test below in one compiled call, unless the box has no background
+        quick = limb_cover(self.counts, self.graph.rows, self.graph.cols, self.r2, pts, RIM)
+        if quick >= 0:
+            self.limb[b] = quick == 1
+            return quick == 1
         rows, cols, r2 = self.graph.rows[pts], self.graph.cols[pts], self.r2[pts]
         deep = r2 > RIM
         if deep.sum() < 4:  # 2·r > 2·√2: at least 4 points are needed

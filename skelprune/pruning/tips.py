@@ -113,61 +113,23 @@ class _Tips:
         (``len − 2`` on a single path) the pixels lost and the (axial, diagonal) steps
         dropped, whether it cuts a remnant only (:data:`RULE`), the box the tip's disks
         can reach, the pixels only they cover, and the best cut on a skeleton with
-        ``lost``, ``na`` and ``nd``: all tips in one compiled call."""
+        ``lost``, ``na`` and ``nd``."""
         sk, graph = self.sk, self.graph
-        pts: list[int] = []
-        drop: list[int] = []
-        diag: list[int] = []
-        npts, nsteps, m = [], [], []
-        for b, e in ends:
-            p, d, steps = graph.tip(b, e)
-            pts += p
-            drop += d
-            diag += steps
-            npts.append(len(p))
-            nsteps.append(len(steps))
-            # a single path keeps two points: one would be a single endpoint
-            m.append(len(steps) + (0 if graph.branches[b].node[1 - e] is None else 1))
-        pts_a = np.asarray(pts, np.int64)
-        drop_a = np.asarray(drop, np.int64)
-        off, cl, cs, allowed, box, only, best = _tip_cuts(
-            sk.mask,
-            self.c,
-            sk.rows,
-            sk.cols,
-            sk.r2,
-            pts_a,
-            drop_a,
-            np.asarray(diag, np.int64),
-            np.asarray(npts, np.int64),
-            np.asarray(nsteps, np.int64),
-            np.asarray(m, np.int64),
-            RULES.index(RULE),
-            lost,
-            na,
-            nd,
-            area,
-            alpha,
-            lbar,
-        )
+        rule = RULES.index(RULE)
         out = []
-        start = 0
-        offs, boxes, onlys, bests = off.tolist(), box.tolist(), only.tolist(), best.tolist()
-        for i, n in enumerate(npts):
-            a, z = offs[i], offs[i + 1]
-            out.append(
-                _Tip(
-                    pts_a[start : start + n],
-                    drop_a[start : start + n],
-                    cl[a:z],
-                    cs[a:z],
-                    allowed[a:z],
-                    tuple(boxes[i]),  # type: ignore[arg-type]
-                    onlys[i],
-                    bests[i],
-                )
+        for b, e in ends:
+            points, drop, steps = graph.tip(b, e)
+            # a single path keeps two points: one would be a single endpoint
+            m = len(steps) + (0 if graph.branches[b].node[1 - e] is None else 1)
+            pts = np.asarray(points, np.int64)
+            dr = np.asarray(drop, np.int64)
+            cl, cs, box, only = cut_counts(
+                sk.mask, self.c, sk.rows, sk.cols, sk.r2, pts, dr, np.asarray(steps, np.int64), m
             )
-            start += n
+            allowed = remnant_cuts(sk.rows, sk.cols, sk.r2, pts, dr, cl, rule)
+            best = _best(lost, na, nd, cl, cs, allowed, area, alpha, lbar)
+            b0, b1, b2, b3 = box.tolist()
+            out.append(_Tip(pts, dr, cl, cs, allowed, (b0, b1, b2, b3), int(only), int(best)))
         return out
 
     def exclusive(self, b: int) -> int:
@@ -241,63 +203,6 @@ def _best(lost0, na0, nd0, cand_lost, cand_steps, allowed, area, alpha, lbar):
         if lam <= best_lam:
             best, best_lam = k, lam
     return best
-
-
-@njit(cache=True)
-def _tip_cuts(
-    mask,
-    c,
-    rows,
-    cols,
-    r2,
-    pts,
-    drop,
-    diag,
-    npts,
-    nsteps,
-    m,
-    rule,
-    lost0,
-    na0,
-    nd0,
-    area,
-    alpha,
-    lbar,
-):
-    """:func:`~skelprune.pruning._rowcover.cut_counts`, :func:`remnant_cuts` and
-    :func:`_best` for tips one after another (tip ``i``: the next ``npts[i]`` of ``pts``
-    and ``drop``, the next ``nsteps[i]`` of ``diag``, ``m[i]`` cuts), in one call.
-
-    Returns the offsets of each tip's cuts, their lost pixels, dropped steps and whether
-    allowed (concatenated), and per tip the box, the pixels only it covers and the best
-    cut.
-    """
-    n = m.size
-    off = np.zeros(n + 1, np.int64)
-    for i in range(n):
-        off[i + 1] = off[i] + m[i]
-    lost = np.zeros(off[n], np.int64)
-    cut = np.zeros((off[n], 2), np.int64)
-    allowed = np.zeros(off[n], np.bool_)
-    box = np.empty((n, 4), np.int64)
-    only = np.empty(n, np.int64)
-    best = np.empty(n, np.int64)
-    p0 = d0 = 0
-    for i in range(n):
-        p = pts[p0 : p0 + npts[i]]
-        d = drop[p0 : p0 + npts[i]]
-        g = diag[d0 : d0 + nsteps[i]]
-        lo, ct, bx, on = cut_counts(mask, c, rows, cols, r2, p, d, g, m[i])
-        ok = remnant_cuts(rows, cols, r2, p, d, lo, rule)
-        lost[off[i] : off[i + 1]] = lo
-        cut[off[i] : off[i + 1]] = ct
-        allowed[off[i] : off[i + 1]] = ok
-        box[i] = bx
-        only[i] = on
-        best[i] = _best(lost0, na0, nd0, lo, ct, ok, area, alpha, lbar)
-        p0 += npts[i]
-        d0 += nsteps[i]
-    return off, lost, cut, allowed, box, only, best
 
 
 def _cut(

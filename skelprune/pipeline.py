@@ -54,6 +54,7 @@ def prune_component(
     options = options.resolved()  # the method's defaults filled in
     beta = options.beta
     medial = Skeleton.medial_axis(crop, origin)
+    fewer = False  # the start has fewer points than the medial axis
     if options.method == "dce":
         norm = medial.normalisation(beta)
         keep = dce_support(medial, DCE_VERTICES, options.dce_threshold)
@@ -71,14 +72,14 @@ def prune_component(
         norm = start.normalisation(beta)
         if start is not medial and (norm.alpha is None or not start.end_branches()):
             norm = medial.normalisation(beta)
-        seq = pruning_sequence(
-            start, norm.alpha, norm.lbar, uncovered=start.n_points < medial.n_points
-        )
+        # (n_points sums over the graph: counted once)
+        fewer = start is not medial and start.n_points < medial.n_points
+        seq = pruning_sequence(start, norm.alpha, norm.lbar, uncovered=fewer)
         chosen = chosen_step(seq, options.choice, options.min_margin)
     # Λ(D \ R(M)) without a second painting: a sequence from M knows it; from the
     # coarse skeleton, only the pixels it misses need testing against the removed disks.
     ma_lost = seq.lost[0]
-    if start.n_points < medial.n_points:
+    if fewer:
         gone = np.ones(medial.rows.size, bool)
         gone[start.points()] = False
         ma_lost -= count_covered(

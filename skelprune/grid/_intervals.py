@@ -18,7 +18,7 @@ from numba import njit
 
 from ._digital import isqrt
 
-__all__ = ["disk_runs", "owner_runs", "union"]
+__all__ = ["disk_runs", "owner_runs", "union", "union_runs"]
 
 # Runs are sorted on the key ``row << 32 | lo``: rows and columns are array indices,
 # non-negative and far below 2**31.
@@ -137,6 +137,15 @@ def owner_runs(rows, cols, r2, labels, n_labels):
 @njit(cache=True)
 def union(a, b):
     """Run set of the pixels of ``a`` or ``b``."""
+    return union_runs(a, b)
+
+
+# inline="always": also called inside compiled code (the coverage's merge), and a
+# cached callee that returns an array must not also be entered from Python (see
+# skelprune.grid._disk_counts.coverage).
+@njit(cache=True, inline="always")
+def union_runs(a, b):
+    """:func:`union`, for compiled callers."""
     out = np.empty((a.shape[0] + b.shape[0], 3), np.int64)
     i = j = m = 0
     while i < a.shape[0] or j < b.shape[0]:

@@ -23,7 +23,9 @@ def _root(parent, i):
     return i
 
 
-@njit(cache=True)
+# inline="always": called from Python (label8) and inside compiled code (_crops); a
+# cached callee that returns arrays must not be both (see _disk_counts.coverage).
+@njit(cache=True, inline="always")
 def _components(mask):
     """Row runs of ``mask`` (row, first, last column) in raster order, the component of
     each (numbered in the raster order of the components' first pixels), the count, and
@@ -134,18 +136,30 @@ def components8(mask: np.ndarray) -> list[tuple[np.ndarray, tuple[int, int]]]:
     >>> [(c.shape, o) for c, o in components8(m)]
     [((3, 3), (-1, -1)), ((3, 4), (1, 1))]
     """
-    runs, comp, n, box = _components(np.ascontiguousarray(mask, dtype=np.bool_))
-    order = np.argsort(comp, kind="stable")
-    ends = np.searchsorted(comp[order], np.arange(n + 1))
+    buf, offsets, box = _crops(np.ascontiguousarray(mask, dtype=np.bool_))
     out = []
-    for c in range(n):
-        top, left, bottom, right = box[c].tolist()
-        mine = runs[order[ends[c] : ends[c + 1]]]
-        # +1 where a run starts, -1 after it ends, summed along the rows: the runs of a
-        # row never touch, so no two marks share a pixel
-        marks = np.zeros((bottom - top + 3, right - left + 4), np.int8)
-        marks[mine[:, 0] - top + 1, mine[:, 1] - left + 1] = 1
-        marks[mine[:, 0] - top + 1, mine[:, 2] - left + 2] = -1
-        crop = np.cumsum(marks, axis=1, dtype=np.int8)[:, :-1].astype(bool)
+    offs = offsets.tolist()
+    for c, (top, left, bottom, right) in enumerate(box.tolist()):
+        shape = (bottom - top + 3, right - left + 3)
+        crop = buf[offs[c] : offs[c] + shape[0] * shape[1]].reshape(shape)
         out.append((crop, (top - 1, left - 1)))
     return out
+
+
+@njit(cache=True)
+def _crops(mask):
+    """:func:`components8` in one compiled call: the crops one after another in one
+    flat buffer (crop ``c`` at ``offsets[c]``, ``bottom − top + 3`` rows of
+    ``right − left + 3``), and the boxes."""
+    runs, comp, count, box = _components(mask)
+    offsets = np.zeros(count + 1, np.int64)
+    for c in range(count):
+        offsets[c + 1] = offsets[c] + (box[c, 2] - box[c, 0] + 3) * (box[c, 3] - box[c, 1] + 3)
+    buf = np.zeros(offsets[count], np.bool_)
+    for k in range(runs.shape[0]):
+        c = comp[k]
+        width = box[c, 3] - box[c, 1] + 3
+        base = offsets[c] + (runs[k, 0] - box[c, 0] + 1) * width - box[c, 1] + 1
+        for x in range(runs[k, 1], runs[k, 2] + 1):
+            buf[base + x] = True
+    return buf, offsets, box

@@ -13,8 +13,9 @@ shape are huge and pile up.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
-from ._intervals import union
+from ._intervals import union_runs
 from ._tiles import COVER_TILE, _build, _merge, _remove_owner
 
 __all__ = ["COVER_TILE", "Coverage"]
@@ -107,9 +108,11 @@ class Coverage:
         )
         self.used, self.tused = self.buf.shape[0], self.tiles.size
         self.lost = int(lost)
+        self._shared = self._state()
 
     def _state(self) -> tuple:
-        """What the tile kernels share, in the order of their trailing parameters."""
+        """What the tile kernels share, in the order of their trailing parameters (kept
+        in ``_shared``, made again when a merge grows ``buf`` or ``tiles``)."""
         return (
             self.tile,
             self.tw,
@@ -137,30 +140,18 @@ class Coverage:
 
         The pruning knows the label of the branch it removes, so no point is looked at.
         """
-        lost = int(_remove_owner(old, *self._state()))
-        self.hi[old] = self.lo[old]
-        self.thi[old] = self.tlo[old]
+        lost = int(_remove_label(old, *self._shared))
         self.lost += lost
         return lost
 
     def merge_label(self, old: int, new: int) -> None:
         """Give all points labelled ``old`` the label ``new``."""
-        if old == new or self.hi[old] == self.lo[old]:
-            return
-        merged = union(self.buf[self.lo[new] : self.hi[new]], self.buf[self.lo[old] : self.hi[old]])
-        if self.used + len(merged) > len(self.buf):
-            bigger = np.empty((2 * (self.used + len(merged)), 3), np.int64)
-            bigger[: self.used] = self.buf[: self.used]
-            self.buf = bigger
-        mlo = self.used
-        self.buf[mlo : mlo + len(merged)] = merged
-        self.used += len(merged)
-        need = self.thi[old] - self.tlo[old] + self.thi[new] - self.tlo[new]
-        if self.tused + need > self.tiles.size:
-            bigger = np.empty(2 * (self.tused + need), np.int64)
-            bigger[: self.tused] = self.tiles[: self.tused]
-            self.tiles = bigger
-        self.tused, lost = _merge(old, new, mlo, self.used, self.tused, *self._state())
+        buf, tiles, self.used, self.tused, lost = _merge_label(
+            old, new, self.used, self.tused, *self._shared
+        )
+        if buf is not self.buf or tiles is not self.tiles:
+            self.buf, self.tiles = buf, tiles
+            self._shared = self._state()
         self.lost += int(lost)
 
     def counts(self) -> np.ndarray:
@@ -176,3 +167,89 @@ class Coverage:
     def uncovered(self) -> np.ndarray:
         """Flat indices (raster order) of the pixels of ``D`` no disk covers."""
         return np.flatnonzero(self.mask & (self.counts() == 0))
+
+
+@njit(cache=True)
+def _remove_label(old, *shared):
+    """:meth:`Coverage.remove_label` in one compiled call: the pixels left uncovered."""
+    lost = _remove_owner(old, *shared)
+    lo, hi, tlo, thi = shared[4], shared[5], shared[7], shared[8]
+    hi[old] = lo[old]
+    thi[old] = tlo[old]
+    return lost
+
+
+@njit(cache=True)
+def _merge_label(
+    old,
+    new,
+    used,
+    tused,
+    tile,
+    tw,
+    mask,
+    buf,
+    lo,
+    hi,
+    tiles,
+    tlo,
+    thi,
+    start,
+    owners,
+    alias,
+    alive,
+    stamp,
+    c,
+    s,
+    excl,
+    full,
+    opened,
+):
+    """:meth:`Coverage.merge_label` in one compiled call: the union of the two owners'
+    runs appended to ``buf`` (``buf[:used]`` in use) and the tiles to ``tiles``
+    (``tiles[:tused]``), each grown when full, then :func:`._tiles._merge`. Returns
+    ``buf``, ``tiles`` (the same arrays or larger copies), their new ends, and the
+    pixels left uncovered."""
+    if old == new or hi[old] == lo[old]:
+        return buf, tiles, used, tused, 0
+    merged = union_runs(buf[lo[new] : hi[new]], buf[lo[old] : hi[old]])
+    n = merged.shape[0]
+    if used + n > buf.shape[0]:
+        bigger = np.empty((2 * (used + n), 3), np.int64)
+        bigger[:used] = buf[:used]
+        buf = bigger
+    mlo = used
+    buf[mlo : mlo + n] = merged
+    used += n
+    need = thi[old] - tlo[old] + thi[new] - tlo[new]
+    if tused + need > tiles.size:
+        more = np.empty(2 * (tused + need), np.int64)
+        more[:tused] = tiles[:tused]
+        tiles = more
+    tused, lost = _merge(
+        old,
+        new,
+        mlo,
+        used,
+        tused,
+        tile,
+        tw,
+        mask,
+        buf,
+        lo,
+        hi,
+        tiles,
+        tlo,
+        thi,
+        start,
+        owners,
+        alias,
+        alive,
+        stamp,
+        c,
+        s,
+        excl,
+        full,
+        opened,
+    )
+    return buf, tiles, used, tused, lost

@@ -14,7 +14,6 @@ pixels is then exactly the shape.
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,16 +26,12 @@ from ._digital import (
     SIMPLE,
     heap_pop,
     heap_push,
-    isqrt,
     neighbourhood_code,
 )
-from ._disk_counts import (
-    capped_coverage,
-    coverage,
-    disk_loss,
-    disk_remove,
-    drop_redundant_anchors,
-)
+from ._disk_counts import coverage, disk_loss, disk_remove
+from ._edt import squared_distance
+from ._last_cover import capped_coverage, drop_redundant_anchors
+from ._maximal_disks import VECTOR_KIND, VECTORS, _anchors, _domination_table
 from ._orientation import IDENTITY_ORIENTATION, oriented
 
 __all__ = [
@@ -47,192 +42,6 @@ __all__ = [
     "oriented_medial_axis",
     "squared_distance",
 ]
-
-
-def squared_distance(padded: np.ndarray) -> np.ndarray:
-    """Exact squared Euclidean distance of each pixel to the nearest background pixel.
-
-    Parameters
-    ----------
-    padded : (H, W) bool array
-        The shape, with at least one background pixel all around.
-
-    Returns
-    -------
-    (H, W) int64 array, 0 on the background.
-
-    Examples
-    --------
-    >>> m = np.zeros((5, 5), bool); m[1:4, 1:4] = True
-    >>> squared_distance(m)[2, 2]
-    np.int64(4)
-    """
-    padded = np.asarray(padded, dtype=np.bool_)
-    if padded.all():  # no background to measure from: scipy's convention
-        from scipy import ndimage
-
-        d = ndimage.distance_transform_edt(padded)
-        return np.rint(d * d).astype(np.int64)
-    return _squared_edt(padded)
-
-
-@njit(cache=True)
-def _squared_edt(fg: np.ndarray) -> np.ndarray:
-    """Exact squared Euclidean distance transform in integers (Meijster, Roerdink &
-    Hesselink 2000): the distance along each column, then the lower envelope of the
-    parabolas ``(x - i)² + g(i)²`` along each row. Equal to the rounded square of
-    scipy's exact transform, with a quarter of its memory and no floating point.
-    """
-    h, w = fg.shape
-    inf = h + w  # more than any distance along a column
-    out = np.empty((h, w), dtype=np.int64)
-    for x in range(w):  # columns, walked row by row: contiguous in memory
-        out[0, x] = 0 if not fg[0, x] else inf
-    for y in range(1, h):
-        for x in range(w):
-            out[y, x] = 0 if not fg[y, x] else min(out[y - 1, x] + 1, inf)
-    for y in range(h - 2, -1, -1):
-        for x in range(w):
-            if out[y + 1, x] + 1 < out[y, x]:
-                out[y, x] = out[y + 1, x] + 1
-    g = np.empty(w, dtype=np.int64)
-    s = np.empty(w, dtype=np.int64)  # columns whose parabola is on the envelope
-    t = np.empty(w, dtype=np.int64)  # where each starts to be the lowest
-    for y in range(h):
-        for x in range(w):
-            g[x] = out[y, x] * out[y, x]
-        q = 0
-        s[0] = 0
-        t[0] = 0
-        for u in range(1, w):
-            while q >= 0 and (t[q] - s[q]) ** 2 + g[s[q]] > (t[q] - u) ** 2 + g[u]:
-                q -= 1
-            if q < 0:
-                q = 0
-                s[0] = u
-            else:
-                i = s[q]
-                sep = 1 + (u * u - i * i + g[u] - g[i]) // (2 * (u - i))
-                if sep < w:
-                    q += 1
-                    s[q] = u
-                    t[q] = sep
-        for u in range(w - 1, -1, -1):
-            out[y, u] = (u - s[q]) ** 2 + g[s[q]]
-            if u == t[q]:
-                q -= 1
-    return out
-
-
-# Test vectors of the domination test: every offset in a 7 x 7 window. Eight
-# neighbours alone see domination only where the distance gradient is axial or
-# diagonal; elsewhere nearly every pixel would pass for a centre of a maximal disk.
-REACH = 3
-# Shortest first: the containing disk is most often a near one (the order does not
-# change the result, only how soon the search stops).
-VECTORS = np.array(
-    sorted(
-        (
-            (dy, dx)
-            for dy in range(-REACH, REACH + 1)
-            for dx in range(-REACH, REACH + 1)
-            if (dy, dx) != (0, 0)
-        ),
-        key=lambda v: (v[0] ** 2 + v[1] ** 2, v),
-    ),
-    dtype=np.int64,
-)
-# Disks are symmetric, so the table depends on (min, max) of |dy|, |dx| only.
-_KINDS = sorted({tuple(sorted((abs(int(a)), abs(int(b))))) for a, b in VECTORS})
-VECTOR_KIND = np.array(
-    [_KINDS.index(tuple(sorted((abs(int(a)), abs(int(b)))))) for a, b in VECTORS], dtype=np.int64
-)
-
-
-def _domination_table(values: np.ndarray) -> np.ndarray:
-    """:func:`_cached_domination_table` sized for the largest of ``values`` (at least 1)."""
-    max_r2 = int(values.max()) if values.size else 1
-    return _cached_domination_table(1 << max(max_r2, 1).bit_length())
-
-
-@functools.lru_cache(maxsize=8)
-def _cached_domination_table(max_r2: int) -> np.ndarray:
-    """For each squared radius ``R`` and each vector kind ``v``: the smallest ``r2`` a
-    pixel at offset ``v`` needs for its disk to contain the disk of radius² ``R``.
-
-    That is one more than the largest ``|o − v|²`` over the offsets ``|o|² < R``.
-    Entries depend on ``R`` only, so a table sized by a power of two serves every
-    smaller shape.
-    """
-    # int32 while the entries fit (below (√R + 3√2)² + 1 < 2³¹): half the memory of a
-    # table that a 4096-px shape makes 4 M rows long
-    need = np.full((max_r2 + 1, len(_KINDS)), -1, dtype=np.int32 if max_r2 <= 1 << 30 else np.int64)
-    _farthest_points(need, np.array(_KINDS, dtype=np.int64))
-    return need
-
-
-@njit(cache=True)
-def _farthest_points(need: np.ndarray, kinds: np.ndarray) -> None:
-    """Fill ``need`` (``max_r2 + 1`` rows of -1, one column per kind) in place."""
-    # Bucketed by |o|² instead of sorting the offsets by it: a running maximum over the
-    # buckets is then the maximum over each disk (1.4 s → 0.16 s for a 4096-px shape).
-    nk = kinds.shape[0]
-    max_r2 = need.shape[0] - 1  # row L + 1: offsets |o|² = L
-    reach = isqrt(max_r2 - 1)  # the largest |dy| with dy² < max_r2
-    # kinds have no negative coordinate, so of the offsets ±dy, ±dx (same |o|²) the
-    # one with both coordinates ≤ 0 is the farthest: one quadrant is enough
-    for dy in range(-reach, 1):
-        for dx in range(-reach, 1):
-            length = dy * dy + dx * dx
-            if length >= max_r2:
-                continue
-            for j in range(nk):
-                a, b = dy - kinds[j, 0], dx - kinds[j, 1]
-                if a * a + b * b > need[length + 1, j]:
-                    need[length + 1, j] = a * a + b * b
-    run = np.full(nk, -1, dtype=np.int64)
-    need[0, :] = 0
-    for big_r in range(1, max_r2 + 1):
-        for j in range(nk):
-            run[j] = max(run[j], need[big_r, j])
-            need[big_r, j] = run[j] + 1
-
-
-@njit(cache=True, inline="always")
-def _dominated_by(r2, need, vectors, kind, r, c, v, i) -> bool:
-    """Whether the disk at ``(r, c)`` + ``vectors[i]`` contains the one at ``(r, c)``."""
-    rr, cc = r + vectors[i, 0], c + vectors[i, 1]
-    if rr < 0 or cc < 0 or rr >= r2.shape[0] or cc >= r2.shape[1]:
-        return False
-    return r2[rr, cc] >= need[v, kind[i]]
-
-
-@njit(cache=True)
-def _anchors(r2: np.ndarray, need: np.ndarray, vectors: np.ndarray, kind: np.ndarray) -> np.ndarray:
-    """Centres of maximal disks: pixels whose disk no nearby pixel's disk contains.
-
-    Exact on the discrete disks, within the window of ``vectors``; a pixel whose
-    disk is contained only by a farther one stays an anchor, which costs a spur the
-    redundancy pass removes, never reconstruction.
-    """
-    h, w = r2.shape
-    anchor = np.zeros((h, w), dtype=np.bool_)
-    last = 0  # the vector that found the previous pixel dominated: tried first
-    for r in range(1, h - 1):
-        for c in range(1, w - 1):
-            v = r2[r, c]
-            if v == 0:
-                continue
-            if _dominated_by(r2, need, vectors, kind, r, c, v, last):
-                continue
-            dominated = False
-            for i in range(vectors.shape[0]):
-                if _dominated_by(r2, need, vectors, kind, r, c, v, i):
-                    dominated = True
-                    last = i
-                    break
-            anchor[r, c] = not dominated
-    return anchor
 
 
 @njit(cache=True, inline="always")
@@ -323,17 +132,6 @@ def _ordered_thinning(fg, r2, anchor, simple) -> None:
 #: The thinning's first cap on the counts, and the largest before exact counts.
 _FIRST_CAP = 4
 _LAST_CAP = 64
-
-
-def thinning_cap(r2s: np.ndarray, pixels: int) -> int:
-    """The first cap on the thinning's counts for disks ``r2s`` on a grid of ``pixels``.
-
-    Capped counts (see :func:`_thin`) cost about the pixels, exact ones the disks'
-    heights: capped where the heights outweigh the pixels (a blob's axis, few removals
-    and disks of hundreds of pixels' radius), exact otherwise.
-    """
-    heights = float(np.sum(2.0 * np.sqrt(r2s.astype(np.float64)) + 1.0))
-    return _FIRST_CAP if heights > pixels else 0
 
 
 @njit(cache=True)
@@ -544,16 +342,67 @@ def oriented_medial_axis(padded: np.ndarray, r2: np.ndarray) -> MedialAxis:
 def _medial_axis_pixels(padded: np.ndarray, r2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rows and columns of the medial axis, computed in the given frame."""
     need = _domination_table(r2)  # sized by the maximum: no need to select the shape
-    anchor = _anchors(r2, need, VECTORS, VECTOR_KIND)
-    ar, ac = np.nonzero(anchor)
-    order = np.lexsort((ac, ar, r2[ar, ac]))
-    drop_redundant_anchors(anchor, r2, ar[order].astype(np.int64), ac[order].astype(np.int64))
+    return _axis_pixels(
+        np.asarray(padded, dtype=np.bool_), r2, need, VECTORS, VECTOR_KIND, SIMPLE, DEGREE
+    )
+
+
+@njit(cache=True)
+def _by_radius(fg, r2):
+    """The pixels of ``fg``, smallest ``r2`` first, ties in raster order (a stable sort
+    of the raster order by radius, as ``np.lexsort((cols, rows, r2[rows, cols]))``)."""
+    h, w = fg.shape
+    n = 0
+    for r in range(h):
+        for c in range(w):
+            if fg[r, c]:
+                n += 1
+    rows = np.empty(n, dtype=np.int64)
+    cols = np.empty(n, dtype=np.int64)
+    vals = np.empty(n, dtype=np.int64)
+    k = 0
+    for r in range(h):
+        for c in range(w):
+            if fg[r, c]:
+                rows[k], cols[k], vals[k] = r, c, r2[r, c]
+                k += 1
+    order = np.argsort(vals, kind="mergesort")  # stable
+    return rows[order], cols[order]
+
+
+@njit(cache=True)
+def _axis_pixels(padded, r2, need, vectors, kind, simple, degree):
+    """:func:`_medial_axis_pixels`'s stages in one compiled call: the anchors (centres of
+    maximal disks), the redundant ones dropped, the distance-ordered thinning, the
+    thinning pass and the ends extended; returns the axis's rows and columns, in raster
+    order."""
+    anchor = _anchors(r2, need, vectors, kind)
+    ar, ac = _by_radius(anchor, r2)
+    drop_redundant_anchors(anchor, r2, ar, ac)
     fg = padded.copy()
-    _ordered_thinning(fg, r2, anchor, SIMPLE)
-    rows, cols = np.nonzero(fg)
-    order = np.lexsort((cols, rows, r2[rows, cols]))  # smallest radius first
-    rows, cols = rows[order].astype(np.int64), cols[order].astype(np.int64)
-    _thin(fg, r2, rows, cols, SIMPLE, DEGREE, thinning_cap(r2[rows, cols], r2.size))
-    _extend_ends(fg, r2, DEGREE)
-    rows, cols = np.nonzero(fg)
-    return rows.astype(np.int64), cols.astype(np.int64)
+    _ordered_thinning(fg, r2, anchor, simple)
+    rows, cols = _by_radius(fg, r2)  # smallest radius first
+    # The first cap on the thinning's counts: capped counts (see _thin) cost about the
+    # pixels, exact ones the disks' heights; capped where the heights outweigh the
+    # pixels (a blob's axis, few removals and disks of hundreds of pixels' radius),
+    # exact otherwise. Either gives the same axis.
+    heights = 0.0
+    for k in range(rows.size):
+        heights += 2.0 * np.sqrt(np.float64(r2[rows[k], cols[k]])) + 1.0
+    _thin(fg, r2, rows, cols, simple, degree, _FIRST_CAP if heights > r2.size else 0)
+    _extend_ends(fg, r2, degree)
+    h, w = fg.shape
+    n = 0
+    for r in range(h):
+        for c in range(w):
+            if fg[r, c]:
+                n += 1
+    out_r = np.empty(n, dtype=np.int64)
+    out_c = np.empty(n, dtype=np.int64)
+    k = 0
+    for r in range(h):
+        for c in range(w):
+            if fg[r, c]:
+                out_r[k], out_c[k] = r, c
+                k += 1
+    return out_r, out_c

@@ -10,7 +10,7 @@ import numpy as np
 from numba import njit
 
 from ._digital import disk_half_width, isqrt
-from ._disk_counts import last_cover
+from ._last_cover import last_cover
 
 __all__ = [
     "count_covered",
@@ -70,7 +70,7 @@ def count_covered(
 
     For a few pixels and many disks: the pixels are a bitmap in tiles that each disk
     walks a row of tiles at a time, skipping the tiles with no pixel left to find
-    (:func:`~skelprune.grid._disk_counts.last_cover`), so a disk costs about its height in
+    (:func:`~skelprune.grid._last_cover.last_cover`), so a disk costs about its height in
     tiles, not its area nor a test per pixel.
 
     Examples

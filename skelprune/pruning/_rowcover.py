@@ -22,7 +22,13 @@ from numba import njit
 
 from ..grid import isqrt
 
-__all__ = ["cover_counts", "cut_counts", "exclusive_losses", "uncover", "uncover_count"]
+__all__ = [
+    "cover_counts",
+    "cut_counts",
+    "exclusive_losses",
+    "uncover",
+    "uncover_count",
+]
 
 
 @njit(cache=True)

@@ -199,6 +199,8 @@ def _flatten(graph: BranchGraph, branches: list[int]) -> tuple[np.ndarray, np.nd
         br.points[::-1] if br.node[0] is None else br.points
         for br in (graph.branches[b] for b in branches)
     ]
+    if len(lists) == 1:  # (most calls: one branch that a merge changed)
+        return np.asarray(lists[0], np.int64), np.array([0, len(lists[0])], np.int64)
     offsets = np.zeros(len(lists) + 1, np.int64)
     np.cumsum(np.fromiter(map(len, lists), np.int64, len(lists)), out=offsets[1:])
     return np.fromiter(chain.from_iterable(lists), np.int64, int(offsets[-1])), offsets
@@ -240,6 +242,9 @@ class _EndBranches:
         self.starts_at[after] = np.arange(len(after))
         self.before, self.after, self.positions = before, after, positions
         self.cache: dict[int, tuple[int, bool, int, float]] = {}  # b -> (n, sup, v, d2)
+        # _branch_states' arguments after the points (the same arrays every call; made
+        # on the first, which builds the raster's cells)
+        self.shared: tuple | None = None
 
     def update(self, branches: list[int]) -> None:
         """Bring the cached answers of ``branches`` up to date (one compiled call)."""
@@ -252,30 +257,30 @@ class _EndBranches:
         if not stale:
             return
         flat, offsets = _flatten(graph, stale)
-        cells = self.raster.cells()
-        sup, claimed = _branch_states(
-            flat,
-            offsets,
-            self.raster.seg_lo,
-            self.raster.seg_hi,
-            cells.start,
-            cells.row,
-            cells.col,
-            cells.lo,
-            cells.hi,
-            cells.nxt,
-            cells.width,
-            self.raster.local,
-            self.raster.r2,
-            self.raster.tolerance,
-            self.known,
-            self.first,
-            self.supported,
-            self.vertex,
-            self.starts_at,
-            self.before,
-            self.after,
-        )
+        if self.shared is None:
+            cells = self.raster.cells()
+            self.shared = (
+                self.raster.seg_lo,
+                self.raster.seg_hi,
+                cells.start,
+                cells.row,
+                cells.col,
+                cells.lo,
+                cells.hi,
+                cells.nxt,
+                cells.width,
+                self.raster.local,
+                self.raster.r2,
+                self.raster.tolerance,
+                self.known,
+                self.first,
+                self.supported,
+                self.vertex,
+                self.starts_at,
+                self.before,
+                self.after,
+            )
+        sup, claimed = _branch_states(flat, offsets, *self.shared)
         for b, ok, v in zip(stale, sup.tolist(), claimed.tolist(), strict=True):
             d2 = 0.0
             if v >= 0:
@@ -286,8 +291,11 @@ class _EndBranches:
             self.cache[b] = (len(graph.branches[b].points), ok, v, d2)
 
     def is_supported(self, b: int) -> bool:
-        self.update([b])
-        return self.cache[b][1]
+        hit = self.cache.get(b)
+        if hit is None or hit[0] != len(self.graph.branches[b].points):
+            self.update([b])
+            hit = self.cache[b]
+        return hit[1]
 
     def unsupported(self, branches: list[int]) -> list[int]:
         self.update(branches)

@@ -30,8 +30,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ..grid._edt import _squared_edt
 from ..grid.graph import BranchGraph
-from ..grid.medial_axis import _squared_edt
 from ._rowcover import cover_counts, uncover
 
 __all__ = ["MIN_LIMB_AREA", "RIM", "LimbGuard"]

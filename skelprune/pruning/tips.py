@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -75,6 +76,19 @@ class Trim:
         return self.na, self.nd
 
 
+class _Tip(NamedTuple):
+    """One tip's candidate cuts (:meth:`_Tips.candidates`)."""
+
+    points: np.ndarray
+    drop: np.ndarray
+    lost: np.ndarray
+    cut: np.ndarray
+    allowed: np.ndarray
+    box: tuple[int, int, int, int]
+    only: int
+    best: int
+
+
 class _Tips:
     """The disk counts the cuts share (``c``: per pixel, how many disks of the skeleton
     left so far cover it)."""
@@ -86,34 +100,37 @@ class _Tips:
         self.c = cover_counts(h, w, sk.rows[idx], sk.cols[idx], sk.r2[idx])
 
     def candidates(
-        self, b: int, e: int
-    ) -> tuple[
-        list[int], np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int], int, np.ndarray
-    ]:
-        """The tip's points, their drop indices, per cut ``k = 0 … len − 1`` of the path
+        self,
+        ends: list[tuple[int, int]],
+        lost: int,
+        na: int,
+        nd: int,
+        area: int,
+        alpha: float,
+        lbar: float,
+    ) -> list[_Tip]:
+        """Each tip's points, their drop indices, per cut ``k = 0 … len − 1`` of the path
         (``len − 2`` on a single path) the pixels lost and the (axial, diagonal) steps
-        dropped, the box the tip's disks can reach, the pixels only they cover, and per
-        cut whether it cuts a remnant only (:data:`RULE`)."""
+        dropped, whether it cuts a remnant only (:data:`RULE`), the box the tip's disks
+        can reach, the pixels only they cover, and the best cut on a skeleton with
+        ``lost``, ``na`` and ``nd``."""
         sk, graph = self.sk, self.graph
-        points, drop, steps = graph.tip(b, e)
-        # a single path keeps two points: one would be a single endpoint
-        m = len(steps) + (0 if graph.branches[b].node[1 - e] is None else 1)
-        pts = np.asarray(points, np.int64)
-        dr = np.asarray(drop, np.int64)
-        lost, cut, box, only = cut_counts(
-            sk.mask,
-            self.c,
-            sk.rows,
-            sk.cols,
-            sk.r2,
-            pts,
-            dr,
-            np.asarray(steps, np.int64),
-            m,
-        )
-        box_ = (int(box[0]), int(box[1]), int(box[2]), int(box[3]))
-        allowed = remnant_cuts(sk.rows, sk.cols, sk.r2, pts, dr, lost, RULES.index(RULE))
-        return points, dr, lost, cut, box_, int(only), allowed
+        rule = RULES.index(RULE)
+        out = []
+        for b, e in ends:
+            points, drop, steps = graph.tip(b, e)
+            # a single path keeps two points: one would be a single endpoint
+            m = len(steps) + (0 if graph.branches[b].node[1 - e] is None else 1)
+            pts = np.asarray(points, np.int64)
+            dr = np.asarray(drop, np.int64)
+            cl, cs, box, only = cut_counts(
+                sk.mask, self.c, sk.rows, sk.cols, sk.r2, pts, dr, np.asarray(steps, np.int64), m
+            )
+            allowed = remnant_cuts(sk.rows, sk.cols, sk.r2, pts, dr, cl, rule)
+            best = _best(lost, na, nd, cl, cs, allowed, area, alpha, lbar)
+            b0, b1, b2, b3 = box.tolist()
+            out.append(_Tip(pts, dr, cl, cs, allowed, (b0, b1, b2, b3), int(only), int(best)))
+        return out
 
     def exclusive(self, b: int) -> int:
         """Pixels only branch ``b``'s disks cover."""
@@ -188,16 +205,48 @@ def _best(lost0, na0, nd0, cand_lost, cand_steps, allowed, area, alpha, lbar):
     return best
 
 
-def _disk_box(rows: np.ndarray, cols: np.ndarray, r2: np.ndarray) -> tuple[int, int, int, int]:
-    """The box (top, left, bottom, right) these points' disks can reach, as
+def _cut(
+    c: np.ndarray,
+    rows: np.ndarray,
+    cols: np.ndarray,
+    r2: np.ndarray,
+    points: np.ndarray,
+    drop: np.ndarray,
+    k: int,
+) -> tuple[list[int], tuple[int, int, int, int]]:
+    """Cut ``k`` of a tip: its dropped points' disks taken off the counts ``c``; returns
+    those points and the box (top, left, bottom, right) their disks can reach, as
     :func:`~skelprune.pruning._rowcover.cut_counts` bounds a tip's."""
-    rad = np.sqrt(r2).astype(np.int64) + 1
-    return (
-        int((rows - rad).min()),
-        int((cols - rad).min()),
-        int((rows + rad).max()),
-        int((cols + rad).max()),
-    )
+    gone, box = _cut_kernel(c, rows, cols, r2, points, drop, k)
+    b = box.tolist()
+    return gone.tolist(), (b[0], b[1], b[2], b[3])
+
+
+@njit(cache=True)
+def _cut_kernel(c, rows, cols, r2, points, drop, k):
+    """:func:`_cut` in one compiled call."""
+    n = 0
+    for j in range(points.size):
+        if drop[j] < k:
+            n += 1
+    gone = np.empty(n, np.int64)
+    n = 0
+    for j in range(points.size):
+        if drop[j] < k:
+            gone[n] = points[j]
+            n += 1
+    gr, gc, g2 = rows[gone], cols[gone], r2[gone]
+    uncover(c, gr, gc, g2)
+    box = np.empty(4, np.int64)
+    box[0] = box[1] = np.iinfo(np.int64).max
+    box[2] = box[3] = np.iinfo(np.int64).min
+    for j in range(n):
+        rad = int(math.sqrt(g2[j])) + 1
+        box[0] = min(box[0], gr[j] - rad)
+        box[1] = min(box[1], gc[j] - rad)
+        box[2] = max(box[2], gr[j] + rad)
+        box[3] = max(box[3], gc[j] + rad)
+    return gone, box
 
 
 def _meet(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> bool:
@@ -241,15 +290,15 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
     # The order: longest cut on Ŝ alone first, then endpoint (row, col).
     keyed = []
     first = {}
-    for b, e in ends:
-        cand = tips.candidates(b, e)
-        cl, cs = cand[2], cand[3]
-        k = _best(lost, graph.na, graph.nd, cl, cs, cand[6], area, alpha, lbar)
+    for (b, e), tip in zip(
+        ends, tips.candidates(ends, lost, graph.na, graph.nd, area, alpha, lbar), strict=True
+    ):
         p = graph.free_end_point(b, e)
-        first[b, e] = cand
+        first[b, e] = tip
+        cs = tip.cut
         keyed.append(
             (
-                -step_length(int(cs[k, 0]), int(cs[k, 1])),
+                -step_length(int(cs[tip.best, 0]), int(cs[tip.best, 1])),
                 int(graph.rows[p]),
                 int(graph.cols[p]),
                 b,
@@ -264,28 +313,29 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
     # how many changes that count has seen
     kept: dict[int, tuple[int, tuple[int, int, int, int], int]] = {}
     for *_, b, e in keyed:
-        points, drop, cl, cs, box, only, allowed = first[b, e]
-        if b in cut_branches or any(_meet(box, c) for c in changed):
+        tip = first[b, e]
+        if b in cut_branches or any(_meet(tip.box, c) for c in changed):
             # an earlier cut changed what this tip's disks share: count again
-            points, drop, cl, cs, box, only, allowed = tips.candidates(b, e)
-        k = _best(lost, graph.na, graph.nd, cl, cs, allowed, area, alpha, lbar)
+            (tip,) = tips.candidates([(b, e)], lost, graph.na, graph.nd, area, alpha, lbar)
+            k = tip.best
+        elif changed:  # counted before a cut changed the length and the lost pixels
+            k = _best(lost, graph.na, graph.nd, tip.lost, tip.cut, tip.allowed, area, alpha, lbar)
+        else:
+            k = tip.best
+        points, drop, cl, cs = tip.points, tip.drop, tip.lost, tip.cut
         cuts.append((b, e, k))
         # a pixel only the kept points cover had all its disks in the tip, one kept
-        kept[b] = (only - int(cl[k]), box, len(changed) + (k > 0))
+        kept[b] = (tip.only - int(cl[k]), tip.box, len(changed) + (k > 0))
         if k == 0:
             continue
-        gone = np.asarray(
-            [p for p, d in zip(points, drop.tolist(), strict=True) if d < k], np.int64
-        )
-        gr, gc, g2 = answer.rows[gone], answer.cols[gone], answer.r2[gone]
-        uncover(tips.c, gr, gc, g2)
         # Only the dropped points' disks changed the counts: their box, not the whole
         # tip's (whose large disks near the junction reach most of a small shape), so
         # that fewer later tips are counted again.
-        changed.append(_disk_box(gr, gc, g2))
+        gone, dropped_box = _cut(tips.c, answer.rows, answer.cols, answer.r2, points, drop, k)
+        changed.append(dropped_box)
         cut_branches.add(b)
         lost += int(cl[k])
-        graph.cut_tip(b, e, gone.tolist(), int(cs[k, 0]), int(cs[k, 1]))
+        graph.cut_tip(b, e, gone, int(cs[k, 0]), int(cs[k, 1]))
     exclusive = {}
     for b in graph.end_branches():
         if b in kept and not any(_meet(kept[b][1], c) for c in changed[kept[b][2] :]):

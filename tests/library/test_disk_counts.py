@@ -1,5 +1,5 @@
-"""Disk-count kernels (skelprune.grid._disk_counts) and the redundant-anchor pass against plain
-per-pixel counts."""
+"""Disk-count kernels (skelprune.grid._disk_counts and ._last_cover) and the
+redundant-anchor pass against plain per-pixel counts."""
 
 from __future__ import annotations
 
@@ -11,18 +11,12 @@ import pytest
 from evaluation.perturb import boundary_noise
 from skelprune.api import components
 from skelprune.grid._digital import disk_half_width, isqrt
-from skelprune.grid._disk_counts import (
-    BLOCK,
-    capped_coverage,
-    coverage,
-    disk_loss,
-    disk_remove,
-    drop_redundant_anchors,
-    last_cover,
-)
+from skelprune.grid._disk_counts import BLOCK, coverage, disk_loss, disk_remove
+from skelprune.grid._last_cover import capped_coverage, drop_redundant_anchors, last_cover
 from testkit.shapes import blobs, dataset, load
 
 ma = importlib.import_module("skelprune.grid.medial_axis")
+disks = importlib.import_module("skelprune.grid._maximal_disks")
 
 
 def true_counts(cover: np.ndarray, lazy: np.ndarray) -> np.ndarray:
@@ -170,14 +164,14 @@ def test_drop_redundant_anchors_matches_plain_counts(case):
 def test_domination_table_is_the_containment_threshold(size):
     """``need[R, v]``: the least r2 whose disk at offset ``v`` holds the disk of radius² R,
     worked out here from the definition: test every candidate r2 against every pixel."""
-    need = ma._cached_domination_table(size)
-    assert need.shape == (size + 1, len(ma._KINDS))
+    need = disks._cached_domination_table(size)
+    assert need.shape == (size + 1, len(disks._KINDS))
     reach = isqrt(size) + 1
     dy, dx = np.mgrid[-reach : reach + 1, -reach : reach + 1]
     d2 = dy * dy + dx * dx
     for big_r in range(1, size + 1):
         inside = d2 < big_r
-        for j, (a, b) in enumerate(ma._KINDS):
+        for j, (a, b) in enumerate(disks._KINDS):
             far = ((dy - a) ** 2 + (dx - b) ** 2)[inside]
             least = next(t for t in range(1, 4 * size + 64) if (far < t).all())
             assert need[big_r, j] == least, (big_r, (a, b))

@@ -11,7 +11,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["DEGREE", "NEIGHBOURS", "SIMPLE", "disk_half_width", "isqrt"]
+__all__ = ["DEGREE", "NEIGHBOURS", "SIMPLE", "disk_half_width", "find_root", "isqrt"]
 
 # Neighbour order used by every lookup table: clockwise from the top-left.
 NEIGHBOURS = np.array(
@@ -126,3 +126,16 @@ def heap_pop(heap, size):
         heap[m], heap[i] = heap[i], heap[m]
         i = m
     return top, size
+
+
+@njit(cache=True, inline="always")
+def find_root(parent, x):
+    """The root of ``x`` in the union-find forest ``parent``, the path compressed on the
+    way: the pixel kernels' one union-find (the first open column of a row, the owner a
+    label was merged into)."""
+    root = x
+    while parent[root] != root:
+        root = parent[root]
+    while parent[x] != root:
+        parent[x], x = root, parent[x]
+    return root

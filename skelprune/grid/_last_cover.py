@@ -10,21 +10,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._digital import disk_half_width, isqrt
+from ._digital import disk_half_width, find_root, isqrt
 from ._disk_counts import BLOCK, _block_stats
 
 __all__ = ["TILE", "capped_coverage", "drop_redundant_anchors", "last_cover"]
-
-
-@njit(cache=True, inline="always")
-def _find(nxt, x) -> int:
-    """First unpainted pixel at or after ``x`` in a row (union-find, path compression)."""
-    root = x
-    while nxt[root] != root:
-        root = nxt[root]
-    while nxt[x] != root:
-        nxt[x], x = root, nxt[x]
-    return root
 
 
 # Side of the square tiles :func:`last_cover` works in: 32 pixels, one int64 word holds
@@ -138,7 +127,7 @@ def last_cover(inside, rows, cols, r2s) -> np.ndarray:
             wide = disk_half_width(v, min(max(r, y0), y1) - r)
             trow = tnxt[ty]
             span = _bits(y0 - ty * TILE, y1 - ty * TILE)
-            tx = _find(trow, (c - wide) // TILE)
+            tx = find_root(trow, (c - wide) // TILE)
             while tx <= (c + wide) // TILE:
                 x0 = tx * TILE
                 ys = busy[ty, tx] & span
@@ -191,7 +180,7 @@ def last_cover(inside, rows, cols, r2s) -> np.ndarray:
                     across[ty, tx] = cols_left
                 if busy[ty, tx] == 0:
                     trow[tx] = tx + 1
-                tx = _find(trow, tx + 1)
+                tx = find_root(trow, tx + 1)
     return last
 
 
@@ -293,7 +282,7 @@ def capped_coverage(inside, rows, cols, r2s, cap: int):
             wide = disk_half_width(v, min(max(r, y0), y1) - r)
             trow = tnxt[ty]
             span = _bits(y0 - ty * TILE, y1 - ty * TILE)
-            tx = _find(trow, (c - wide) // TILE)
+            tx = find_root(trow, (c - wide) // TILE)
             while tx <= (c + wide) // TILE:
                 x0 = tx * TILE
                 ys = busy[ty, tx] & span
@@ -352,7 +341,7 @@ def capped_coverage(inside, rows, cols, r2s, cap: int):
                     across[ty, tx] = cols_left
                 if busy[ty, tx] == 0:
                     trow[tx] = tx + 1
-                tx = _find(trow, tx + 1)
+                tx = find_root(trow, tx + 1)
     nb = (shape_w + BLOCK - 1) // BLOCK
     cover = np.zeros((shape_h, nb * BLOCK), dtype=np.int32)
     for y in range(shape_h):

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ._digital import find_root
 from ._intervals import owner_runs
 
 # Coverage counts owners, not disks: each owner (a branch, or a junction cluster) is the
@@ -87,17 +88,6 @@ def _tile_owners(tiles, toff, n_tiles):
     return start, owners, full
 
 
-@njit(cache=True, inline="always")
-def _find(alias, b):
-    """The owner label ``b`` is now part of (labels merge into others)."""
-    root = b
-    while alias[root] != root:
-        root = alias[root]
-    while alias[b] != root:
-        alias[b], b = root, alias[b]
-    return root
-
-
 @njit(cache=True)
 def _open(t, tile, tw, mask, buf, lo, hi, start, owners, alias, alive, stamp, c, s, excl):
     """Count the pixels of tile ``t`` (every owner meeting it, painted); credit the
@@ -106,7 +96,7 @@ def _open(t, tile, tw, mask, buf, lo, hi, start, owners, alias, alive, stamp, c,
     y0, x0 = ty * tile, tx * tile
     ct, st = c[t], s[t]
     for j in range(start[t], start[t + 1]):
-        b = _find(alias, owners[j])
+        b = find_root(alias, owners[j])
         if not alive[b] or stamp[b] == t:
             continue
         stamp[b] = t

@@ -22,8 +22,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..grid._rowcover import cover_counts, uncover_count
 from ..grid.medial_axis import squared_distance
-from ._rowcover import cover_counts, uncover_count
 from .bayesian import PruningSequence
 
 if TYPE_CHECKING:

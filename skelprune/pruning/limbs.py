@@ -31,8 +31,8 @@ import numpy as np
 from numba import njit
 
 from ..grid._edt import _squared_edt
+from ..grid._rowcover import cover_counts, uncover
 from ..grid.graph import BranchGraph
-from ._rowcover import cover_counts, uncover
 
 __all__ = ["MIN_LIMB_AREA", "RIM", "LimbGuard"]
 

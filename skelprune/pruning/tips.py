@@ -36,9 +36,9 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from ..grid._rowcover import cover_counts, cut_counts, exclusive_losses, uncover
 from ..grid.graph import BranchGraph, step_length
 from ..skeleton import Skeleton
-from ._rowcover import cover_counts, cut_counts, exclusive_losses, uncover
 
 __all__ = ["RULES", "Trim", "trim_tips"]
 
@@ -216,7 +216,7 @@ def _cut(
 ) -> tuple[list[int], tuple[int, int, int, int]]:
     """Cut ``k`` of a tip: its dropped points' disks taken off the counts ``c``; returns
     those points and the box (top, left, bottom, right) their disks can reach, as
-    :func:`~skelprune.pruning._rowcover.cut_counts` bounds a tip's."""
+    :func:`~skelprune.grid._rowcover.cut_counts` bounds a tip's."""
     gone, box = _cut_kernel(c, rows, cols, r2, points, drop, k)
     b = box.tolist()
     return gone.tolist(), (b[0], b[1], b[2], b[3])

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skelprune.pruning._rowcover import cover_counts, exclusive_losses, uncover, uncover_count
+from skelprune.grid._rowcover import cover_counts, exclusive_losses, uncover, uncover_count
 
 
 def random_disks(rng: np.random.Generator, h: int, w: int, n: int):

@@ -20,7 +20,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..grid import isqrt
+from ._digital import find_root, isqrt
 
 __all__ = [
     "cover_counts",
@@ -173,15 +173,6 @@ def uncover_count(c, deep, rows, cols, r2):
 
 
 @njit(cache=True)
-def _find(nxt, x):
-    """The first column ``≥ x`` still open (path halving)."""
-    while nxt[x] != x:
-        nxt[x] = nxt[nxt[x]]
-        x = nxt[x]
-    return x
-
-
-@njit(cache=True)
 def exclusive_losses(mask, c, rows, cols, r2, drop, n_drop):
     """Pixels of ``mask`` covered by these disks only, by the largest ``drop`` among them.
 
@@ -221,11 +212,11 @@ def exclusive_losses(mask, c, rows, cols, r2, drop, n_drop):
         nxt[right + 1] = right + 1
         for j in range(na):  # decreasing drop index
             d = t[j]
-            x = _find(nxt, lo[j])
+            x = find_root(nxt, lo[j])
             while x <= hi[j]:
                 loss[d] += 1
                 nxt[x] = x + 1
-                x = _find(nxt, x + 1)
+                x = find_root(nxt, x + 1)
     return loss
 
 

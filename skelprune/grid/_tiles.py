@@ -5,6 +5,8 @@ Used only by :mod:`skelprune.grid.coverage`.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
@@ -21,6 +23,30 @@ from ._intervals import owner_runs
 
 #: Side of the square tiles of :class:`Coverage`.
 COVER_TILE = 32
+
+
+class TileState(NamedTuple):
+    """What the tile kernels share, passed as one record: every array above but the two
+    that grow and are passed beside it (``buf``, the owners' runs, and ``tiles``, their
+    tile lists)."""
+
+    tile: int
+    tw: int
+    mask: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    tlo: np.ndarray
+    thi: np.ndarray
+    start: np.ndarray
+    owners: np.ndarray
+    alias: np.ndarray
+    alive: np.ndarray
+    stamp: np.ndarray
+    c: np.ndarray
+    s: np.ndarray
+    excl: np.ndarray
+    full: np.ndarray
+    opened: np.ndarray
 
 
 @njit(cache=True)
@@ -89,12 +115,27 @@ def _tile_owners(tiles, toff, n_tiles):
 
 
 @njit(cache=True)
-def _open(t, tile, tw, mask, buf, lo, hi, start, owners, alias, alive, stamp, c, s, excl):
+def _open(t, st, buf):
     """Count the pixels of tile ``t`` (every owner meeting it, painted); credit the
     pixels with one owner to it, and return those of the shape with none."""
+    tile, tw, mask, lo, hi, start, owners, alias, alive, stamp, c, s, excl = (
+        st.tile,
+        st.tw,
+        st.mask,
+        st.lo,
+        st.hi,
+        st.start,
+        st.owners,
+        st.alias,
+        st.alive,
+        st.stamp,
+        st.c,
+        st.s,
+        st.excl,
+    )
     ty, tx = t // tw, t % tw
     y0, x0 = ty * tile, tx * tile
-    ct, st = c[t], s[t]
+    ct, cs = c[t], s[t]
     for j in range(start[t], start[t + 1]):
         b = find_root(alias, owners[j])
         if not alive[b] or stamp[b] == t:
@@ -111,7 +152,7 @@ def _open(t, tile, tw, mask, buf, lo, hi, start, owners, alias, alive, stamp, c,
         i = u
         while i < hi[b] and buf[i, 0] < y0 + tile:
             a, e = max(buf[i, 1], x0), min(buf[i, 2], x0 + tile - 1)
-            row_c, row_s = ct[buf[i, 0] - y0], st[buf[i, 0] - y0]
+            row_c, row_s = ct[buf[i, 0] - y0], cs[buf[i, 0] - y0]
             for q in range(a - x0, e - x0 + 1):
                 row_c[q] += 1
                 row_s[q] += b
@@ -119,7 +160,7 @@ def _open(t, tile, tw, mask, buf, lo, hi, start, owners, alias, alive, stamp, c,
     lost = 0
     h, w = mask.shape
     for y in range(y0, min(y0 + tile, h)):
-        row_c, row_s, row_m = ct[y - y0], st[y - y0], mask[y]
+        row_c, row_s, row_m = ct[y - y0], cs[y - y0], mask[y]
         for x in range(x0, min(x0 + tile, w)):
             n = row_c[x - x0]
             if n == 1:
@@ -130,48 +171,39 @@ def _open(t, tile, tw, mask, buf, lo, hi, start, owners, alias, alive, stamp, c,
 
 
 @njit(cache=True)
-def _open_thin_tiles(
-    tile, tw, mask, buf, lo, hi, start, owners, alias, alive, stamp, c, s, excl, full, opened
-):
+def _open_thin_tiles(st, buf):
+    """Open every tile fewer than two owners cover whole; the shape's pixels they leave
+    uncovered."""
     lost = 0
-    for t in range(full.size):
-        if full[t] < 2:
-            opened[t] = True
-            lost += _open(
-                t, tile, tw, mask, buf, lo, hi, start, owners, alias, alive, stamp, c, s, excl
-            )
+    for t in range(st.full.size):
+        if st.full[t] < 2:
+            st.opened[t] = True
+            lost += _open(t, st, buf)
     return lost
 
 
 @njit(cache=True)
-def _remove_owner(
-    old,
-    tile,
-    tw,
-    mask,
-    buf,
-    lo,
-    hi,
-    tiles,
-    tlo,
-    thi,
-    start,
-    owners,
-    alias,
-    alive,
-    stamp,
-    c,
-    s,
-    excl,
-    full,
-    opened,
-):
+def _remove_owner(old, st, buf, tiles):
     """Take owner ``old`` off the pixels of its run set; return the pixels left uncovered.
 
     In open tiles each pixel is visited once (a run set is disjoint), so the pixels left
     with one owner are credited to it at once; a closed tile loses one owner covering it
     whole, if ``old`` was one, and is opened when fewer than two are left.
     """
+    tile, tw, lo, hi, tlo, thi, alive, c, s, excl, full, opened = (
+        st.tile,
+        st.tw,
+        st.lo,
+        st.hi,
+        st.tlo,
+        st.thi,
+        st.alive,
+        st.c,
+        st.s,
+        st.excl,
+        st.full,
+        st.opened,
+    )
     lost = 0
     for i in range(lo[old], hi[old]):
         r, a, e = buf[i, 0], buf[i, 1], buf[i, 2]
@@ -197,9 +229,7 @@ def _remove_owner(
             full[t] -= 1
             if full[t] < 2:
                 opened[t] = True
-                lost += _open(
-                    t, tile, tw, mask, buf, lo, hi, start, owners, alias, alive, stamp, c, s, excl
-                )
+                lost += _open(t, st, buf)
     return lost
 
 
@@ -263,35 +293,12 @@ def _merge_pixels(c, s, opened, tile, tw, moved, kept, old, new):
 
 
 @njit(cache=True)
-def _merge_tiles(
-    out,
-    m,
-    old,
-    new,
-    tile,
-    tw,
-    mask,
-    buf,
-    lo,
-    hi,
-    tiles,
-    tlo,
-    thi,
-    start,
-    owners,
-    alias,
-    alive,
-    stamp,
-    c,
-    s,
-    excl,
-    full,
-    opened,
-):
+def _merge_tiles(out, m, old, new, st, buf, tiles):
     """The tile list of ``new`` after it absorbed ``old``, written to ``out[m:]``; a closed
     tile both covered whole loses one such owner (and opens when fewer than two are
     left). Returns the new end of ``out`` and the pixels left uncovered (none: a merge
     uncovers nothing, but opening a tile counts its pixels)."""
+    tlo, thi, full, opened = st.tlo, st.thi, st.full, st.opened
     i, e_i = tlo[old], thi[old]
     j, e_j = tlo[new], thi[new]
     lost = 0
@@ -309,23 +316,7 @@ def _merge_tiles(
                 full[t] -= 1
                 if full[t] < 2:
                     opened[t] = True
-                    lost += _open(
-                        t,
-                        tile,
-                        tw,
-                        mask,
-                        buf,
-                        lo,
-                        hi,
-                        start,
-                        owners,
-                        alias,
-                        alive,
-                        stamp,
-                        c,
-                        s,
-                        excl,
-                    )
+                    lost += _open(t, st, buf)
             i += 1
             j += 1
         m += 1
@@ -348,76 +339,12 @@ def _build(rows, cols, r2, labels, n_labels, tile, tw, mask, c, s):
     stamp = np.full(n_labels, -1, np.int64)
     opened = np.zeros(n_tiles, np.bool_)
     excl = np.zeros(n_labels, np.int64)
-    lost = _open_thin_tiles(
-        tile, tw, mask, runs, lo, hi, start, owners, alias, alive, stamp, c, s, excl, full, opened
-    )
-    return (
-        runs,
-        lo,
-        hi,
-        tiles,
-        tlo,
-        thi,
-        start,
-        owners,
-        full,
-        alias,
-        alive,
-        stamp,
-        opened,
-        excl,
-        lost,
-    )
-
-
-@njit(cache=True)
-def _merge(
-    old,
-    new,
-    mlo,
-    mhi,
-    tused,
-    tile,
-    tw,
-    mask,
-    buf,
-    lo,
-    hi,
-    tiles,
-    tlo,
-    thi,
-    start,
-    owners,
-    alias,
-    alive,
-    stamp,
-    c,
-    s,
-    excl,
-    full,
-    opened,
-):
-    """Owner ``old`` joins owner ``new``, whose merged runs are ``buf[mlo:mhi]``: the
-    pixels of the open tiles, then the tiles (written from ``tiles[tused:]``). Returns
-    the new end of ``tiles`` and the pixels left uncovered by the tiles it opened."""
-    excl[new] += _merge_pixels(
-        c, s, opened, tile, tw, buf[lo[old] : hi[old]], buf[lo[new] : hi[new]], old, new
-    )
-    lo[new], hi[new] = mlo, mhi
-    alias[old] = new
-    alive[old] = False
-    end, lost = _merge_tiles(
-        tiles,
-        tused,
-        old,
-        new,
+    st = TileState(
         tile,
         tw,
         mask,
-        buf,
         lo,
         hi,
-        tiles,
         tlo,
         thi,
         start,
@@ -431,6 +358,35 @@ def _merge(
         full,
         opened,
     )
+    return runs, tiles, st, _open_thin_tiles(st, runs)
+
+
+@njit(cache=True)
+def _merge(old, new, mlo, mhi, tused, st, buf, tiles):
+    """Owner ``old`` joins owner ``new``, whose merged runs are ``buf[mlo:mhi]``: the
+    pixels of the open tiles, then the tiles (written from ``tiles[tused:]``). Returns
+    the new end of ``tiles`` and the pixels left uncovered by the tiles it opened."""
+    tile, tw, lo, hi, tlo, thi, alias, alive, c, s, excl, opened = (
+        st.tile,
+        st.tw,
+        st.lo,
+        st.hi,
+        st.tlo,
+        st.thi,
+        st.alias,
+        st.alive,
+        st.c,
+        st.s,
+        st.excl,
+        st.opened,
+    )
+    excl[new] += _merge_pixels(
+        c, s, opened, tile, tw, buf[lo[old] : hi[old]], buf[lo[new] : hi[new]], old, new
+    )
+    lo[new], hi[new] = mlo, mhi
+    alias[old] = new
+    alive[old] = False
+    end, lost = _merge_tiles(tiles, tused, old, new, st, buf, tiles)
     tlo[new], thi[new] = tused, end
     thi[old] = tlo[old]
     hi[old] = lo[old]

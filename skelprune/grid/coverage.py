@@ -78,23 +78,7 @@ class Coverage:
         # zeroed lazily by the system: the pages of tiles never opened are never touched
         self.c = np.zeros((n_tiles, tile, tile), np.int32)
         self.s = np.zeros((n_tiles, tile, tile), np.int64)
-        (
-            self.buf,
-            self.lo,
-            self.hi,
-            self.tiles,
-            self.tlo,
-            self.thi,
-            self.start,
-            self.owners,
-            self.full,
-            self.alias,
-            self.alive,
-            self.stamp,
-            self.opened,
-            self.exclusive,
-            lost,
-        ) = _build(
+        self.buf, self.tiles, self.state, lost = _build(
             np.asarray(rows, np.int64),
             np.asarray(cols, np.int64),
             np.asarray(r2, np.int64),
@@ -106,52 +90,24 @@ class Coverage:
             self.c,
             self.s,
         )
+        self.exclusive, self.opened = self.state.excl, self.state.opened
         self.used, self.tused = self.buf.shape[0], self.tiles.size
         self.lost = int(lost)
-        self._shared = self._state()
-
-    def _state(self) -> tuple:
-        """What the tile kernels share, in the order of their trailing parameters (kept
-        in ``_shared``, made again when a merge grows ``buf`` or ``tiles``)."""
-        return (
-            self.tile,
-            self.tw,
-            self.mask,
-            self.buf,
-            self.lo,
-            self.hi,
-            self.tiles,
-            self.tlo,
-            self.thi,
-            self.start,
-            self.owners,
-            self.alias,
-            self.alive,
-            self.stamp,
-            self.c,
-            self.s,
-            self.exclusive,
-            self.full,
-            self.opened,
-        )
 
     def remove_label(self, old: int) -> int:
         """Remove the disks of all points labelled ``old``; returns the newly uncovered area.
 
         The pruning knows the label of the branch it removes, so no point is looked at.
         """
-        lost = int(_remove_label(old, *self._shared))
+        lost = int(_remove_label(old, self.state, self.buf, self.tiles))
         self.lost += lost
         return lost
 
     def merge_label(self, old: int, new: int) -> None:
         """Give all points labelled ``old`` the label ``new``."""
-        buf, tiles, self.used, self.tused, lost = _merge_label(
-            old, new, self.used, self.tused, *self._shared
+        self.buf, self.tiles, self.used, self.tused, lost = _merge_label(
+            old, new, self.used, self.tused, self.state, self.buf, self.tiles
         )
-        if buf is not self.buf or tiles is not self.tiles:
-            self.buf, self.tiles = buf, tiles
-            self._shared = self._state()
         self.lost += int(lost)
 
     def counts(self) -> np.ndarray:
@@ -170,46 +126,22 @@ class Coverage:
 
 
 @njit(cache=True)
-def _remove_label(old, *shared):
+def _remove_label(old, st, buf, tiles):
     """:meth:`Coverage.remove_label` in one compiled call: the pixels left uncovered."""
-    lost = _remove_owner(old, *shared)
-    lo, hi, tlo, thi = shared[4], shared[5], shared[7], shared[8]
-    hi[old] = lo[old]
-    thi[old] = tlo[old]
+    lost = _remove_owner(old, st, buf, tiles)
+    st.hi[old] = st.lo[old]
+    st.thi[old] = st.tlo[old]
     return lost
 
 
 @njit(cache=True)
-def _merge_label(
-    old,
-    new,
-    used,
-    tused,
-    tile,
-    tw,
-    mask,
-    buf,
-    lo,
-    hi,
-    tiles,
-    tlo,
-    thi,
-    start,
-    owners,
-    alias,
-    alive,
-    stamp,
-    c,
-    s,
-    excl,
-    full,
-    opened,
-):
+def _merge_label(old, new, used, tused, st, buf, tiles):
     """:meth:`Coverage.merge_label` in one compiled call: the union of the two owners'
     runs appended to ``buf`` (``buf[:used]`` in use) and the tiles to ``tiles``
     (``tiles[:tused]``), each grown when full, then :func:`._tiles._merge`. Returns
     ``buf``, ``tiles`` (the same arrays or larger copies), their new ends, and the
     pixels left uncovered."""
+    lo, hi, tlo, thi = st.lo, st.hi, st.tlo, st.thi
     if old == new or hi[old] == lo[old]:
         return buf, tiles, used, tused, 0
     merged = union_runs(buf[lo[new] : hi[new]], buf[lo[old] : hi[old]])
@@ -226,30 +158,5 @@ def _merge_label(
         more = np.empty(2 * (tused + need), np.int64)
         more[:tused] = tiles[:tused]
         tiles = more
-    tused, lost = _merge(
-        old,
-        new,
-        mlo,
-        used,
-        tused,
-        tile,
-        tw,
-        mask,
-        buf,
-        lo,
-        hi,
-        tiles,
-        tlo,
-        thi,
-        start,
-        owners,
-        alias,
-        alive,
-        stamp,
-        c,
-        s,
-        excl,
-        full,
-        opened,
-    )
+    tused, lost = _merge(old, new, mlo, used, tused, st, buf, tiles)
     return buf, tiles, used, tused, lost

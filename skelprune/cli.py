@@ -110,8 +110,9 @@ def prune_command(
         list[Path],
         typer.Argument(
             metavar="FILE",
-            help="PNG or TIFF images, GeoJSON polygons (.geojson, .json), or folders "
-            "of them (*.png, *.tif, *.tiff, *.geojson, any case).",
+            help="PNG or TIFF images, GeoJSON polygons (.geojson, .json), volumes (.npy, "
+            "TIFF stacks), or folders of them (*.png, *.tif, *.tiff, *.geojson, *.npy, any "
+            "case).",
         ),
     ],
     beta: BetaOption = PruneOptions.beta,

@@ -58,13 +58,13 @@ TIFF_SUFFIXES = (".tif", ".tiff")
 NPY_MAGIC = b"\x93NUMPY"
 
 
-def is_volume(source: Any) -> bool:
-    """Whether ``source`` is a volume without being told: the path of a ``.npy`` file or
-    of a multi-page TIFF (a stack), or a 3-D array whose last axis is longer than an
-    image's channels (:data:`IMAGE_CHANNELS`; a ``(Z, Y, X)`` volume with ``X ≤ 4`` is read
-    as a volume when ``spacing`` is given)."""
+def is_volume(source: Any, spacing_given: bool = False) -> bool:
+    """Whether ``source`` is a volume: the path of a ``.npy`` file or of a multi-page TIFF
+    (a stack), or a 3-D array whose last axis is longer than an image's channels
+    (:data:`IMAGE_CHANNELS`), or any 3-D array when ``spacing_given`` (a ``(Z, Y, X)``
+    volume with ``X ≤ 4`` is read as a volume when ``spacing`` is given)."""
     if isinstance(source, np.ndarray):
-        return source.ndim == 3 and source.shape[-1] > IMAGE_CHANNELS
+        return source.ndim == 3 and (spacing_given or source.shape[-1] > IMAGE_CHANNELS)
     if isinstance(source, bytes | bytearray | memoryview):
         from .io.tiff import tiff_pages
 
@@ -106,11 +106,7 @@ def _read_stack(path: Any, max_voxels: int) -> np.ndarray:
                     f"a TIFF stack holds one-channel pages of one size; this one reads as "
                     f"{'x'.join(map(str, shape))}"
                 )
-            voxels = shape[0] * shape[1] * shape[2]
-            if voxels > max_voxels:
-                raise ImageTooLargeError(
-                    f"the stack has {voxels} voxels, more than the {max_voxels} read"
-                )
+            _within_limit(shape, max_voxels)
             return np.asarray(series.asarray())
     except SkelpruneError:
         raise
@@ -150,12 +146,8 @@ def check_volume_size(data: bytes, max_voxels: int | None) -> tuple[int, int, in
                 first = tif.pages.first
                 width, height = int(first.imagewidth), int(first.imagelength)
         dims = (pages, height, width)
-    voxels = dims[0] * dims[1] * dims[2]
-    if max_voxels is not None and voxels > max_voxels:
-        raise ImageTooLargeError(
-            f"the volume has {voxels} voxels ({'×'.join(map(str, dims))}), the limit is "
-            f"{max_voxels}"
-        )
+    if max_voxels is not None:
+        _within_limit(dims, max_voxels)
     return dims
 
 
@@ -181,12 +173,7 @@ def _npy_bytes(data: bytes, max_voxels: int) -> np.ndarray:
     within ``max_voxels`` and within the bytes given) before the array is made."""
     f = io.BytesIO(data)
     shape, fortran, dtype = _npy_header(f)
-    voxels = int(np.prod(shape, dtype=np.int64))
-    if voxels > max_voxels:
-        raise ImageTooLargeError(
-            f"the array has {voxels} voxels ({'×'.join(map(str, shape))}), the limit is "
-            f"{max_voxels}"
-        )
+    voxels = _within_limit(shape, max_voxels)
     if len(data) - f.tell() < voxels * dtype.itemsize:
         raise InvalidImageError(
             f"truncated .npy: {'×'.join(map(str, shape))} {dtype} needs "
@@ -194,6 +181,24 @@ def _npy_bytes(data: bytes, max_voxels: int) -> np.ndarray:
         )
     arr = np.frombuffer(data, dtype, voxels, offset=f.tell())
     return arr.reshape(shape, order="F" if fortran else "C")
+
+
+def _within_limit(shape: tuple[int, ...], max_voxels: int) -> int:
+    """The voxels of a volume of ``shape`` (from an array or a file's header), refused
+    past ``max_voxels``: the one check of a volume's size.
+
+    Raises
+    ------
+    ImageTooLargeError
+        More voxels than ``max_voxels``.
+    """
+    voxels = int(np.prod(shape, dtype=np.int64))
+    if voxels > max_voxels:
+        raise ImageTooLargeError(
+            f"the volume has {voxels} voxels ({'×'.join(map(str, shape))}), the limit is "
+            f"{max_voxels}"
+        )
+    return voxels
 
 
 def _read_npy(path: str | os.PathLike[str], max_voxels: int) -> np.ndarray:
@@ -205,9 +210,7 @@ def _read_npy(path: str | os.PathLike[str], max_voxels: int) -> np.ndarray:
             shape, _, _ = _npy_header(f)
     except OSError as exc:
         raise InvalidImageError(f"cannot read {os.fspath(path)!r} as a .npy array: {exc}") from None
-    voxels = int(np.prod(shape, dtype=np.int64))
-    if voxels > max_voxels:
-        raise ImageTooLargeError(f"the array has {voxels} voxels, more than the {max_voxels} read")
+    _within_limit(shape, max_voxels)
     try:
         return np.load(Path(path), mmap_mode="r", allow_pickle=False)
     except (OSError, ValueError) as exc:  # a body shorter than its header says
@@ -265,10 +268,8 @@ def read_volume(source: Any, max_voxels: int | None = None) -> np.ndarray:
         arr = _read_npy(source, limit)
     else:
         arr = np.asarray(source)
-        if max_voxels is not None and arr.size > max_voxels:
-            raise ImageTooLargeError(
-                f"the array has {arr.size} voxels, more than the {max_voxels} read"
-            )
+        if max_voxels is not None:
+            _within_limit(arr.shape, max_voxels)
     if arr.ndim != 3:
         raise InvalidImageError(f"a volume is a 3-D array; this one has {arr.ndim} dimensions")
     if not (arr.dtype == np.bool_ or np.issubdtype(arr.dtype, np.integer)):

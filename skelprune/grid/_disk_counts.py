@@ -28,6 +28,7 @@ __all__ = [
     "coverage",
     "disk_loss",
     "disk_remove",
+    "with_blocks",
 ]
 
 BLOCK = 16
@@ -74,6 +75,14 @@ def coverage(shape_h: int, shape_w: int, rows, cols, r2s):
             run += cover[y, x]
             cover[y, x] = run
     cover = cover[:, :wide].copy()
+    return with_blocks(cover)
+
+
+@njit(cache=True, inline="always")
+def with_blocks(cover) -> DiskCounts:
+    """``cover`` (``h × nb · BLOCK`` counts) with its per-block minima and their counts,
+    and no lazy decrement yet: one coverage count (see the module docstring)."""
+    shape_h, nb = cover.shape[0], cover.shape[1] // BLOCK
     bmin = np.empty((shape_h, nb), dtype=np.int32)
     bcnt = np.empty((shape_h, nb), dtype=np.int32)
     lazy = np.zeros((shape_h, nb), dtype=np.int32)

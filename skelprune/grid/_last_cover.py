@@ -11,7 +11,7 @@ import numpy as np
 from numba import njit
 
 from ._digital import disk_half_width, find_root, isqrt
-from ._disk_counts import BLOCK, _block_stats
+from ._disk_counts import BLOCK, with_blocks
 
 __all__ = ["TILE", "capped_coverage", "drop_redundant_anchors", "last_cover"]
 
@@ -81,6 +81,44 @@ def _bits(a, e) -> int:
     return ((1 << (e + 1)) - 1) ^ ((1 << a) - 1)
 
 
+@njit(cache=True, inline="always")
+def _next_busy(busy):
+    """Per row of tiles, the next tile (at or after each) with a bit left, the row's end
+    ``tw`` past the last: a skip list whose entries all point at a busy tile."""
+    th, tw = busy.shape
+    tnxt = np.empty((th, tw + 1), dtype=np.int32)
+    for ty in range(th):
+        for tx in range(tw + 1):
+            tnxt[ty, tx] = tx if tx == tw or busy[ty, tx] else tx + 1
+    for ty in range(th):  # compress: every entry points at a busy tile (or the end)
+        for tx in range(tw - 1, -1, -1):
+            tnxt[ty, tx] = tnxt[ty, tnxt[ty, tx]] if tnxt[ty, tx] != tx else tx
+    return tnxt
+
+
+@njit(cache=True, inline="always")
+def _rows_reached(ys, cols_left, ty, x0, r, c, v):
+    """Of the rows ``ys`` (bits) of the tile at row ``ty`` and column ``x0``, whose bits
+    left lie in the columns ``cols_left`` (bits), those where the disk ``(r, c, v)`` can
+    reach them: none if the disk misses the box of the bits left (most tiles a disk
+    meets have their bits elsewhere), else the rows where it reaches the box's columns."""
+    if not ys:
+        return ys
+    ya = ty * TILE + _bit_index(ys & -ys)
+    ye = ty * TILE + _top_bit(ys)
+    xa = x0 + _bit_index(cols_left & -cols_left)
+    xe = x0 + _top_bit(cols_left)
+    dy = ya - r if r < ya else (r - ye if r > ye else 0)
+    dx = xa - c if c < xa else (c - xe if c > xe else 0)
+    if dy * dy + dx * dx >= v:
+        return 0
+    reach = isqrt(v - 1 - dx * dx)
+    return ys & _bits(
+        max(r - reach, ty * TILE) - ty * TILE,
+        min(r + reach, ty * TILE + TILE - 1) - ty * TILE,
+    )
+
+
 @njit(cache=True, inline="always")  # called from compiled code and from tests: see coverage
 def last_cover(inside, rows, cols, r2s) -> np.ndarray:
     """For every pixel, the largest ``k`` whose disk ``(rows[k], cols[k], r2s[k])``
@@ -111,13 +149,7 @@ def last_cover(inside, rows, cols, r2s) -> np.ndarray:
                 todo[y, x // TILE] |= 1 << (x % TILE)
                 busy[y // TILE, x // TILE] |= 1 << (y % TILE)
                 across[y // TILE, x // TILE] |= 1 << (x % TILE)
-    tnxt = np.empty((th, tw + 1), dtype=np.int32)  # next tile of the row with a bit left
-    for ty in range(th):
-        for tx in range(tw + 1):
-            tnxt[ty, tx] = tx if tx == tw or busy[ty, tx] else tx + 1
-    for ty in range(th):  # compress: every entry points at a busy tile (or the end)
-        for tx in range(tw - 1, -1, -1):
-            tnxt[ty, tx] = tnxt[ty, tnxt[ty, tx]] if tnxt[ty, tx] != tx else tx
+    tnxt = _next_busy(busy)
     for k in range(rows.size - 1, -1, -1):
         r, c, v = rows[k], cols[k], r2s[k]
         h = isqrt(v - 1)
@@ -130,26 +162,7 @@ def last_cover(inside, rows, cols, r2s) -> np.ndarray:
             tx = find_root(trow, (c - wide) // TILE)
             while tx <= (c + wide) // TILE:
                 x0 = tx * TILE
-                ys = busy[ty, tx] & span
-                # the box of the bits left in these rows (their columns: those of the
-                # whole tile): skip the tile if the disk misses it (most tiles a disk
-                # meets have their bits elsewhere)
-                if ys:
-                    cols_left = across[ty, tx]
-                    ya = ty * TILE + _bit_index(ys & -ys)
-                    ye = ty * TILE + _top_bit(ys)
-                    xa = x0 + _bit_index(cols_left & -cols_left)
-                    xe = x0 + _top_bit(cols_left)
-                    dy = ya - r if r < ya else (r - ye if r > ye else 0)
-                    dx = xa - c if c < xa else (c - xe if c > xe else 0)
-                    if dy * dy + dx * dx >= v:
-                        ys = 0
-                    else:  # only the rows where the disk reaches the box's columns
-                        reach = isqrt(v - 1 - dx * dx)
-                        ys &= _bits(
-                            max(r - reach, ty * TILE) - ty * TILE,
-                            min(r + reach, ty * TILE + TILE - 1) - ty * TILE,
-                        )
+                ys = _rows_reached(busy[ty, tx] & span, across[ty, tx], ty, x0, r, c, v)
                 painted = False
                 while ys:
                     low = ys & -ys
@@ -265,13 +278,7 @@ def capped_coverage(inside, rows, cols, r2s, cap: int):
     for y in range(shape_h):
         for t in range(tw):
             level[y, t, 0] = todo[y, t]
-    tnxt = np.empty((th, tw + 1), dtype=np.int32)
-    for ty in range(th):
-        for tx in range(tw + 1):
-            tnxt[ty, tx] = tx if tx == tw or busy[ty, tx] else tx + 1
-    for ty in range(th):
-        for tx in range(tw - 1, -1, -1):
-            tnxt[ty, tx] = tnxt[ty, tnxt[ty, tx]] if tnxt[ty, tx] != tx else tx
+    tnxt = _next_busy(busy)
     # largest disks first: they fill the interior's tiles, which the many smaller disks
     # then skip (the counts do not depend on the order)
     for k in np.argsort(-r2s):
@@ -285,23 +292,7 @@ def capped_coverage(inside, rows, cols, r2s, cap: int):
             tx = find_root(trow, (c - wide) // TILE)
             while tx <= (c + wide) // TILE:
                 x0 = tx * TILE
-                ys = busy[ty, tx] & span
-                if ys:
-                    cols_left = across[ty, tx]
-                    ya = ty * TILE + _bit_index(ys & -ys)
-                    ye = ty * TILE + _top_bit(ys)
-                    xa = x0 + _bit_index(cols_left & -cols_left)
-                    xe = x0 + _top_bit(cols_left)
-                    dy = ya - r if r < ya else (r - ye if r > ye else 0)
-                    dx = xa - c if c < xa else (c - xe if c > xe else 0)
-                    if dy * dy + dx * dx >= v:
-                        ys = 0
-                    else:  # only the rows where the disk reaches the box's columns
-                        reach = isqrt(v - 1 - dx * dx)
-                        ys &= _bits(
-                            max(r - reach, ty * TILE) - ty * TILE,
-                            min(r + reach, ty * TILE + TILE - 1) - ty * TILE,
-                        )
+                ys = _rows_reached(busy[ty, tx] & span, across[ty, tx], ty, x0, r, c, v)
                 full = False  # some pixel reached the cap
                 while ys:
                     low = ys & -ys
@@ -355,10 +346,4 @@ def capped_coverage(inside, rows, cols, r2s, cap: int):
                     bit = bits & -bits
                     bits ^= bit
                     cover[y, t * TILE + _bit_index(bit)] = lev
-    bmin = np.empty((shape_h, nb), dtype=np.int32)
-    bcnt = np.empty((shape_h, nb), dtype=np.int32)
-    lazy = np.zeros((shape_h, nb), dtype=np.int32)
-    for y in range(shape_h):
-        for b in range(nb):
-            _block_stats(cover, bmin, bcnt, y, b)
-    return cover, bmin, bcnt, lazy
+    return with_blocks(cover)

@@ -351,6 +351,17 @@ def _medial_axis_pixels(padded: np.ndarray, r2: np.ndarray) -> tuple[np.ndarray,
 def _by_radius(fg, r2):
     """The pixels of ``fg``, smallest ``r2`` first, ties in raster order (a stable sort
     of the raster order by radius, as ``np.lexsort((cols, rows, r2[rows, cols]))``)."""
+    rows, cols = _raster_pixels(fg)
+    vals = np.empty(rows.size, dtype=np.int64)
+    for k in range(rows.size):
+        vals[k] = r2[rows[k], cols[k]]
+    order = np.argsort(vals, kind="mergesort")  # stable
+    return rows[order], cols[order]
+
+
+@njit(cache=True, inline="always")
+def _raster_pixels(fg):
+    """Rows and columns of the pixels of ``fg``, in raster order (``np.nonzero``)."""
     h, w = fg.shape
     n = 0
     for r in range(h):
@@ -359,15 +370,13 @@ def _by_radius(fg, r2):
                 n += 1
     rows = np.empty(n, dtype=np.int64)
     cols = np.empty(n, dtype=np.int64)
-    vals = np.empty(n, dtype=np.int64)
     k = 0
     for r in range(h):
         for c in range(w):
             if fg[r, c]:
-                rows[k], cols[k], vals[k] = r, c, r2[r, c]
+                rows[k], cols[k] = r, c
                 k += 1
-    order = np.argsort(vals, kind="mergesort")  # stable
-    return rows[order], cols[order]
+    return rows, cols
 
 
 @njit(cache=True)
@@ -391,18 +400,4 @@ def _axis_pixels(padded, r2, need, vectors, kind, simple, degree):
         heights += 2.0 * np.sqrt(np.float64(r2[rows[k], cols[k]])) + 1.0
     _thin(fg, r2, rows, cols, simple, degree, _FIRST_CAP if heights > r2.size else 0)
     _extend_ends(fg, r2, degree)
-    h, w = fg.shape
-    n = 0
-    for r in range(h):
-        for c in range(w):
-            if fg[r, c]:
-                n += 1
-    out_r = np.empty(n, dtype=np.int64)
-    out_c = np.empty(n, dtype=np.int64)
-    k = 0
-    for r in range(h):
-        for c in range(w):
-            if fg[r, c]:
-                out_r[k], out_c[k] = r, c
-                k += 1
-    return out_r, out_c
+    return _raster_pixels(fg)

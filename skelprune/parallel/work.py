@@ -150,13 +150,11 @@ def _read(item: Item, job: Job) -> Any:
 
 
 def _is_volume(item: Item, job: Job) -> bool:
-    """Whether an item is a volume: by :func:`skelprune.volume.is_volume`'s rule, or any
-    3-D array when the run gives volume options (what :func:`skelprune.prune` does)."""
+    """Whether an item is a volume (with the run's volume options, any 3-D array)."""
     source = item.source
     if isinstance(source, LabelObject | Feature):
         return False
-    given_3d = job.volume is not None and isinstance(source, np.ndarray) and source.ndim == 3
-    return given_3d or is_volume(source)
+    return is_volume(source, spacing_given=job.volume is not None)
 
 
 def _volume_answer(item: Item, job: Job) -> dict[str, Any]:

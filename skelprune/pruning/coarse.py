@@ -249,11 +249,7 @@ class _EndBranches:
     def update(self, branches: list[int]) -> None:
         """Bring the cached answers of ``branches`` up to date (one compiled call)."""
         graph = self.graph
-        stale = [
-            b
-            for b in branches
-            if (hit := self.cache.get(b)) is None or hit[0] != len(graph.branches[b].points)
-        ]
+        stale = [b for b in branches if self._cached(b) is None]
         if not stale:
             return
         flat, offsets = _flatten(graph, stale)
@@ -290,9 +286,15 @@ class _EndBranches:
                 d2 = float(dr * dr + dc * dc)
             self.cache[b] = (len(graph.branches[b].points), ok, v, d2)
 
-    def is_supported(self, b: int) -> bool:
+    def _cached(self, b: int) -> tuple[int, bool, int, float] | None:
+        """Branch ``b``'s cached answer, None when there is none or a merge has changed
+        the branch since (only a merge changes a branch, and always its length)."""
         hit = self.cache.get(b)
-        if hit is None or hit[0] != len(self.graph.branches[b].points):
+        return None if hit is None or hit[0] != len(self.graph.branches[b].points) else hit
+
+    def is_supported(self, b: int) -> bool:
+        hit = self._cached(b)
+        if hit is None:
             self.update([b])
             hit = self.cache[b]
         return hit[1]

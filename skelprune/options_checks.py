@@ -89,12 +89,11 @@ def _flag(name: str, value: Any) -> bool:
 def _crs_name(name: str, value: Any) -> str:
     if not isinstance(value, str):
         raise InvalidOptionError(f"{name} must be a CRS name (e.g. EPSG:4326), got {shown(value)}")
-    from .io.crs import PLANAR, is_geographic
+    from .io.crs import PLANAR, check_crs
 
     if value == PLANAR:
         return value
-    is_geographic(value)  # an authority code pyproj knows, or the error says which not
-    return value
+    return check_crs(value, name)  # a map CRS of the Earth pyproj knows, or which not
 
 
 def _check_fields(options: Any) -> None:

@@ -12,6 +12,7 @@ follow a contour), and the noise-floor choice.
 from __future__ import annotations
 
 import io
+import math
 import os
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
@@ -84,12 +85,12 @@ def is_volume(source: Any, spacing_given: bool = False) -> bool:
 
 
 def _stack_pages(path: Any) -> int:
-    """Pages of a TIFF, or slices of a single 3-D page (the header only)."""
-    import tifffile
+    """Pages of a TIFF, or slices of a single 3-D page (the header only, read by the
+    bounded walker)."""
+    from .io.tiff import mapped, tiff_pages
 
-    with tifffile.TiffFile(path) as tif:
-        n = len(tif.pages)
-        return n if n > 1 else int(getattr(tif.pages.first, "imagedepth", 1))
+    with open(path, "rb") as f, mapped(f) as data:
+        return tiff_pages(data)
 
 
 def _read_stack(path: Any, max_voxels: int) -> np.ndarray:
@@ -97,7 +98,11 @@ def _read_stack(path: Any, max_voxels: int) -> np.ndarray:
     size, at most ``max_voxels`` voxels by the header, before decoding."""
     import tifffile
 
+    from .io.tiff import mapped, stack_layouts
+
     try:
+        with open(path, "rb") as f, mapped(f) as data:
+            stack_layouts(data)  # the page chain and tags, bounded, before tifffile
         with tifffile.TiffFile(path) as tif:
             series = tif.series[0]
             shape = tuple(int(v) for v in series.shape)
@@ -132,27 +137,29 @@ def check_volume_size(data: bytes, max_voxels: int | None) -> tuple[int, int, in
             )
         dims = (int(shape[0]), int(shape[1]), int(shape[2]))
     else:
-        from .io.tiff import tiff_pages, tiff_size
+        from .io.tiff import is_tiff, stack_layouts
 
-        pages = tiff_pages(data)
-        if pages < 2:
+        if not is_tiff(data):
             raise InvalidImageError("not a volume: neither a .npy file nor a multi-page TIFF")
-        try:
-            width, height = tiff_size(data)
-        except InvalidImageError:  # the first page alone: its size is what is asked
-            import tifffile
-
-            with tifffile.TiffFile(io.BytesIO(data)) as tif:
-                first = tif.pages.first
-                width, height = int(first.imagewidth), int(first.imagelength)
-        dims = (pages, height, width)
+        pages = stack_layouts(data)
+        if len(pages) < 2:
+            raise InvalidImageError("not a volume: a TIFF of one page is an image")
+        dims = (len(pages), pages[0].height, pages[0].width)
     if max_voxels is not None:
         _within_limit(dims, max_voxels)
     return dims
 
 
 def _npy_header(f: IO[bytes]) -> tuple[tuple[int, ...], bool, np.dtype[Any]]:
-    """A ``.npy`` header: shape, Fortran order, dtype (refused: no header, objects)."""
+    """A ``.npy`` header: shape, Fortran order, dtype, every field checked: the shape a
+    tuple of whole numbers of at least 1 (not booleans), the dtype booleans or integers
+    of a plain, non-empty type (no objects, sub-arrays, records, times).
+
+    Raises
+    ------
+    InvalidImageError
+        Naming the field that is not read.
+    """
     try:
         version = np.lib.format.read_magic(f)
         read_header = (
@@ -161,11 +168,34 @@ def _npy_header(f: IO[bytes]) -> tuple[tuple[int, ...], bool, np.dtype[Any]]:
             else np.lib.format.read_array_header_2_0
         )
         shape, fortran, dtype = read_header(f)
-    except ValueError as exc:
-        raise InvalidImageError(f"cannot read the .npy header: {str(exc)[:200]}") from None
+    except Exception:  # numpy's messages may quote the parser's objects
+        raise InvalidImageError(
+            "cannot read the .npy header: not a .npy header dictionary of 'descr', "
+            "'fortran_order' and 'shape' (write it with numpy.save)"
+        ) from None
+    if not isinstance(shape, tuple) or any(type(d) is not int for d in shape):
+        raise InvalidImageError(
+            f"the .npy header's shape {_shown(shape)} is not a tuple of whole numbers"
+        )
+    if any(d < 1 for d in shape):
+        raise InvalidImageError(
+            f"the .npy header's shape {_shown(shape)} has a dimension below 1; a "
+            "volume's dimensions are 1 or more"
+        )
     if dtype.hasobject:
         raise InvalidImageError("a .npy of Python objects is not read (no pickles)")
-    return tuple(shape), bool(fortran), dtype
+    if dtype.subdtype is not None or dtype.names is not None or dtype.kind not in "biu":
+        raise InvalidImageError(
+            f"the .npy header's dtype {_shown(dtype.str)} is not read: a volume holds "
+            "booleans or integer labels (bool, int8-int64, uint8-uint64)"
+        )
+    return shape, bool(fortran), dtype
+
+
+def _shown(value: Any) -> str:
+    """A header field as a message quotes it (short)."""
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 def _npy_bytes(data: bytes, max_voxels: int) -> np.ndarray:
@@ -192,13 +222,18 @@ def _within_limit(shape: tuple[int, ...], max_voxels: int) -> int:
     ImageTooLargeError
         More voxels than ``max_voxels``.
     """
-    voxels = int(np.prod(shape, dtype=np.int64))
+    voxels = math.prod(int(d) for d in shape)  # Python integers: no wrap-around
     if voxels > max_voxels:
         raise ImageTooLargeError(
-            f"the volume has {voxels} voxels ({'×'.join(map(str, shape))}), the limit is "
+            f"the volume has {voxels} voxels ({_dims(shape)}), the limit is "
             f"{max_voxels}"
         )
     return voxels
+
+
+def _dims(shape: tuple[int, ...]) -> str:
+    text = "×".join(map(str, shape))
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 def _read_npy(path: str | os.PathLike[str], max_voxels: int) -> np.ndarray:

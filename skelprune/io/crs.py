@@ -37,6 +37,7 @@ __all__ = [
     "RFC7946_CRS",
     "LocalProjection",
     "check_crs_name",
+    "check_crs",
     "crs_name",
     "guess_crs",
     "local_projection",
@@ -143,13 +144,50 @@ def has_pyproj() -> bool:
     return True
 
 
-def _crs(name: str) -> Any:
-    check_crs_name(name)
+#: The Earth's equatorial radius as CRSs give it, in metres, within a few kilometres
+#: (the ellipsoids of the Earth's datums): a CRS of another body is refused.
+EARTH_RADIUS = (6_350_000.0, 6_400_000.0)
+
+
+def _crs(name: str, what: str = "crs") -> Any:
+    """The pyproj CRS of ``name``, refused (naming ``what``) when pyproj does not know
+    it, or when it is no map of the Earth's surface: a vertical CRS (heights), a
+    geocentric one (x, y, z from the Earth's centre), or one of another body (the Moon,
+    Mars)."""
+    check_crs_name(name, what)
     pyproj = _pyproj()
     try:
-        return pyproj.CRS.from_user_input(name)
+        crs = pyproj.CRS.from_user_input(name)
     except pyproj.exceptions.CRSError as exc:
-        raise InvalidOptionError(f"crs: {name!r} is not a CRS pyproj knows: {exc}") from None
+        raise InvalidOptionError(
+            f"{what}: {name!r} is not a CRS pyproj knows: {str(exc)[:200]}"
+        ) from None
+    if crs.is_vertical and not (crs.is_geographic or crs.is_projected):
+        raise InvalidOptionError(f"{what}: {name} is a vertical CRS (heights); give a map CRS")
+    if crs.is_geocentric:
+        raise InvalidOptionError(
+            f"{what}: {name} is a geocentric CRS (x, y, z from the Earth's centre); give a "
+            "map CRS (geographic or projected)"
+        )
+    ellipsoid = crs.ellipsoid
+    radius = None if ellipsoid is None else ellipsoid.semi_major_metre
+    if radius is None or not EARTH_RADIUS[0] <= radius <= EARTH_RADIUS[1]:
+        body = f"a body of radius {radius:,.0f} m" if radius else "no known body"
+        raise InvalidOptionError(
+            f"{what}: {name} is a CRS of {body}, not the Earth's; skelprune's "
+            "geography is the Earth's"
+        )
+    return crs
+
+
+def check_crs(name: str, what: str = "crs") -> str:
+    """``name``, when it is a map CRS of the Earth pyproj knows (:func:`_crs`).
+
+    >>> check_crs("EPSG:32633")
+    'EPSG:32633'
+    """
+    _crs(name, what)
+    return name
 
 
 @dataclass(frozen=True)

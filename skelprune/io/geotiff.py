@@ -22,8 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InvalidImageError
+from ..errors import InvalidImageError, SkelpruneError
 from .frame import PixelFrame
+from .tiff_ifd import TiffPage
 
 #: File name endings read as GeoTIFF masks (any case).
 GEOTIFF_SUFFIXES = (".tif", ".tiff")
@@ -31,6 +32,7 @@ GEOTIFF_SUFFIXES = (".tif", ".tiff")
 __all__ = [
     "GEOTIFF_SUFFIXES",
     "Georeference",
+    "geo_keys",
     "geotiff_georeference",
     "read_geotiff",
     "read_geotiff_bytes",
@@ -127,12 +129,13 @@ class Georeference:
         return {"crs": self.crs, "transform": list(self.transform)}
 
 
-#: GeoKeys that name the CRS by its EPSG code (projected first), and the value GeoTIFF
-#: uses for a user-defined one.
-_CRS_KEYS = ("ProjectedCSTypeGeoKey", "GeographicTypeGeoKey")
+#: GeoKeys read: the model type, the raster type, and those that name the CRS by its
+#: EPSG code (projected first); the value GeoTIFF uses for a user-defined one.
+_MODEL_TYPE, _RASTER_TYPE = 1024, 1025
+_CRS_KEYS = (3072, 2048)  # ProjectedCSTypeGeoKey, GeographicTypeGeoKey
 _USER_DEFINED = 32767
-#: The tags of the grid, by tifffile's names.
-_GRID_TAGS = {"ModelPixelScale": 33550, "ModelTiepoint": 33922, "ModelTransformation": 34264}
+_GEOCENTRIC = 3
+_KEY_DIRECTORY, _DOUBLES, _ASCII = 34735, 34736, 34737
 
 
 def geotiff_georeference(data: bytes) -> Georeference | None:
@@ -142,8 +145,9 @@ def geotiff_georeference(data: bytes) -> Georeference | None:
     Raises
     ------
     InvalidImageError
-        GeoTIFF tags that give no grid (no tie point and scale, nor a transformation), or
-        a CRS that is not an EPSG code.
+        GeoTIFF tags that give no grid (no tie point and scale, nor a transformation), a
+        tag or GeoKey of another type or count than GeoTIFF writes, a geocentric model,
+        or a CRS that is not an EPSG code pyproj knows (when pyproj is installed).
 
     Examples
     --------
@@ -158,58 +162,109 @@ def geotiff_georeference(data: bytes) -> Georeference | None:
     """
     from .tiff import GEO_TAGS, _page
 
-    page = _page(data)
-    if not any(code in page.tags for code in GEO_TAGS):
+    page = _page(data).page
+    if not any(code in page for code in GEO_TAGS):
         return None
-    try:
-        tags = dict(page.geotiff_tags or {})  # None without a key directory
-        for name, code in _GRID_TAGS.items():  # the grid's tags, key directory or not
-            if name not in tags and code in page.tags:
-                tags[name] = page.tags[code].value
-    except Exception as exc:  # a malformed key directory
-        raise InvalidImageError(f"unreadable GeoTIFF tags: {str(exc)[:200]}") from None
-    transform = _transform(tags)
-    crs_code = next((tags[k] for k in _CRS_KEYS if k in tags), None)
+    keys = geo_keys(page)
+    if keys.get(_MODEL_TYPE) == _GEOCENTRIC:
+        raise InvalidImageError(
+            "the GeoTIFF's model is geocentric (x, y, z from the Earth's centre); a mask "
+            "lies on a map grid: a projected or geographic CRS"
+        )
+    transform = _transform(page, keys.get(_RASTER_TYPE, 1) == 2)
+    crs_code = next((keys[k] for k in _CRS_KEYS if k in keys), None)
     crs: str | None = None
     if crs_code is not None:
-        if int(crs_code) == _USER_DEFINED:
+        if crs_code == _USER_DEFINED:
             raise InvalidImageError(
                 "the GeoTIFF's CRS is user-defined (no EPSG code); reproject it to a CRS "
                 "with an EPSG code, or read the file from disk"
             )
-        crs = f"EPSG:{int(crs_code)}"
+        crs = _epsg(crs_code)
     nodata = None
-    if 42113 in page.tags:  # GDAL_NODATA: the value as ASCII
+    if 42113 in page:  # GDAL_NODATA: the value as ASCII
         try:
-            nodata = float(str(page.tags[42113].value).strip().strip("\x00"))
+            nodata = float(page.text(42113).strip())
         except ValueError:
             raise InvalidImageError("the GeoTIFF's nodata tag is not a number") from None
     return Georeference(transform, crs, nodata)
 
 
-def _transform(tags: dict[str, Any]) -> tuple[float, float, float, float, float, float]:
-    matrix = tags.get("ModelTransformation")
-    if matrix is not None:
-        m = np.asarray(matrix, float).ravel()
-        if m.size != 16:
-            raise InvalidImageError("the GeoTIFF's model transformation is not 4×4")
+def _epsg(code: int) -> str:
+    """``EPSG:code``, refused when it is no CRS (0, a code pyproj does not know) or a
+    vertical or geocentric one."""
+    from .crs import check_crs, has_pyproj
+
+    name = f"EPSG:{code}"
+    if code == 0:
+        raise InvalidImageError("the GeoTIFF's CRS code is 0, which names no CRS")
+    if has_pyproj():
+        try:
+            check_crs(name, "the GeoTIFF's CRS")
+        except SkelpruneError as exc:
+            raise InvalidImageError(str(exc)) from None
+    return name
+
+
+def geo_keys(page: TiffPage) -> dict[int, int]:
+    """The GeoKeys a GeoTIFF's page holds as one SHORT each (the model, raster and CRS
+    keys; other keys are not read).
+
+    Raises
+    ------
+    InvalidImageError
+        A key directory that is not SHORTs, shorter than its header says, or a key read
+        here stored as doubles or text, or with other than one value.
+    """
+    if _KEY_DIRECTORY not in page:
+        return {}
+    shorts = page.values(_KEY_DIRECTORY, (3,))
+    if shorts.size < 4 or shorts.size < 4 + 4 * int(shorts[3]):
+        raise InvalidImageError(
+            f"the GeoTIFF's key directory holds {shorts.size} values, fewer than its "
+            "header says"
+        )
+    keys: dict[int, int] = {}
+    for k in range(int(shorts[3])):
+        key, where, count, value = (int(v) for v in shorts[4 + 4 * k : 8 + 4 * k])
+        if key not in (_MODEL_TYPE, _RASTER_TYPE, *_CRS_KEYS):
+            continue
+        if where != 0 or count != 1:
+            stored = {_DOUBLES: "doubles", _ASCII: "text"}.get(where, f"tag {where}")
+            raise InvalidImageError(
+                f"the GeoTIFF's GeoKey {key} is stored as {count} {stored}; GeoTIFF writes "
+                "it as one SHORT"
+            )
+        keys[key] = value
+    return keys
+
+
+def _transform(page: TiffPage, pixel_is_point: bool) -> tuple[float, ...]:
+    if 34264 in page:
+        m = page.values(34264, (12,), 16).astype(float)
         t = (m[0], m[1], m[3], m[4], m[5], m[7])
     else:
-        scale, tie = tags.get("ModelPixelScale"), tags.get("ModelTiepoint")
-        if scale is None or tie is None or len(scale) < 2 or len(tie) < 6:
+        if 33550 not in page or 33922 not in page:
             raise InvalidImageError(
                 "the GeoTIFF has no grid: neither a tie point with a pixel scale nor a "
                 "model transformation"
             )
+        scale = page.values(33550, (12,), 3)
+        tie = page.values(33922, (12,))
+        if tie.size < 6 or tie.size % 6:
+            raise InvalidImageError(
+                f"the GeoTIFF's ModelTiepoint holds {tie.size} values; a tie point is 6"
+            )
         sx, sy = float(scale[0]), float(scale[1])
         i, j, x, y = float(tie[0]), float(tie[1]), float(tie[3]), float(tie[4])
         t = (sx, 0.0, x - i * sx, 0.0, -sy, y + j * sy)
-    if int(tags.get("GTRasterTypeGeoKey", 1)) == 2:  # PixelIsPoint: the tie is a centre
+    if pixel_is_point:  # PixelIsPoint: the tie is a centre
         t = (t[0], t[1], t[2] - 0.5 * t[0], t[3], t[4], t[5] - 0.5 * t[4])
-    values = tuple(float(v) for v in t)
+    with np.errstate(all="ignore"):
+        values = tuple(float(v) for v in t)
     if not all(np.isfinite(values)):
         raise InvalidImageError("the GeoTIFF's transform is not finite")
-    return values  # type: ignore[return-value]
+    return values
 
 
 def read_geotiff_bytes(

@@ -25,14 +25,18 @@ Codecs: Deflate uses the standard library's ``zlib``; LZW and PackBits need
 
 from __future__ import annotations
 
+import contextlib
 import io
+import mmap
 import os
+from collections.abc import Iterator
 import zlib
 from typing import Any
 
 import numpy as np
 
-from ..errors import ImageTooLargeError, InvalidImageError
+from ..errors import ImageTooLargeError, InvalidImageError, SkelpruneError
+from .tiff_ifd import BITS, Layout, page_layout, read_structure
 
 __all__ = [
     "COMPRESSIONS",
@@ -41,6 +45,7 @@ __all__ = [
     "is_tiff",
     "read_tiff",
     "read_tiff_stack",
+    "stack_layouts",
     "tiff_pages",
     "tiff_size",
 ]
@@ -48,8 +53,6 @@ __all__ = [
 #: TIFF compression codes read, and their names.
 COMPRESSIONS = {1: "none", 5: "LZW", 8: "Deflate", 32946: "Deflate", 32773: "PackBits"}
 _SIGNATURES = (b"II*\x00", b"MM\x00*", b"II+\x00", b"MM\x00+")
-#: Bits per sample read (1: bilevel).
-_BITS = (1, 8, 16, 32, 64)
 #: Decoded bytes allowed per allowed pixel (4 samples of 32 bits): with ``max_pixels``,
 #: the most a TIFF may decode to.
 MAX_DECODED_BYTES_PER_PIXEL = 16
@@ -77,45 +80,43 @@ def is_georeferenced(path: os.PathLike[str] | str) -> bool:
     >>> is_georeferenced(path)
     False
     """
-    import tifffile
-
     try:
-        with open(path, "rb") as f:  # opened once: the signature, then the header
-            if not is_tiff(f.read(4)):
+        with open(path, "rb") as f, mapped(f) as data:
+            if not is_tiff(data[:4]):
                 return False
-            f.seek(0)
-            with tifffile.TiffFile(f) as tif:
-                tags = tif.pages.first.tags
-                return any(code in tags for code in GEO_TAGS)
-    except Exception:  # a broken header: the image reader names what is wrong
+            first = read_structure(data, 1).pages[0]
+            return any(code in first for code in GEO_TAGS)
+    except (OSError, ValueError, IndexError, SkelpruneError):  # the reader names it
         return False
 
 
-def _page(data: bytes) -> Any:
-    """The one page of a TIFF, its header parsed (nothing decoded)."""
-    import tifffile
+@contextlib.contextmanager
+def mapped(f: Any) -> Iterator[Any]:
+    """A file's bytes, mapped (empty bytes for an empty file)."""
+    if os.fstat(f.fileno()).st_size == 0:
+        yield b""
+        return
+    with mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as m:
+        yield m
 
-    try:
-        tif = tifffile.TiffFile(io.BytesIO(data))
-    except Exception as exc:  # tifffile raises many kinds on a broken header
-        raise InvalidImageError(f"cannot read TIFF: {_plain(exc)}") from None
-    with tif:
-        try:
-            n = len(tif.pages)
-        except Exception as exc:
-            raise InvalidImageError(f"corrupt TIFF: {_plain(exc)}") from None
-        if n != 1:
-            raise InvalidImageError(
-                f"multi-page TIFF: {n} pages; an image is one page (a stack of pages is "
-                "read as a volume, docs/volumes.md)"
-            )
-        page = tif.pages.first
-        if getattr(page, "imagedepth", 1) != 1:
-            raise InvalidImageError(
-                f"3-D TIFF: 1 page of {page.imagedepth} slices; skelprune reads "
-                "single-image 2-D TIFFs"
-            )
-        return page
+
+def _page(data: bytes) -> Layout:
+    """The one page of a TIFF, its structure read by the bounded walker and its tags
+    checked (nothing decoded)."""
+    structure = read_structure(data, MAX_STACK_PAGES)
+    n = len(structure.pages)
+    if n != 1:
+        counted = f"more than {n}" if structure.more else str(n)
+        raise InvalidImageError(
+            f"multi-page TIFF: {counted} pages; an image is one page (a stack of pages is "
+            "read as a volume, docs/volumes.md)"
+        )
+    page = page_layout(structure.pages[0])
+    if page.depth != 1:
+        raise InvalidImageError(
+            f"3-D TIFF: 1 page of {page.depth} slices; skelprune reads single-image 2-D TIFFs"
+        )
+    return page
 
 
 def _plain(exc: BaseException) -> str:
@@ -133,27 +134,8 @@ def tiff_size(data: bytes) -> tuple[int, int]:
     >>> tiff_size(buf.getvalue())
     (5, 3)
     """
-    page = _page(bytes(data))
-    return int(page.imagewidth), int(page.imagelength)
-
-
-def _segments(page: Any) -> tuple[int, list[int], int]:
-    """Bytes of each strip or tile when whole, the fewest each must decode to (a last
-    strip may stop at the image's end) and the number of segments expected."""
-    spp = int(page.samplesperpixel)
-    planes = spp if page.planarconfig == 2 else 1
-    per_pixel = (spp // planes) * int(page.bitspersample)
-    width, height = int(page.imagewidth), int(page.imagelength)
-    if page.is_tiled:
-        tw, tl = int(page.tilewidth), int(page.tilelength)
-        full = tl * ((tw * per_pixel + 7) // 8)
-        count = planes * (-(-width // tw)) * (-(-height // tl))
-        return full, [full] * count, count
-    rows = min(int(page.rowsperstrip or height), height)
-    row_bytes = (width * per_pixel + 7) // 8
-    strips = -(-height // rows)
-    least = [min(rows, height - i * rows) * row_bytes for i in range(strips)] * planes
-    return rows * row_bytes, least, strips * planes
+    page = _page(data)
+    return page.width, page.height
 
 
 def _decoded_length(codec: int, raw: bytes, limit: int) -> int:
@@ -217,36 +199,38 @@ def read_tiff(data: bytes, *, max_pixels: int | None = None) -> np.ndarray:
     return _decode_page(_page(data), data, max_pixels)
 
 
-def _decode_page(page: Any, data: bytes, max_pixels: int | None) -> np.ndarray:
-    """One page's values, its header checked against the file and the limits first."""
-    width, height = int(page.imagewidth), int(page.imagelength)
-    if width <= 0 or height <= 0:
-        raise InvalidImageError(f"corrupt TIFF: invalid size {width}×{height}")
+def _decode_page(
+    page: Layout, data: bytes, max_pixels: int | None, tif: Any = None
+) -> np.ndarray:
+    """One page's values, its header checked against the file and the limits first
+    (``tif``: the file open in tifffile, for the pages of a stack)."""
+    width, height = page.width, page.height
     if max_pixels is not None and width * height > max_pixels:
         raise ImageTooLargeError(
             f"image has {width * height} pixels ({width}×{height}), the limit is {max_pixels}"
         )
-    spp, bits = int(page.samplesperpixel), int(page.bitspersample)
-    if bits not in _BITS or not 1 <= spp <= 4 or (bits == 1 and spp != 1):
+    spp, bits = page.samples, page.bits
+    if bits not in BITS or not 1 <= spp <= 4 or (bits == 1 and spp != 1):
         raise InvalidImageError(
             f"TIFF of {spp} samples of {bits} bits is not read; skelprune reads bilevel, "
             "8/16/32-bit integer and 32/64-bit float TIFFs of 1 to 4 samples"
         )
-    decoded = width * height * spp * bits // 8
+    decoded = page.decoded_bytes
     if max_pixels is not None and decoded > max_pixels * MAX_DECODED_BYTES_PER_PIXEL:
         raise ImageTooLargeError(
             f"image decodes to {decoded} bytes, the limit is "
             f"{max_pixels * MAX_DECODED_BYTES_PER_PIXEL}"
         )
-    codec = int(page.compression)
+    codec = page.compression
     if codec not in COMPRESSIONS:
         raise InvalidImageError(
             f"TIFF compression {codec} is not read; skelprune reads uncompressed, LZW, "
             "Deflate and PackBits TIFFs"
         )
-    full, least, count = _segments(page)
-    offsets, counts = list(page.dataoffsets), list(page.databytecounts)
-    if len(offsets) != count or len(counts) != count:
+    full, least = page.segments()
+    count = len(least)
+    offsets, counts = page.offsets.tolist(), page.counts.tolist()
+    if len(offsets) != count:
         raise InvalidImageError(
             f"corrupt TIFF: {len(offsets)} strips or tiles where its {width}×{height} "
             f"header needs {count}"
@@ -267,12 +251,14 @@ def _decode_page(page: Any, data: bytes, max_pixels: int | None) -> np.ndarray:
             raise InvalidImageError(
                 f"truncated TIFF: strip {i} holds {got} of the {least[i]} bytes its header promises"
             )
-    try:
-        values = page.asarray()
+    try:  # the chain and the tags checked: tifffile walks no further than this page
+        if tif is None:
+            with _tifffile(data) as one:
+                values, axes = _values(one, page.index)
+        else:
+            values, axes = _values(tif, page.index)
     except Exception as exc:  # the checks above leave only codec-level surprises
         raise InvalidImageError(f"cannot decode TIFF: {_plain(exc)}") from None
-    values = np.asarray(values)
-    axes = str(page.axes)
     if axes.startswith("S") and values.ndim == 3:  # planar: samples first
         values = np.moveaxis(values, 0, -1)
     values = values.reshape(height, width, -1)
@@ -283,9 +269,21 @@ def _decode_page(page: Any, data: bytes, max_pixels: int | None) -> np.ndarray:
 MAX_STACK_PAGES = 4096
 
 
+def _tifffile(data: bytes) -> Any:
+    import tifffile
+
+    return tifffile.TiffFile(io.BytesIO(data))
+
+
+def _values(tif: Any, index: int) -> tuple[np.ndarray, str]:
+    tpage = tif.pages[index]
+    return np.asarray(tpage.asarray()), str(tpage.axes)
+
+
 def tiff_pages(data: bytes) -> int:
-    """Pages of a TIFF (slices of a single 3-D page counted as pages), from its header;
-    0 for bytes that are not a readable TIFF.
+    """Pages of a TIFF (slices of a single 3-D page counted as pages), from its header
+    read by the bounded walker (:data:`MAX_STACK_PAGES` + 1 for more); 0 for bytes that
+    are not a readable TIFF.
 
     >>> import tifffile
     >>> buf = io.BytesIO()
@@ -293,16 +291,39 @@ def tiff_pages(data: bytes) -> int:
     >>> tiff_pages(buf.getvalue()), tiff_pages(b"not a tiff")
     (3, 0)
     """
-    import tifffile
-
     if not is_tiff(bytes(data[:4])):
         return 0
     try:
-        with tifffile.TiffFile(io.BytesIO(data)) as tif:
-            n = len(tif.pages)
-            return n if n > 1 else int(getattr(tif.pages.first, "imagedepth", 1))
-    except Exception:  # a broken header: the readers say what is wrong
+        structure = read_structure(data, MAX_STACK_PAGES + 1)
+        n = len(structure.pages)
+        return n if n != 1 else page_layout(structure.pages[0]).depth
+    except SkelpruneError:  # a broken header: the readers say what is wrong
         return 0
+
+
+def stack_layouts(data: Any) -> list[Layout]:
+    """The checked layouts of a TIFF stack's pages (one size, at most
+    :data:`MAX_STACK_PAGES`), read by the bounded walker.
+
+    Raises
+    ------
+    InvalidImageError
+        Not a TIFF, a broken structure or tag, more pages than allowed, a 3-D page, or
+        pages of different sizes.
+    """
+    structure = read_structure(data, MAX_STACK_PAGES)
+    if structure.more:
+        raise InvalidImageError(f"TIFF stack of more than {MAX_STACK_PAGES} pages; at most {MAX_STACK_PAGES} are read")
+    pages = [page_layout(p) for p in structure.pages]
+    if any(p.depth != 1 for p in pages):
+        raise InvalidImageError("a 3-D TIFF page is not read; write one page a slice")
+    sizes = {(p.height, p.width) for p in pages}
+    if len(sizes) != 1:
+        raise InvalidImageError(
+            f"the TIFF stack's pages differ in size ({len(sizes)} sizes); a volume's "
+            "slices are one size"
+        )
+    return pages
 
 
 def read_tiff_stack(data: bytes, *, max_voxels: int | None = None) -> np.ndarray:
@@ -326,43 +347,21 @@ def read_tiff_stack(data: bytes, *, max_voxels: int | None = None) -> np.ndarray
     >>> v = read_tiff_stack(buf.getvalue()); v.shape, int(v.sum())
     ((3, 4, 5), 6)
     """
-    import tifffile
-
     data = bytes(data)
-    if not is_tiff(data):
-        raise InvalidImageError("not a TIFF file: the TIFF signature is missing")
+    pages = stack_layouts(data)
+    n, height, width = len(pages), pages[0].height, pages[0].width
+    if max_voxels is not None and n * height * width > max_voxels:
+        raise ImageTooLargeError(
+            f"the stack has {n * height * width} voxels ({n}×{height}×{width}), the "
+            f"limit is {max_voxels}"
+        )
+    slices = []
     try:
-        tif = tifffile.TiffFile(io.BytesIO(data))
+        tif = _tifffile(data)
     except Exception as exc:  # tifffile raises many kinds on a broken header
         raise InvalidImageError(f"cannot read TIFF: {_plain(exc)}") from None
     with tif:
-        try:
-            n = len(tif.pages)
-            if n > MAX_STACK_PAGES:
-                raise InvalidImageError(
-                    f"TIFF stack of {n} pages; at most {MAX_STACK_PAGES} are read"
-                )
-            pages: list[Any] = [tif.pages[i] for i in range(n)]
-        except InvalidImageError:
-            raise
-        except Exception as exc:
-            raise InvalidImageError(f"corrupt TIFF: {_plain(exc)}") from None
-        if n == 1 and getattr(pages[0], "imagedepth", 1) != 1:
-            raise InvalidImageError("a 3-D TIFF page is not read; write one page a slice")
-        sizes = {(int(p.imagelength), int(p.imagewidth)) for p in pages}
-        if len(sizes) != 1:
-            raise InvalidImageError(
-                f"the TIFF stack's pages differ in size ({len(sizes)} sizes); a volume's "
-                "slices are one size"
-            )
-        height, width = sizes.pop()
-        if max_voxels is not None and n * height * width > max_voxels:
-            raise ImageTooLargeError(
-                f"the stack has {n * height * width} voxels ({n}×{height}×{width}), the "
-                f"limit is {max_voxels}"
-            )
-        slices = []
         for page in pages:
-            values = _decode_page(page, data, None)
+            values = _decode_page(page, data, None, tif)
             slices.append(values if values.ndim == 2 else values[..., 0])
     return np.stack(slices)

@@ -48,6 +48,7 @@ __all__ = [
     "BodyTooLargeError",
     "HeaderTooLargeError",
     "InternalError",
+    "MainMemoryError",
     "NotAcceptableError",
     "RequestTimeoutError",
     "UnauthorizedError",
@@ -95,6 +96,11 @@ class RequestTimeoutError(Exception):
     ``SKELPRUNE_BODY_TIMEOUT`` to send its body."""
 
 
+class MainMemoryError(Exception):
+    """The main process holds more than ``SKELPRUNE_MAIN_MEMORY_MB``: no new body is read
+    until it holds less (a 503 that passes)."""
+
+
 class InternalError(Exception):
     """A bug: an exception nothing else maps (the message gives a log reference)."""
 
@@ -127,6 +133,7 @@ PROBLEMS: dict[type[BaseException], ProblemKind] = {
     NotAcceptableError: ProblemKind(406, "not-acceptable", "Not acceptable"),
     UnauthorizedError: ProblemKind(401, "unauthorized", "Unauthorized"),
     QueueFullError: ProblemKind(503, "queue-full", "Service busy"),
+    MainMemoryError: ProblemKind(503, "main-memory", "Service busy"),
     PoolStartingError: ProblemKind(503, "starting", "Service starting"),
     PoolClosedError: ProblemKind(503, "unavailable", "Service unavailable"),
     JobTimeoutError: ProblemKind(504, "job-timeout", "Job timed out"),
@@ -199,8 +206,12 @@ def problem(
     )
 
 
+#: Most validation errors an answer lists (``error_count`` says how many there were).
+MAX_ERRORS = 20
+
+
 def _loc(loc: tuple[Any, ...] | list[Any]) -> str:
-    return ".".join(str(p) for p in loc)
+    return ".".join(str(p) for p in loc)[:200]
 
 
 def install_error_handlers(app: FastAPI, *, retry_after: int) -> None:
@@ -240,6 +251,7 @@ def install_error_handlers(app: FastAPI, *, retry_after: int) -> None:
 
     async def validation_error(request: Request, exc: Exception) -> JSONResponse:
         assert isinstance(exc, RequestValidationError)
+        found = exc.errors()
         errors = [
             # pydantic prefixes a validator's message with "Value error, ": not the user's
             {
@@ -247,10 +259,10 @@ def install_error_handlers(app: FastAPI, *, retry_after: int) -> None:
                 "msg": str(e.get("msg", "")).removeprefix("Value error, "),
                 "type": str(e.get("type", "")),
             }
-            for e in exc.errors()
+            for e in found[:MAX_ERRORS]
         ]
         shown = "; ".join(f"{_loc(e['loc'])}: {e['msg']}" for e in errors[:5])
-        more = f" (and {len(errors) - 5} more)" if len(errors) > 5 else ""
+        more = f" (and {len(found) - 5} more)" if len(found) > 5 else ""
         row = PROBLEMS[RequestValidationError]
         return problem_response(
             row.status,
@@ -258,7 +270,7 @@ def install_error_handlers(app: FastAPI, *, retry_after: int) -> None:
             slug=row.slug,
             title=row.title,
             instance=request.url.path,
-            extra={"errors": errors},
+            extra={"errors": errors, "error_count": len(found)},
         )
 
     async def unexpected(request: Request, exc: Exception) -> JSONResponse:

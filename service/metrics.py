@@ -7,6 +7,8 @@ from dataclasses import dataclass
 
 from prometheus_client import CollectorRegistry, Gauge, Histogram
 
+from skelprune.budget import resident_bytes
+
 from service.worker.pool import WorkerPool
 
 __all__ = ["Metrics", "metrics"]
@@ -58,5 +60,10 @@ def metrics(registry: CollectorRegistry, pool: WorkerPool) -> Metrics:
         "Workers replaced because their memory did not come back after a job.",
         registry=registry,
     ).set_function(lambda: pool.recycled)
+    Gauge(
+        "skelprune_main_resident_bytes",
+        "Resident memory of the main process (reads and checks every request body).",
+        registry=registry,
+    ).set_function(resident_bytes)
     pool.on_job_done = m.job_seconds.observe
     return m

@@ -105,6 +105,13 @@ class Settings(BaseSettings):
         "runs is stopped and replaced (413), and one whose memory did not come back after a "
         "job is replaced.",
     )
+    main_memory_mb: int = Field(
+        1024,
+        ge=128,
+        description="Resident memory the main process (which reads and checks every "
+        "request body) may hold, MiB: over it, a request that sends a body gets 503 "
+        "(main-memory, with Retry-After) until the main process holds less.",
+    )
     time_estimate_scale: float = Field(
         1.0,
         ge=0,

@@ -23,6 +23,8 @@ from service.http.scan import BatchItem, count_polygon, split_batch
 from service.http.schemas import MatchPolygons, PolygonJob, PruneQuery, polygon_request_adapter
 from skelprune.budget import check_polygon
 from skelprune.errors import InvalidOptionError, InvalidPolygonError
+from skelprune.io.input import check_image_size
+from skelprune.volume import check_volume_size, is_volume
 
 __all__ = [
     "BATCH_MAX_ITEMS",
@@ -32,6 +34,9 @@ __all__ = [
     "batch_size",
     "body_errors",
     "check_polygon_body",
+    "check_upload",
+    "declared_type",
+    "measure_upload",
     "content_type",
     "parse_batch",
     "parse_pair",
@@ -88,6 +93,56 @@ async def validate_json(
     if len(body) > BIG_JSON:
         return await asyncio.to_thread(run)
     return run()
+
+
+#: The first bytes of each file type an image body may be, by its ``Content-Type``.
+SIGNATURES = {
+    "image/png": (b"\x89PNG\r\n\x1a\n",),
+    "image/tiff": (b"II*\x00", b"MM\x00*", b"II+\x00", b"MM\x00+"),
+    "image/gif": (b"GIF87a", b"GIF89a"),
+    "application/x-npy": (b"\x93NUMPY",),
+}
+
+
+def declared_type(data: bytes, declared: str | None) -> None:
+    """Refuse an image body whose bytes are another type than its ``Content-Type``
+    declares (a ``.npy`` sent as ``image/png``); a body of no known type is left to
+    the reader, which names what it is.
+
+    Raises
+    ------
+    UnsupportedMediaTypeError
+        Naming the type the bytes are and the one declared.
+    """
+    if declared is None or declared not in SIGNATURES:
+        return
+    head = bytes(data[:8])
+    actual = next(
+        (t for t, sigs in SIGNATURES.items() if any(head.startswith(s) for s in sigs)), None
+    )
+    if actual is not None and actual != declared:
+        raise UnsupportedMediaTypeError(
+            f"the body is {actual} but its Content-Type says {declared}; send it as "
+            f"Content-Type: {actual}"
+        )
+
+
+def measure_upload(data: bytes, max_pixels: int | None, declared: str | None = None) -> None:
+    """An uploaded image or volume's type and size from its header, refused before it
+    is queued (what the service checks of every file in the main process: bounded, and
+    run off the event loop by :func:`check_upload`)."""
+    declared_type(data, declared)
+    if is_volume(data):
+        check_volume_size(data, max_pixels)  # voxels count as pixels
+    else:
+        check_image_size(data, max_pixels)
+
+
+async def check_upload(data: bytes, max_pixels: int | None, declared: str | None = None) -> None:
+    """:func:`measure_upload` in a thread: a file's structure (a TIFF's pages and tags,
+    a ``.npy`` header) is read off the event loop, so that health checks and other
+    requests are served meanwhile."""
+    await asyncio.to_thread(measure_upload, data, max_pixels, declared)
 
 
 def check_polygon_body(

@@ -12,14 +12,20 @@ from service.http.schemas import PruneQuery
 
 __all__ = ["QUERY_OPTIONS", "parse_query", "validation_error"]
 
+#: Validation errors kept of one request.
+MAX_KEPT = 100
 QUERY_OPTIONS = frozenset(PruneQuery.model_fields)  # no aliases: field name = parameter
 
 
 def validation_error(
     errors: list[dict[str, Any]], prefix: tuple[str, ...]
 ) -> RequestValidationError:
-    """Validation errors located under ``prefix`` (``("query",)``, ``("body",)``)."""
-    return RequestValidationError([{**e, "loc": (*prefix, *e.get("loc", ()))} for e in errors])
+    """Validation errors located under ``prefix`` (``("query",)``, ``("body",)``); the
+    first :data:`MAX_KEPT` of them (what an answer can list, and a few over, so that the
+    answer says there were more)."""
+    return RequestValidationError(
+        [{**e, "loc": (*prefix, *e.get("loc", ()))} for e in errors[:MAX_KEPT]]
+    )
 
 
 def parse_query(params: QueryParams) -> PruneQuery:

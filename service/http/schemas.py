@@ -170,16 +170,19 @@ class _GeoJSONObject(BaseModel):
         return self
 
 
-Position = Annotated[list[FiniteFloat], Field(min_length=2, max_length=3)]
-LinearRing = Annotated[list[Position], Field(min_length=4)]
-BBox = Annotated[list[FiniteFloat], Field(min_length=4, max_length=6)]
+# fail_fast: a list stops at its first invalid item, so that a body of a million wrong
+# numbers makes one validation error, not a million (each an object, and a line of the
+# answer).
+Position = Annotated[list[FiniteFloat], Field(min_length=2, max_length=3, fail_fast=True)]
+LinearRing = Annotated[list[Position], Field(min_length=4, fail_fast=True)]
+BBox = Annotated[list[FiniteFloat], Field(min_length=4, max_length=6, fail_fast=True)]
 
 
 class PolygonGeometry(_GeoJSONObject):
     """GeoJSON Polygon: exterior ring first, then holes; rings closed."""
 
     type: Literal["Polygon"]
-    coordinates: Annotated[list[LinearRing], Field(min_length=1)]
+    coordinates: Annotated[list[LinearRing], Field(min_length=1, fail_fast=True)]
     bbox: BBox | None = None
 
 
@@ -188,7 +191,8 @@ class MultiPolygonGeometry(_GeoJSONObject):
 
     type: Literal["MultiPolygon"]
     coordinates: Annotated[
-        list[Annotated[list[LinearRing], Field(min_length=1)]], Field(min_length=1)
+        list[Annotated[list[LinearRing], Field(min_length=1, fail_fast=True)]],
+        Field(min_length=1, fail_fast=True),
     ]
     bbox: BBox | None = None
 
@@ -211,7 +215,7 @@ class FeatureCollection(_GeoJSONObject):
     """GeoJSON FeatureCollection; the union of its polygons is the shape."""
 
     type: Literal["FeatureCollection"]
-    features: Annotated[list[Feature], Field(min_length=1)]
+    features: Annotated[list[Feature], Field(min_length=1, fail_fast=True)]
     bbox: BBox | None = None
 
 
@@ -336,7 +340,12 @@ class Problem(BaseModel):
     request_id: str | None = Field(
         None, description="The request's ID, also in the `X-Request-ID` response header."
     )
-    errors: list[ValidationItem] | None = Field(None, description="Validation errors (422).")
+    errors: list[ValidationItem] | None = Field(
+        None, description="Validation errors (422): the first 20."
+    )
+    error_count: int | None = Field(
+        None, description="How many validation errors the request has (422)."
+    )
 
 
 class Health(BaseModel):

@@ -18,18 +18,37 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from fastapi import Request
 
-from service.errors import UnsupportedMediaTypeError
+from service.errors import MainMemoryError, UnsupportedMediaTypeError
 from service.http.bodies import JSON_TYPES, Form, content_type, read_form, refuse_encoding
 from service.http.query import parse_query
 from service.http.schemas import PruneQuery
 from service.settings import Settings
 from service.worker.jobs import Media
 from service.worker.pool import WorkerPool
+from skelprune.budget import mib, resident_bytes
 
 if TYPE_CHECKING:
     from service.metrics import Metrics
 
-__all__ = ["BodyKind", "ShapeRequest", "ShapeRequests"]
+__all__ = ["BodyKind", "ShapeRequest", "ShapeRequests", "check_main_memory"]
+
+
+def check_main_memory(limit_mb: int) -> None:
+    """Refuse a new body while the main process holds more than ``limit_mb`` MiB: the
+    main process's memory watched as the workers' is (it cannot be replaced, so what
+    it stops is more work).
+
+    Raises
+    ------
+    MainMemoryError
+        Naming what it holds and its budget.
+    """
+    held = resident_bytes()
+    if held > limit_mb * 2**20:
+        raise MainMemoryError(
+            f"the server's main process holds {mib(held)}, over its budget of "
+            f"{mib(limit_mb * 2**20)}; try again shortly"
+        )
 
 #: What a body holds, by its ``Content-Type``: an image as the body itself (PNG or
 #: TIFF; a volume as a ``.npy`` or a TIFF stack), a multipart form, or JSON (GeoJSON).
@@ -37,6 +56,7 @@ BodyKind = Literal["image", "form", "json"]
 KINDS: dict[str, BodyKind] = {
     "image/png": "image",
     "image/tiff": "image",
+    "image/gif": "image",
     "application/x-npy": "image",  # a volume as a .npy file
     "multipart/form-data": "form",
     **dict.fromkeys(JSON_TYPES, "json"),
@@ -55,6 +75,7 @@ class ShapeRequest:
     media: Media | None  # the answer the Accept header asks for (None: the endpoint has one)
     kind: BodyKind
     body: bytes
+    content_type: str = ""  # the body's declared media type, without parameters
 
     async def form(self, max_files: int) -> Form:
         """The body as a multipart form (:func:`~service.http.bodies.read_form`)."""
@@ -86,6 +107,7 @@ class ShapeRequests:
         media = self.accept(request.headers.get("accept"))
         ctype = content_type(request)
         refuse_encoding(request)
+        check_main_memory(state.settings.main_memory_mb)
         body = await request.body()  # size-limited by BodyLimitMiddleware
         kind = KINDS.get(ctype)
         if kind is None or kind not in self.kinds:
@@ -93,5 +115,5 @@ class ShapeRequests:
                 f"Content-Type {ctype or 'none'!r} is not supported; send {self.send}"
             )
         return ShapeRequest(
-            request, query, state.settings, state.pool, state.metrics, media, kind, body
+            request, query, state.settings, state.pool, state.metrics, media, kind, body, ctype
         )

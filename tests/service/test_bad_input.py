@@ -175,7 +175,10 @@ MP_WRONG_FIELD = multipart("image", "shape.png", GOOD, "image/png")
 
 CASES = [
     # --- PNG: not a PNG, broken, oversized, degenerate
-    Case("not-a-png", b"GIF89a" + b"\0" * 64, "image/png", 400, ("not a PNG", "signature")),
+    Case("not-a-png", b"\xff\xd8\xff" + b"\0" * 64, "image/png", 400, ("not a PNG", "signature")),
+    # the body's bytes are another type than its Content-Type declares
+    Case("gif-sent-as-png", b"GIF89a" + b"\0" * 64, "image/png", 415, ("image/gif", "image/png")),
+    Case("npy-sent-as-png", b"\x93NUMPY" + b"\0" * 64, "image/png", 415, ("x-npy", "image/png")),
     Case("text-as-png", b"hello, world", "image/png", 400, ("not a PNG",)),
     Case("empty-body-png", b"", "image/png", 400, ("not a PNG",)),
     Case("truncated-png", GOOD[: len(GOOD) // 2], "image/png", 400, ("truncated PNG",)),

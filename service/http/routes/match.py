@@ -10,6 +10,7 @@ from fastapi import APIRouter, Depends, Response
 from service.apidocs import openapi
 from service.http.bodies import (
     check_polygon_body,
+    check_upload,
     parse_pair,
     validate_json,
 )
@@ -18,7 +19,6 @@ from service.http.query import QUERY_OPTIONS
 from service.http.shape_request import ShapeRequest, ShapeRequests
 from service.worker.match_job import MatchJob, run_match_job
 from skelprune.errors import InvalidOptionError
-from skelprune.io.input import check_image_size
 
 __all__ = ["match_function", "router"]
 
@@ -66,7 +66,7 @@ async def match(
             )
         pngs = form.uploads(("a", "b"), "a PNG")
         for png in pngs:
-            check_image_size(png, settings.max_pixels)
+            await check_upload(png, settings.max_pixels)
     else:
         shapes = await validate_json(
             parse_pair,

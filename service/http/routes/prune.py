@@ -18,6 +18,7 @@ from service.http.bodies import (
     BATCH_MAX_ITEMS,
     batch_size,
     check_polygon_body,
+    check_upload,
     parse_batch,
     parse_polygon,
     polygon_item,
@@ -33,7 +34,6 @@ from service.worker.pool import PoolError
 from skelprune.budget import check_polygon
 from skelprune.errors import InvalidPolygonError, SkelpruneError
 from skelprune.io.input import check_image_size
-from skelprune.volume import check_volume_size, is_volume
 
 __all__ = ["job_function", "router"]
 
@@ -93,11 +93,9 @@ async def prune(
             call.body,
             check_polygon_body(settings.max_vertices, settings.estimate_seconds),
         )
-    if png is not None:  # refused before it is queued
-        if is_volume(png):
-            check_volume_size(png, settings.max_pixels)  # voxels count as pixels
-        else:
-            check_image_size(png, settings.max_pixels)
+    if png is not None:  # refused before it is queued, off the event loop
+        declared = call.content_type if call.kind == "image" else None
+        await check_upload(png, settings.max_pixels, declared)
     assert call.media is not None  # negotiate always names one
     build = job_builder(
         call.query, envelope, settings, polygon=geojson is not None, media=call.media
@@ -125,7 +123,7 @@ def _batch_item(
     or its problem line."""
     try:
         if isinstance(item, bytes):
-            check_image_size(item, settings.max_pixels)
+            check_image_size(item, settings.max_pixels)  # a batch holds images, not volumes
             return build.job(png=item)
         counts = item.counts
         check_polygon(
@@ -170,7 +168,7 @@ async def prune_batch(
         build = job_builder(
             call.query, form.options(files="file"), settings, polygon=False, media="json"
         )
-        jobs = _batch_jobs(items, build, settings)
+        jobs = await asyncio.to_thread(_batch_jobs, items, build, settings)
     else:
         # split, measured and validated off the event loop, item by item
         items = await asyncio.to_thread(parse_batch, call.body)

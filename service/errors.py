@@ -38,6 +38,7 @@ from skelprune.errors import (
     InvalidPolygonError,
     JobTooLargeError,
     SkelpruneError,
+    plain_text,
 )
 from skelprune.matching import UnmatchableShapeError
 
@@ -168,7 +169,7 @@ def problem_response(
         "type": TYPE_PREFIX + slug if slug else "about:blank",
         "title": title or phrase,
         "status": status,
-        "detail": detail,
+        "detail": plain_text(detail),
     }
     if instance:
         body["instance"] = instance
@@ -256,7 +257,7 @@ def install_error_handlers(app: FastAPI, *, retry_after: int) -> None:
             # pydantic prefixes a validator's message with "Value error, ": not the user's
             {
                 "loc": [str(p) for p in e.get("loc", ())],
-                "msg": str(e.get("msg", "")).removeprefix("Value error, "),
+                "msg": plain_text(str(e.get("msg", "")).removeprefix("Value error, ")),
                 "type": str(e.get("type", "")),
             }
             for e in found[:MAX_ERRORS]

@@ -191,6 +191,8 @@ def prune_command(
             raise typer.Exit(1) from None
         for warning in res.warnings:  # also in the document; here for the reader
             typer.echo(f"warning: {inputs[0]}: {warning['message']}", err=True)
+        if getattr(getattr(res, "input", None), "hint", None):  # a label image, labels off
+            typer.echo(f"warning: {inputs[0]}: {res.input.hint}", err=True)
         written: tuple[tuple[str, Path | None, Callable[[], bytes]], ...] = (
             ("--overlay", overlay, res.overlay_png),
             ("--csv", csv, lambda: res.to_csv().encode()),

@@ -13,7 +13,7 @@ from .errors import SkelpruneError
 from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions, VolumeOptions
 
 #: What a folder is searched for (any case).
-FOLDER_SUFFIXES = (".png", ".geojson", ".tif", ".tiff", ".npy")
+FOLDER_SUFFIXES = (".png", ".gif", ".geojson", ".tif", ".tiff", ".npy")
 
 
 def _prune(

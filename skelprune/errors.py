@@ -10,6 +10,7 @@ the same way: :func:`problem_kind`.
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 __all__ = [
@@ -20,6 +21,7 @@ __all__ = [
     "InvalidPolygonError",
     "JobTooLargeError",
     "SkelpruneError",
+    "plain_text",
     "problem_kind",
     "shown",
 ]
@@ -98,5 +100,20 @@ def shown(value: Any) -> str:
             float(value)
         except OverflowError:
             return f"{'-' if value < 0 else ''}<integer of {value.bit_length()} bits>"
-    text = repr(value)
+    text = plain_text(repr(value))
     return text if len(text) <= 40 else text[:37] + "..."
+
+
+_NUMPY_SCALAR = re.compile(r"\bnp\.(?:float|int|uint|bool|str)_?\d*\(([^()]*)\)")
+_ADDRESS = re.compile(r"<([^<>]*?) at 0x[0-9a-fA-F]+>")
+
+
+def plain_text(text: str) -> str:
+    """A message without the interpreter's internals: numpy scalars as their value
+    (``np.float64(2.0)``: ``2.0``), an object's address dropped (``<ast.BinOp object at
+    0x7f…>``: ``<ast.BinOp object>``). Every error answer's detail goes through it.
+
+    >>> plain_text("got (np.float64(2.5), np.int64(3)) and <ast.BinOp object at 0x7f00>")
+    'got (2.5, 3) and <ast.BinOp object>'
+    """
+    return _ADDRESS.sub(r"<\1>", _NUMPY_SCALAR.sub(r"\1", text))

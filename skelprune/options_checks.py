@@ -7,6 +7,7 @@ The classes are in :mod:`skelprune.options` and :mod:`skelprune.options_input`.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable
 from dataclasses import field, fields
 from typing import Any
@@ -113,20 +114,54 @@ def _check_fields(options: Any) -> None:
         raise InvalidOptionError("; ".join(message for _, message in errors), errors)
 
 
+#: A number as text is read: plain ASCII decimal (Python's float() also reads "1_0" and
+#: other scripts' digits).
+PLAIN_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
+#: The range of a pixel's or voxel's size: past it, lengths, areas and volumes would
+#: overflow or vanish in floating point (a 1e308 spacing makes every length infinite).
+SCALE_RANGE = (1e-12, 1e12)
+
+
+def _scale(name: str, value: Any) -> float:
+    """A pixel's size: a finite number within :data:`SCALE_RANGE`."""
+    low, high = SCALE_RANGE
+    try:
+        ok = (
+            not isinstance(value, bool)
+            and isinstance(value, int | float)
+            and low <= value <= high
+        )
+    except OverflowError:
+        ok = False
+    if not ok:
+        raise InvalidOptionError(
+            f"{name} must be a finite number from {low:g} to {high:g}, got {shown(value)}"
+        )
+    return float(value)
+
+
+_with_schema(_scale, minimum=SCALE_RANGE[0], maximum=SCALE_RANGE[1])
+
+
 def _spacing(name: str, value: Any) -> tuple[float, float, float]:
     try:
         if isinstance(value, str):  # "dz,dy,dx", as a query or the CLI writes it
-            values: tuple[Any, ...] = tuple(float(v) for v in value.split(","))
+            parts = value.split(",")
+            if not all(PLAIN_NUMBER.fullmatch(v.strip()) for v in parts):
+                raise ValueError(value)  # "1_0" and other digits than ASCII: refused
+            values: tuple[Any, ...] = tuple(float(v) for v in parts)
         else:
             values = tuple(value)
     except (TypeError, ValueError):
         values = ()
+    low, high = SCALE_RANGE
     if len(values) != 3 or not all(
-        not isinstance(v, bool) and isinstance(v, int | float) and math.isfinite(v) and v > 0
+        not isinstance(v, bool) and isinstance(v, int | float) and low <= v <= high
         for v in values
     ):
         raise InvalidOptionError(
-            f"{name} must be three finite numbers > 0 (dz, dy, dx), got {shown(value)}"
+            f"{name} must be three finite numbers > 0 (dz, dy, dx), each from {low:g} to "
+            f"{high:g}, got {shown(value)}"
         )
     return (float(values[0]), float(values[1]), float(values[2]))
 

@@ -17,6 +17,7 @@ from .options_checks import (
     _integer,
     _number,
     _option,
+    _scale,
     _spacing,
 )
 
@@ -109,7 +110,7 @@ class RasterOptions:
         "Raster pixel size in the polygon's units, > 0 (default: fitted to the polygon, "
         "see pixels_per_width). For an image: the side of a pixel in your units, which "
         "the tables (summary, CSV) measure in (default: pixels).",
-        _number(0, strict=True),
+        _scale,
     )
     longest_side: int | None = _option(
         None,

@@ -21,7 +21,8 @@ from skelprune.budget import (
     out_of_memory,
     volume_estimate,
 )
-from skelprune.errors import ImageTooLargeError, InvalidOptionError, SkelpruneError
+from skelprune.errors import ImageTooLargeError, InvalidOptionError
+from skelprune.output.finite import finite_text, finite_tree
 from skelprune.io.input import Input, Kind, read_input
 from skelprune.options import (
     OutputOptions,
@@ -169,6 +170,11 @@ def warmup() -> str:
     return f"{loaded} numba kernels loaded from the cache in {took}"
 
 
+#: The response header of a warning about the input that every answer carries (the
+#: JSON document also holds it, as ``hint``): a label image read without ``labels``.
+WARNING_HEADER = "X-Skelprune-Warning"
+
+
 def read_job(job: Job) -> Input:
     """The job's input, read with the service's limits."""
     return read_input(
@@ -225,7 +231,9 @@ def _run_job(job: Job) -> JobResult:
             "option(s) spacing only apply to volume input (a .npy or a TIFF stack body)"
         )
     shape = read_job(job)
-    cost = estimate(shape.mask, answer_pixels(job, shape.mask.shape), job.options.scope)
+    cost = estimate(
+        shape.mask, answer_pixels(job, shape.mask.shape), job.options.scope, shape.labels
+    )
     check_budget(cost, job.memory_budget, job.time_budget)
     t0 = time.perf_counter()
     res = prune_input(shape, job.options, job.output)
@@ -246,6 +254,8 @@ def _run_job(job: Job) -> JobResult:
         body = res.to_graphml().encode()
     else:
         body = dumps(res.to_dict())
+    if shape.hint is not None:  # a label image read without labels: said in every answer
+        headers[WARNING_HEADER] = shape.hint.encode("ascii", "replace").decode("ascii")
     return JobResult(
         body=body, media_type=MEDIA_TYPES[job.media], prune_seconds=elapsed, headers=headers
     )
@@ -268,6 +278,12 @@ def _run_volume_job(job: Job) -> JobResult:
         z, y, x = volume.shape
         scale = job.output.overlay_scale or auto_volume_scale(volume.shape)
         answer = (y + z + 4) * (x + z + 4) * scale * scale
+        if job.max_pixels is not None and answer > job.max_pixels:
+            raise ImageTooLargeError(
+                f"the projections image would have {answer} pixels (overlay_scale {scale} "
+                f"on a {x}×{y}×{z} volume), the limit is {job.max_pixels}; use a smaller "
+                "overlay_scale"
+            )
     cost = volume_estimate(volume, answer)
     check_budget(cost, job.memory_budget, job.time_budget, VOLUME_BASIS)
     t0 = time.perf_counter()
@@ -293,7 +309,7 @@ def png_headers(values: list[Any]) -> dict[str, str]:
     headers = {"X-Skelprune-Components": str(len(values))}
     if len(values) <= PNG_HEADER_COMPONENTS:
         for name, key in PNG_HEADERS.items():
-            headers[name] = ",".join(repr(float(v[key])) for v in values)
+            headers[name] = ",".join(finite_text(v[key]) for v in values)
     else:
         headers["X-Skelprune-Values"] = (
             f"omitted: more than {PNG_HEADER_COMPONENTS} components; ask for application/json"
@@ -303,12 +319,6 @@ def png_headers(values: list[Any]) -> dict[str, str]:
 
 def dumps(doc: Any) -> bytes:
     """The answer as compact JSON (what every job serialises with)."""
-    # allow_nan=False: a NaN would be invalid JSON. The input checks keep every number
-    # finite; should one still overflow, the caller hears why (422), not "internal error".
-    try:
-        return json.dumps(doc, separators=(",", ":"), allow_nan=False).encode()
-    except ValueError:
-        raise SkelpruneError(
-            "the answer would hold a number JSON cannot write (an "
-            "overflow); scale the input coordinates down"
-        ) from None
+    # A number that is not finite is null (the one rule of skelprune.output.finite);
+    # allow_nan=False then only guards that rule.
+    return json.dumps(finite_tree(doc), separators=(",", ":"), allow_nan=False).encode()

@@ -42,7 +42,7 @@ Kind = Literal["image", "geojson"]
 #: File name endings read as GeoJSON polygons (any case); any other file is read as a PNG.
 GEOJSON_SUFFIXES = (".geojson", ".json")
 #: The image formats read (by their signature, whatever the file's name).
-IMAGE_FORMATS = ("PNG", "TIFF")
+IMAGE_FORMATS = ("PNG", "TIFF", "GIF")
 #: What a mask given as it is (an array, a GeoTIFF) takes as the shape: its non-zero
 #: pixels (a GeoTIFF's nodata value is not the shape either).
 MASK_FOREGROUND = Foreground(ARRAY_FOREGROUND, "nonzero")
@@ -331,6 +331,7 @@ def image_input(
 
 def _format(data: bytes) -> str:
     """The image format of a file's first bytes, or an error naming what is read."""
+    from .gif import is_gif
     from .png import PNG_SIGNATURE
     from .tiff import is_tiff
 
@@ -338,9 +339,11 @@ def _format(data: bytes) -> str:
         return "PNG"
     if is_tiff(data):
         return "TIFF"
+    if is_gif(data):
+        return "GIF"
     known = {
         b"\xff\xd8\xff": "a JPEG image",
-        b"GIF8": "a GIF image",
+        b"GIF8": "a GIF image of a version not read (GIF87a and GIF89a are)",
         b"BM": "a BMP image",
         b"SQLite format 3": "an SQLite file (a GeoPackage?)",
         b"\x00\x00\x27\x0a": "a Shapefile",
@@ -355,8 +358,8 @@ def _format(data: bytes) -> str:
     if what is None:
         what = "empty" if not data else "a format not recognised"
     raise InvalidImageError(
-        f"not a PNG or TIFF file: neither the PNG signature nor the TIFF one ({what}); "
-        f"images are read from {' and '.join(IMAGE_FORMATS)} files, polygons from GeoJSON "
+        f"not a PNG, TIFF or GIF file: none of their signatures ({what}); "
+        f"images are read from {', '.join(IMAGE_FORMATS)} files, polygons from GeoJSON "
         "(.geojson, .json)"
     )
 
@@ -365,10 +368,15 @@ def check_image_size(data: bytes, max_pixels: int | None) -> tuple[int, int]:
     """A PNG's or TIFF's ``(width, height)`` from its header; refuses more than
     ``max_pixels`` pixels, and a file of another format, before anything is decoded."""
     data = bytes(data)
-    if _format(data[:64]) == "PNG":
+    kind = _format(data[:64])
+    if kind == "PNG":
         from .png import check_png_size
 
         return check_png_size(data, max_pixels)
+    if kind == "GIF":
+        from .gif import gif_size
+
+        return gif_size(data, max_pixels)
     from .tiff import tiff_size
 
     width, height = tiff_size(data)
@@ -398,8 +406,13 @@ def _image_values(source: Any, max_pixels: int | None) -> tuple[np.ndarray, np.n
             raise InvalidImageError(f"cannot read {os.fspath(source)!r}: {exc.strerror}") from None
     else:
         data = bytes(source)
-    if _format(data) == "TIFF":
+    kind = _format(data)
+    if kind == "TIFF":
         from .tiff import read_tiff
 
         return read_tiff(data, max_pixels=max_pixels), None
+    if kind == "GIF":
+        from .gif import read_gif
+
+        return read_gif(data, max_pixels)
     return png.read_values(data, max_pixels)

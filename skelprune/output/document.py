@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from ..io.input import Input
     from ..io.polygon import PolygonRaster
 from .component import ComponentResult
+from .finite import finite_tree
 from .render import auto_scale, encode_png, result_overlay
 from .views import to_networkx
 
@@ -166,7 +167,7 @@ class PruneResult:
             doc["hint"] = self.input.hint
         if overlay:
             doc["overlay_png"] = base64.b64encode(self.overlay_png()).decode("ascii")
-        return doc
+        return finite_tree(doc)
 
     def _options_block(self) -> dict[str, Any]:
         """Every pruning option as applied, in the document's order."""
@@ -246,8 +247,10 @@ class PruneResult:
         )
         from .summary import geojson_numbers
 
-        return geojson_numbers(
-            self, cast(dict[str, Any], collection), self.frame if frame is None else frame
+        return finite_tree(
+            geojson_numbers(
+                self, cast(dict[str, Any], collection), self.frame if frame is None else frame
+            )
         )
 
     def to_networkx(self, frame: PixelFrame | None = None) -> Any:

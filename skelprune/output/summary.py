@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from ..io.frame import IDENTITY, PixelFrame
+from .finite import finite
 from .table import ENDPOINT, JUNCTION, LOOP, BranchTable
 
 #: A :class:`~skelprune.output.document.PruneResult` (which imports this module).
@@ -301,7 +302,7 @@ def branch_rows(
     for ci, c in enumerate(result.components):
         t = c.table
         out += _component_branches(t, ci, c.label, scale, unit)
-    return out
+    return [{k: finite(v) for k, v in row.items()} for row in out]
 
 
 def component_rows(result: PruneResult) -> list[dict[str, Any]]:
@@ -330,7 +331,7 @@ def component_rows(result: PruneResult) -> list[dict[str, Any]]:
                 "unit": unit,
             }
         )
-    return out
+    return [{k: finite(v) for k, v in row.items()} for row in out]
 
 
 def table(result: PruneResult, level: str = "branch") -> Any:
@@ -359,7 +360,7 @@ def table_csv(result: PruneResult, level: str = "branch") -> str:
     writer = csv.DictWriter(buf, fieldnames=list(columns), lineterminator="\n")
     writer.writeheader()
     for row in rows:
-        writer.writerow({k: ("" if v is None else v) for k, v in row.items()})
+        writer.writerow({k: ("" if finite(v) is None else v) for k, v in row.items()})
     return buf.getvalue()
 
 
@@ -401,7 +402,7 @@ def graphml(result: PruneResult) -> str:
         return "".join(
             f'<data key="{scope}_{k}">{v if not isinstance(v, str) else quoteattr(v)[1:-1]}</data>'
             for k, v in values.items()
-            if v is not None
+            if finite(v) is not None
         )
 
     rows = branch_rows(result)

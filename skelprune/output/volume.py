@@ -22,6 +22,7 @@ from ..grid3d.tips import VolumeTrim
 from ..options import OutputOptions, PruneOptions
 from ..pruning.bayesian import PruningSequence, target
 from ..pruning.margin import Margins
+from .finite import finite
 
 __all__ = ["VolumeComponent", "VolumeResult"]
 
@@ -301,7 +302,7 @@ class VolumeResult:
         writer = csv.DictWriter(buf, fieldnames=list(VOLUME_BRANCH_COLUMNS), lineterminator="\n")
         writer.writeheader()
         for row in self._branch_rows():
-            writer.writerow({k: ("" if v is None else v) for k, v in row.items()})
+            writer.writerow({k: ("" if finite(v) is None else v) for k, v in row.items()})
         return buf.getvalue()
 
     def to_networkx(self) -> Any:

@@ -27,7 +27,7 @@ __all__ = ["FILE_SUFFIXES", "Item", "Labels", "expand"]
 
 #: What a folder is searched for, any case (a ``.npy`` or a multi-page TIFF is a volume);
 #: a file named as such, or a glob's match, is taken whatever its ending.
-FILE_SUFFIXES = (".png", ".geojson", ".json", ".tif", ".tiff", ".npy")
+FILE_SUFFIXES = (".png", ".gif", ".geojson", ".json", ".tif", ".tiff", ".npy")
 #: Names no input may take: the run's own files under ``out``.
 RESERVED = ("problems",)
 _UNSAFE = re.compile(r"[^\w.+-]+")

@@ -175,7 +175,11 @@ def _answer(item: Item, job: Job) -> dict[str, Any]:
     if _is_volume(item, job):
         return _volume_answer(item, job)
     shape = _read(item, job)
-    check_budget(estimate(shape.mask, scope=job.options.scope), job.memory, job.budget.seconds)
+    check_budget(
+        estimate(shape.mask, scope=job.options.scope, labels=shape.labels),
+        job.memory,
+        job.budget.seconds,
+    )
     res = prune_input(shape, job.options, job.output)
     if isinstance(item.source, Feature):
         line = {"row": item.source.row, "index": _plain(item.source.index)}

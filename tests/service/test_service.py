@@ -280,7 +280,8 @@ def _header_only_png(width: int, height: int) -> bytes:
     ("kwargs", "status", "fragment"),
     [
         ({"content": BIRD[:200]}, 400, "truncated PNG"),
-        ({"content": b"GIF89a" + b"\x00" * 64}, 400, "PNG signature"),
+        ({"content": b"BM" + b"\x00" * 64}, 400, "PNG, TIFF or GIF"),
+        ({"content": b"GIF89a" + b"\x00" * 64}, 415, "image/gif"),
         ({"content": png_bytes(np.zeros((20, 20), np.uint8))}, 422, "no foreground"),
         ({"content": _header_only_png(5000, 5000)}, 413, "limit is 1000000"),
         ({"content": BIRD, "params": {"beta": "0"}}, 422, "beta"),

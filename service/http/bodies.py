@@ -19,7 +19,7 @@ from starlette.datastructures import QueryParams, UploadFile
 
 from service.errors import BodyTooLargeError, UnsupportedMediaTypeError
 from service.http.query import parse_query, validation_error
-from service.http.scan import BatchItem, count_polygon, split_batch
+from service.http.scan import BatchItem, PolygonCounts, count_polygon, split_batch
 from service.http.schemas import MatchPolygons, PolygonJob, PruneQuery, polygon_request_adapter
 from skelprune.budget import check_polygon
 from skelprune.errors import InvalidOptionError, InvalidPolygonError
@@ -35,6 +35,7 @@ __all__ = [
     "body_errors",
     "check_polygon_body",
     "check_upload",
+    "check_values",
     "declared_type",
     "measure_upload",
     "content_type",
@@ -156,9 +157,39 @@ def check_polygon_body(
     def check(body: bytes) -> None:
         counts = count_polygon(body)
         limit = None if max_vertices is None else max_vertices * shapes
+        check_values(counts, limit)
         check_polygon(counts.parts, counts.positions, limit, seconds)
 
     return check
+
+
+#: Values (numbers, strings, objects: commas + 1) a polygon body may hold per allowed
+#: position: three coordinates and room for the rest. Parsing a JSON body holds the
+#: interpreter for its whole length, and a value costs an object, so a body of
+#: millions of values (a flat list of numbers, a bulky property) is refused on its
+#: bytes, before it is parsed.
+VALUES_PER_POSITION = 4
+#: ... and the values a body may hold in any case (properties of a small polygon).
+VALUES_ALLOWED = 65_536
+
+
+def check_values(counts: PolygonCounts, max_positions: int | None) -> None:
+    """Refuse a body of more values than its positions could need.
+
+    Raises
+    ------
+    InvalidPolygonError
+        Naming the count and the limit.
+    """
+    if max_positions is None:
+        return
+    limit = VALUES_PER_POSITION * max_positions + VALUES_ALLOWED
+    if counts.values > limit:
+        raise InvalidPolygonError(
+            f"the body holds about {counts.values} JSON values, more than the {limit} a "
+            f"polygon of at most {max_positions} positions needs (a GeoJSON polygon's "
+            "coordinates are arrays of rings of [x, y] positions)"
+        )
 
 
 def body_errors(errors: list[Any]) -> list[dict[str, Any]]:

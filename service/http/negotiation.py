@@ -5,7 +5,7 @@ from __future__ import annotations
 from service.errors import NotAcceptableError
 from service.worker.jobs import Media
 
-__all__ = ["NDJSON", "PRODUCES", "accept_ndjson", "negotiate"]
+__all__ = ["NDJSON", "PRODUCES", "accept_json", "accept_ndjson", "negotiate"]
 
 #: Media types ``POST /v1/prune`` can answer with, in the server's order of preference.
 PRODUCES: dict[str, Media] = {
@@ -95,3 +95,26 @@ def accept_ndjson(accept: str) -> None:
     ranges = _ranges(accept)
     if ranges and max(_quality(ranges, m) for m in (NDJSON, "application/json")) <= 0:
         raise NotAcceptableError(f"cannot produce any of {accept!r}; available: {NDJSON}")
+
+
+def accept_json(accept: str | None) -> None:
+    """Refuse an ``Accept`` header that admits no JSON (what ``/v1/match`` answers).
+
+    Raises
+    ------
+    NotAcceptableError
+        When the header states a preference and gives ``application/json`` q = 0 or
+        leaves it out.
+
+    >>> accept_json("*/*"), accept_json(None)
+    (None, None)
+    >>> accept_json("text/html")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    service.errors.NotAcceptableError: cannot produce any of 'text/html'; available: application/json
+    """
+    ranges = _ranges(accept or "")
+    if ranges and _quality(ranges, "application/json") <= 0:
+        raise NotAcceptableError(
+            f"cannot produce any of {accept!r}; available: application/json"
+        )

@@ -15,6 +15,7 @@ from service.http.bodies import (
     validate_json,
 )
 from service.http.builder import job_builder
+from service.http.negotiation import accept_json
 from service.http.query import QUERY_OPTIONS
 from service.http.shape_request import ShapeRequest, ShapeRequests
 from service.worker.match_job import MatchJob, run_match_job
@@ -33,7 +34,7 @@ async def match_function() -> Callable[[MatchJob], Any]:
 
 #: ``POST /v1/match`` takes a form of two files or a JSON pair; it answers JSON.
 MATCH = ShapeRequests(
-    lambda accept: None,
+    accept_json,
     ("form", "json"),
     "multipart/form-data (fields 'a' and 'b') or application/json "
     '({"a": GeoJSON, "b": GeoJSON})',

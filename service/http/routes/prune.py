@@ -19,6 +19,7 @@ from service.http.bodies import (
     batch_size,
     check_polygon_body,
     check_upload,
+    check_values,
     parse_batch,
     parse_polygon,
     polygon_item,
@@ -126,6 +127,7 @@ def _batch_item(
             check_image_size(item, settings.max_pixels)  # a batch holds images, not volumes
             return build.job(png=item)
         counts = item.counts
+        check_values(counts, settings.max_vertices)
         check_polygon(
             counts.parts, counts.positions, settings.max_vertices, settings.estimate_seconds
         )

@@ -264,6 +264,14 @@ def _transform(page: TiffPage, pixel_is_point: bool) -> tuple[float, ...]:
         values = tuple(float(v) for v in t)
     if not all(np.isfinite(values)):
         raise InvalidImageError("the GeoTIFF's transform is not finite")
+    from ..options_checks import SCALE_RANGE
+
+    low, high = SCALE_RANGE
+    if not all(low <= abs(v) <= high for v in (values[0], values[4])):
+        raise InvalidImageError(
+            f"the GeoTIFF's pixel size {values[0]:g} × {-values[4]:g} is outside {low:g} to "
+            f"{high:g}: lengths and areas in it would not be finite"
+        )
     return values
 
 

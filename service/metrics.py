@@ -7,9 +7,8 @@ from dataclasses import dataclass
 
 from prometheus_client import CollectorRegistry, Gauge, Histogram
 
-from skelprune.budget import resident_bytes
-
 from service.worker.pool import WorkerPool
+from skelprune.budget import resident_bytes
 
 __all__ = ["Metrics", "metrics"]
 

@@ -137,9 +137,7 @@ def label_count(labels: np.ndarray) -> int:
     return int(np.count_nonzero(values))
 
 
-def shape_counts(
-    mask: np.ndarray, labels: np.ndarray | None = None
-) -> tuple[int, int, int, int]:
+def shape_counts(mask: np.ndarray, labels: np.ndarray | None = None) -> tuple[int, int, int, int]:
     """``(pixels, shape pixels, boundary pixels, components)`` of a boolean mask.
 
     Boundary pixels are the 4-adjacent (shape, background) pairs, the image's edge

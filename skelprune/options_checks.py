@@ -126,11 +126,7 @@ def _scale(name: str, value: Any) -> float:
     """A pixel's size: a finite number within :data:`SCALE_RANGE`."""
     low, high = SCALE_RANGE
     try:
-        ok = (
-            not isinstance(value, bool)
-            and isinstance(value, int | float)
-            and low <= value <= high
-        )
+        ok = not isinstance(value, bool) and isinstance(value, int | float) and low <= value <= high
     except OverflowError:
         ok = False
     if not ok:
@@ -156,8 +152,7 @@ def _spacing(name: str, value: Any) -> tuple[float, float, float]:
         values = ()
     low, high = SCALE_RANGE
     if len(values) != 3 or not all(
-        not isinstance(v, bool) and isinstance(v, int | float) and low <= v <= high
-        for v in values
+        not isinstance(v, bool) and isinstance(v, int | float) and low <= v <= high for v in values
     ):
         raise InvalidOptionError(
             f"{name} must be three finite numbers > 0 (dz, dy, dx), each from {low:g} to "

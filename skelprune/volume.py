@@ -225,8 +225,7 @@ def _within_limit(shape: tuple[int, ...], max_voxels: int) -> int:
     voxels = math.prod(int(d) for d in shape)  # Python integers: no wrap-around
     if voxels > max_voxels:
         raise ImageTooLargeError(
-            f"the volume has {voxels} voxels ({_dims(shape)}), the limit is "
-            f"{max_voxels}"
+            f"the volume has {voxels} voxels ({_dims(shape)}), the limit is {max_voxels}"
         )
     return voxels
 

@@ -1,24 +1,16 @@
 """The red team's hostile requests, each with the answer it must get, and their
 measurement against a real server.
 
-``CASES`` is what the regression tests send (tests/service/test_hostile_files.py);
-``python -m testkit.hostile_cases`` sends each to a real ``python -m service`` at its
-default settings and reports, per case, the status, the time to answer, the slowest
-``/healthz`` while it ran (polled every 20 ms), the server's process tree's largest
-resident set and the time of a small job right after.
+``CASES`` is what the regression tests send (tests/service/test_hostile_files.py), and
+what ``python -m testkit.hostile_measure`` sends to a real server to measure.
 """
 
 from __future__ import annotations
 
 import io
 import json
-import struct
-import sys
-import threading
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -30,8 +22,8 @@ from .hostile_files import (
     looping_tiff,
     npy_bytes,
     npy_with_header,
-    tile_bomb_tiff,
     tiff_with,
+    tile_bomb_tiff,
     write_tiff,
 )
 
@@ -109,7 +101,7 @@ def _form(make: Callable[[], bytes], *fields: str) -> Callable[[], tuple[bytes, 
     def build() -> tuple[bytes, str]:
         data = make()
         parts = b"".join(
-            b"--B\r\nContent-Disposition: form-data; name=\"%s\"; filename=\"x.tif\"\r\n"
+            b'--B\r\nContent-Disposition: form-data; name="%s"; filename="x.tif"\r\n'
             b"Content-Type: image/tiff\r\n\r\n%s\r\n" % (f.encode(), data)
             for f in fields
         )
@@ -158,7 +150,13 @@ def _npy_cases() -> list[Case]:
     for name, descr in _NPY_DTYPES.items():
         header = f"{{'descr': {descr}, 'fortran_order': False, 'shape': (2, 2, 2), }}"
         out.append(
-            Case(name, "/v1/prune", _body(npy_with_header(header, bytes(64)), NPY), (400,), ("dtype",))
+            Case(
+                name,
+                "/v1/prune",
+                _body(npy_with_header(header, bytes(64)), NPY),
+                (400,),
+                ("dtype",),
+            )
         )
     short = b"\x93NUMPY\x01\x00\x02\x00{}"
     out.append(Case("npy-header-length-short", "/v1/prune", _body(short, NPY), (400,), ("header",)))
@@ -182,8 +180,16 @@ def _tiff_cases() -> list[Case]:
     cases = [
         Case("tiff-page-loop", "/v1/prune", _body(loop, TIFF), (400,), ("loops",)),
         Case("tiff-page-loop-upload", "/v1/prune", _form(lambda: loop, "file"), (400,), ("loops",)),
-        Case("tiff-page-loop-batch", "/v1/prune/batch", _form(lambda: loop, "file"), (200,), ("loops",)),
-        Case("tiff-page-loop-match", "/v1/match", _form(lambda: loop, "a", "b"), (400,), ("loops",)),
+        Case(
+            "tiff-page-loop-batch",
+            "/v1/prune/batch",
+            _form(lambda: loop, "file"),
+            (200,),
+            ("loops",),
+        ),
+        Case(
+            "tiff-page-loop-match", "/v1/match", _form(lambda: loop, "a", "b"), (400,), ("loops",)
+        ),
         Case(
             "tiff-2.7M-empty-pages",
             "/v1/prune",
@@ -241,14 +247,64 @@ def _tiff_cases() -> list[Case]:
 def _geo_cases() -> list[Case]:
     keys = [1, 1, 0, 2, 1024, 0, 1, 1, 3072, 0, 1]
     return [
-        Case("geotiff-scale-ascii", "/v1/prune", _body(geotiff_with(scale=(2, b"10,10\x00")), TIFF), (400,), ("ModelPixelScale",)),
-        Case("geotiff-crs-as-doubles", "/v1/prune", _body(geotiff_with([1, 1, 0, 1, 3072, 34736, 1, 0], tag34736=(12, [32633.0])), TIFF), (400,), ("3072", "doubles")),
-        Case("geotiff-crs-nan", "/v1/prune", _body(geotiff_with([1, 1, 0, 1, 3072, 34736, 1, 0], tag34736=(12, [float("nan")])), TIFF), (400,), ("3072",)),
-        Case("geotiff-epsg-0", "/v1/prune", _body(geotiff_with([*keys, 0]), TIFF), (400,), ("code is 0",)),
-        Case("geotiff-epsg-9999", "/v1/prune", _body(geotiff_with([*keys, 9999]), TIFF), (400,), ("EPSG:9999",)),
-        Case("geotiff-epsg-65535", "/v1/prune", _body(geotiff_with([*keys, 65535]), TIFF), (400,), ("EPSG:65535",)),
-        Case("geotiff-geocentric", "/v1/prune", _body(geotiff_with([1, 1, 0, 1, 1024, 0, 1, 3]), TIFF), (400,), ("geocentric",)),
-        Case("geotiff-key-directory-short", "/v1/prune", _body(geotiff_with([1, 1, 0, 9, 1024]), TIFF), (400,), ("key directory",)),
+        Case(
+            "geotiff-scale-ascii",
+            "/v1/prune",
+            _body(geotiff_with(scale=(2, b"10,10\x00")), TIFF),
+            (400,),
+            ("ModelPixelScale",),
+        ),
+        Case(
+            "geotiff-crs-as-doubles",
+            "/v1/prune",
+            _body(geotiff_with([1, 1, 0, 1, 3072, 34736, 1, 0], tag34736=(12, [32633.0])), TIFF),
+            (400,),
+            ("3072", "doubles"),
+        ),
+        Case(
+            "geotiff-crs-nan",
+            "/v1/prune",
+            _body(
+                geotiff_with([1, 1, 0, 1, 3072, 34736, 1, 0], tag34736=(12, [float("nan")])), TIFF
+            ),
+            (400,),
+            ("3072",),
+        ),
+        Case(
+            "geotiff-epsg-0",
+            "/v1/prune",
+            _body(geotiff_with([*keys, 0]), TIFF),
+            (400,),
+            ("code is 0",),
+        ),
+        Case(
+            "geotiff-epsg-9999",
+            "/v1/prune",
+            _body(geotiff_with([*keys, 9999]), TIFF),
+            (400,),
+            ("EPSG:9999",),
+        ),
+        Case(
+            "geotiff-epsg-65535",
+            "/v1/prune",
+            _body(geotiff_with([*keys, 65535]), TIFF),
+            (400,),
+            ("EPSG:65535",),
+        ),
+        Case(
+            "geotiff-geocentric",
+            "/v1/prune",
+            _body(geotiff_with([1, 1, 0, 1, 1024, 0, 1, 3]), TIFF),
+            (400,),
+            ("geocentric",),
+        ),
+        Case(
+            "geotiff-key-directory-short",
+            "/v1/prune",
+            _body(geotiff_with([1, 1, 0, 9, 1024]), TIFF),
+            (400,),
+            ("key directory",),
+        ),
     ]
 
 
@@ -288,12 +344,39 @@ CASES: list[Case] = [
         ("components", "time limit"),
         params={"labels": "true"},
     ),
-    Case("volume-48-65535-labels", "/v1/prune", _lazy(label_volume, NPY), (413,), ("labels", "time limit")),
+    Case(
+        "volume-48-65535-labels",
+        "/v1/prune",
+        _lazy(label_volume, NPY),
+        (413,),
+        ("labels", "time limit"),
+    ),
     *_npy_cases(),
     *_geo_cases(),
-    Case("crs-moon", "/v1/prune", _json(SQUARE), (422,), ("IAU_2015:30100", "Earth"), params={"crs": "IAU_2015:30100"}),
-    Case("crs-vertical", "/v1/prune", _json(SQUARE), (422,), ("vertical",), params={"crs": "EPSG:5703"}),
-    Case("crs-geocentric", "/v1/prune", _json(SQUARE), (422,), ("geocentric",), params={"crs": "EPSG:4978"}),
+    Case(
+        "crs-moon",
+        "/v1/prune",
+        _json(SQUARE),
+        (422,),
+        ("IAU_2015:30100", "Earth"),
+        params={"crs": "IAU_2015:30100"},
+    ),
+    Case(
+        "crs-vertical",
+        "/v1/prune",
+        _json(SQUARE),
+        (422,),
+        ("vertical",),
+        params={"crs": "EPSG:5703"},
+    ),
+    Case(
+        "crs-geocentric",
+        "/v1/prune",
+        _json(SQUARE),
+        (422,),
+        ("geocentric",),
+        params={"crs": "EPSG:4978"},
+    ),
     Case(
         "volume-overlay-scale-6",
         "/v1/prune",
@@ -303,102 +386,63 @@ CASES: list[Case] = [
         params={"overlay_scale": "6"},
         accept="image/png",
     ),
-    Case("spacing-1e308-png", "/v1/prune", _volume((4, 64, 64)), (422,), ("spacing",), params={"spacing": "1e308,1,1"}, accept="image/png"),
-    Case("spacing-1e-308-csv", "/v1/prune", _volume((4, 64, 64)), (422,), ("spacing",), params={"spacing": "1e-308,1,1"}, accept="text/csv"),
-    Case("spacing-5e-324", "/v1/prune", _volume((4, 64, 64)), (422,), ("spacing",), params={"spacing": "5e-324,1,1"}),
-    Case("pixel-size-1e308-csv", "/v1/prune", _json(SQUARE), (422,), ("pixel_size",), params={"pixel_size": "1e308"}, accept="text/csv"),
-    Case("pixel-size-1e308-graphml", "/v1/prune", _json(SQUARE), (422,), ("pixel_size",), params={"pixel_size": "1e308"}, accept="application/graphml+xml"),
-    Case("npy-sent-as-png", "/v1/prune", _lazy(lambda: npy_bytes(np.ones((3, 8, 8), bool)), "image/png"), (415,), ("application/x-npy",)),
-    Case("match-accept-html", "/v1/match", _json({"a": SQUARE, "b": SQUARE}), (406,), ("text/html",), accept="text/html"),
+    Case(
+        "spacing-1e308-png",
+        "/v1/prune",
+        _volume((4, 64, 64)),
+        (422,),
+        ("spacing",),
+        params={"spacing": "1e308,1,1"},
+        accept="image/png",
+    ),
+    Case(
+        "spacing-1e-308-csv",
+        "/v1/prune",
+        _volume((4, 64, 64)),
+        (422,),
+        ("spacing",),
+        params={"spacing": "1e-308,1,1"},
+        accept="text/csv",
+    ),
+    Case(
+        "spacing-5e-324",
+        "/v1/prune",
+        _volume((4, 64, 64)),
+        (422,),
+        ("spacing",),
+        params={"spacing": "5e-324,1,1"},
+    ),
+    Case(
+        "pixel-size-1e308-csv",
+        "/v1/prune",
+        _json(SQUARE),
+        (422,),
+        ("pixel_size",),
+        params={"pixel_size": "1e308"},
+        accept="text/csv",
+    ),
+    Case(
+        "pixel-size-1e308-graphml",
+        "/v1/prune",
+        _json(SQUARE),
+        (422,),
+        ("pixel_size",),
+        params={"pixel_size": "1e308"},
+        accept="application/graphml+xml",
+    ),
+    Case(
+        "npy-sent-as-png",
+        "/v1/prune",
+        _lazy(lambda: npy_bytes(np.ones((3, 8, 8), bool)), "image/png"),
+        (415,),
+        ("application/x-npy",),
+    ),
+    Case(
+        "match-accept-html",
+        "/v1/match",
+        _json({"a": SQUARE, "b": SQUARE}),
+        (406,),
+        ("text/html",),
+        accept="text/html",
+    ),
 ]
-
-
-# ------------------------------------------------------------------ the measurement
-def _tree_rss(pid: int) -> int:
-    """Resident bytes of ``pid`` and its children (one level: the workers)."""
-    from skelprune.budget import resident_bytes
-
-    total = resident_bytes(pid)
-    try:
-        children = Path(f"/proc/{pid}/task/{pid}/children").read_text().split()
-    except OSError:
-        children = []
-    for child in children:
-        total += resident_bytes(int(child))
-        try:
-            grand = Path(f"/proc/{child}/task/{child}/children").read_text().split()
-        except OSError:
-            grand = []
-        total += sum(resident_bytes(int(g)) for g in grand)
-    return total
-
-
-def measure(base: str, pid: int, case: Case, small: bytes) -> dict[str, Any]:
-    """Send ``case``, polling ``/healthz`` and the process tree's memory meanwhile."""
-    import httpx
-
-    stop = threading.Event()
-    worst = {"health": 0.0, "rss": 0}
-
-    def poll() -> None:
-        with httpx.Client(timeout=10) as c:
-            while not stop.is_set():
-                t0 = time.perf_counter()
-                c.get(f"{base}/healthz")
-                worst["health"] = max(worst["health"], time.perf_counter() - t0)
-                worst["rss"] = max(worst["rss"], _tree_rss(pid))
-                time.sleep(0.02)
-
-    body, ctype = case.body()
-    headers = {"content-type": ctype}
-    if case.accept:
-        headers["accept"] = case.accept
-    poller = threading.Thread(target=poll)
-    poller.start()
-    t0 = time.perf_counter()
-    with httpx.Client(timeout=120) as c:
-        resp = c.post(f"{base}{case.path}", content=body, params=case.params, headers=headers)
-        took = time.perf_counter() - t0
-        stop.set()
-        poller.join()
-        t1 = time.perf_counter()
-        after = c.post(f"{base}/v1/prune", content=small, headers={"content-type": "image/png"})
-        small_took = time.perf_counter() - t1
-    text = resp.text
-    detail = json.loads(text).get("detail", "") if resp.headers.get("content-type", "").endswith("json") and text.startswith("{") else text[:120]
-    return {
-        "case": case.name,
-        "bytes": len(body),
-        "status": resp.status_code,
-        "seconds": took,
-        "healthz_max_ms": 1000 * worst["health"],
-        "tree_rss_mib": worst["rss"] / 2**20,
-        "small_job": (after.status_code, small_took),
-        "detail": str(detail)[:90],
-    }
-
-
-def main() -> None:
-    """Every case against a real server at its default settings; a Markdown table."""
-    import tempfile
-
-    from .realserver import running_server
-
-    small = _png(np.pad(np.ones((20, 40), np.uint8) * 255, 5))
-    log = Path(tempfile.mkdtemp()) / "server.log"
-    print("| case | body, bytes | status | time, s | slowest /healthz, ms | tree RSS, MiB | small job after |")
-    print("|---|---|---|---|---|---|---|")
-    with running_server(log) as (proc, base):
-        for case in CASES:
-            r = measure(base, proc.pid, case, small)
-            status, t = r["small_job"]
-            print(
-                f"| {r['case']} | {r['bytes']:,} | {r['status']} | {r['seconds']:.2f} | "
-                f"{r['healthz_max_ms']:.0f} | {r['tree_rss_mib']:,.0f} | {status} in {t:.2f} s |",
-                flush=True,
-            )
-            print(f"  detail: {r['detail']}", file=sys.stderr)
-
-
-if __name__ == "__main__":
-    main()

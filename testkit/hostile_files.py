@@ -25,8 +25,8 @@ __all__ = [
     "looping_tiff",
     "mutations",
     "npy_with_header",
-    "tile_bomb_tiff",
     "tiff_with",
+    "tile_bomb_tiff",
     "write_tiff",
 ]
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 import asyncio
 import http
 import logging
+import uuid
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,6 +37,7 @@ from service.errors import (
     RequestTimeoutError,
     problem,
 )
+from service.logs import request_id_var
 
 __all__ = ["Limits", "guarded_protocol"]
 
@@ -52,8 +54,14 @@ class Limits:
 
 
 def _raw_answer(exc: Exception) -> bytes:
-    """A complete HTTP/1.1 response with the problem of ``exc``; the connection closes."""
-    response = problem(exc)
+    """A complete HTTP/1.1 response with the problem of ``exc``, under a request ID of
+    its own (never the previous request's on the connection); the connection closes."""
+    rid = uuid.uuid4().hex
+    token = request_id_var.set(rid)
+    try:
+        response = problem(exc, headers={"x-request-id": rid})
+    finally:
+        request_id_var.reset(token)
     status = response.status_code
     head = [f"HTTP/1.1 {status} {http.HTTPStatus(status).phrase}"]
     head += [f"{k}: {v}" for k, v in response.headers.items()]

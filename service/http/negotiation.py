@@ -111,10 +111,8 @@ def accept_json(accept: str | None) -> None:
     >>> accept_json("text/html")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    service.errors.NotAcceptableError: cannot produce any of 'text/html'; available: application/json
+    service.errors.NotAcceptableError: cannot produce any of 'text/html'; available: ...
     """
     ranges = _ranges(accept or "")
     if ranges and _quality(ranges, "application/json") <= 0:
-        raise NotAcceptableError(
-            f"cannot produce any of {accept!r}; available: application/json"
-        )
+        raise NotAcceptableError(f"cannot produce any of {accept!r}; available: application/json")

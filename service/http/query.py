@@ -19,7 +19,8 @@ QUERY_OPTIONS = frozenset(PruneQuery.model_fields)  # no aliases: field name = p
 NUMBER_OPTIONS = frozenset(
     name
     for name, f in PruneQuery.model_fields.items()
-    if name == "spacing" or any(t in (int, float) for t in get_args(f.annotation))
+    if name == "spacing"
+    or any(t in (int, float) for t in get_args(f.annotation))
     or any(t in (int, float) for a in get_args(f.annotation) for t in (a, *get_args(a)))
 )
 

@@ -50,6 +50,7 @@ def check_main_memory(limit_mb: int) -> None:
             f"{mib(limit_mb * 2**20)}; try again shortly"
         )
 
+
 #: What a body holds, by its ``Content-Type``: an image as the body itself (PNG or
 #: TIFF; a volume as a ``.npy`` or a TIFF stack), a multipart form, or JSON (GeoJSON).
 BodyKind = Literal["image", "form", "json"]

@@ -22,7 +22,6 @@ from skelprune.budget import (
     volume_estimate,
 )
 from skelprune.errors import ImageTooLargeError, InvalidOptionError
-from skelprune.output.finite import finite_text, finite_tree
 from skelprune.io.input import Input, Kind, read_input
 from skelprune.options import (
     OutputOptions,
@@ -31,6 +30,7 @@ from skelprune.options import (
     ReadOptions,
     VolumeOptions,
 )
+from skelprune.output.finite import finite_text, finite_tree
 from skelprune.output.render import auto_scale
 
 __all__ = [

@@ -221,8 +221,7 @@ def geo_keys(page: TiffPage) -> dict[int, int]:
     shorts = page.values(_KEY_DIRECTORY, (3,))
     if shorts.size < 4 or shorts.size < 4 + 4 * int(shorts[3]):
         raise InvalidImageError(
-            f"the GeoTIFF's key directory holds {shorts.size} values, fewer than its "
-            "header says"
+            f"the GeoTIFF's key directory holds {shorts.size} values, fewer than its header says"
         )
     keys: dict[int, int] = {}
     for k in range(int(shorts[3])):
@@ -239,7 +238,9 @@ def geo_keys(page: TiffPage) -> dict[int, int]:
     return keys
 
 
-def _transform(page: TiffPage, pixel_is_point: bool) -> tuple[float, ...]:
+def _transform(
+    page: TiffPage, pixel_is_point: bool
+) -> tuple[float, float, float, float, float, float]:
     if 34264 in page:
         m = page.values(34264, (12,), 16).astype(float)
         t = (m[0], m[1], m[3], m[4], m[5], m[7])
@@ -272,7 +273,7 @@ def _transform(page: TiffPage, pixel_is_point: bool) -> tuple[float, ...]:
             f"the GeoTIFF's pixel size {values[0]:g} × {-values[4]:g} is outside {low:g} to "
             f"{high:g}: lengths and areas in it would not be finite"
         )
-    return values
+    return values  # type: ignore[return-value]
 
 
 def read_geotiff_bytes(

@@ -29,8 +29,8 @@ import contextlib
 import io
 import mmap
 import os
-from collections.abc import Iterator
 import zlib
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -199,9 +199,7 @@ def read_tiff(data: bytes, *, max_pixels: int | None = None) -> np.ndarray:
     return _decode_page(_page(data), data, max_pixels)
 
 
-def _decode_page(
-    page: Layout, data: bytes, max_pixels: int | None, tif: Any = None
-) -> np.ndarray:
+def _decode_page(page: Layout, data: bytes, max_pixels: int | None, tif: Any = None) -> np.ndarray:
     """One page's values, its header checked against the file and the limits first
     (``tif``: the file open in tifffile, for the pages of a stack)."""
     width, height = page.width, page.height
@@ -313,7 +311,9 @@ def stack_layouts(data: Any) -> list[Layout]:
     """
     structure = read_structure(data, MAX_STACK_PAGES)
     if structure.more:
-        raise InvalidImageError(f"TIFF stack of more than {MAX_STACK_PAGES} pages; at most {MAX_STACK_PAGES} are read")
+        raise InvalidImageError(
+            f"TIFF stack of more than {MAX_STACK_PAGES} pages; at most {MAX_STACK_PAGES} are read"
+        )
     pages = [page_layout(p) for p in structure.pages]
     if any(p.depth != 1 for p in pages):
         raise InvalidImageError("a 3-D TIFF page is not read; write one page a slice")

@@ -23,9 +23,9 @@ from ..errors import ImageTooLargeError, InvalidImageError
 __all__ = [
     "MAX_IFD_BYTES",
     "Layout",
-    "page_layout",
     "TiffPage",
     "TiffStructure",
+    "page_layout",
     "read_structure",
 ]
 
@@ -147,7 +147,9 @@ class TiffPage:
         if e.type == 2:
             return np.frombuffer(self.data, "u1", e.count, e.at)
         if e.type in (5, 10):
-            pairs = np.frombuffer(self.data, self.order + ("u4" if e.type == 5 else "i4"), 2 * e.count, e.at)
+            pairs = np.frombuffer(
+                self.data, self.order + ("u4" if e.type == 5 else "i4"), 2 * e.count, e.at
+            )
             return pairs[0::2] / np.where(pairs[1::2] == 0, np.nan, pairs[1::2])
         return np.frombuffer(self.data, self.order + _NUMPY[e.type], e.count, e.at)
 
@@ -204,7 +206,8 @@ def read_structure(data: Any, max_pages: int) -> TiffStructure:
         type; a page chain that loops; more than :data:`MAX_IFD_BYTES` of directories.
 
     >>> import io, tifffile
-    >>> buf = io.BytesIO(); tifffile.imwrite(buf, np.zeros((3, 4, 5), np.uint8), photometric="minisblack")
+    >>> buf = io.BytesIO()
+    >>> tifffile.imwrite(buf, np.zeros((3, 4, 5), np.uint8), photometric="minisblack")
     >>> s = read_structure(buf.getvalue(), 10); len(s.pages), s.more
     (3, False)
     """
@@ -394,8 +397,19 @@ def page_layout(page: TiffPage) -> Layout:
             f"{counts.size} {tag_name(counts_code)}"
         )
     layout = Layout(
-        i, width, height, samples, bits, compression, planar == 2, tile, rows, offsets,
-        counts, depth, page,
+        i,
+        width,
+        height,
+        samples,
+        bits,
+        compression,
+        planar == 2,
+        tile,
+        rows,
+        offsets,
+        counts,
+        depth,
+        page,
     )
     if tile is not None:
         full, least = layout.segments()

@@ -62,7 +62,10 @@ def test_mutated_tiff_stacks_are_read_or_refused_by_name() -> None:
     m = np.zeros((3, 16, 16), np.uint8)
     m[:, 4:12, 4:12] = 1
     seeds = [_tiff(m, photometric="minisblack", compression="zlib")]
-    assert fuzz(seeds, lambda d: read_tiff_stack(d, max_voxels=LIMIT), (SkelpruneError,), SECONDS) > 100
+    assert (
+        fuzz(seeds, lambda d: read_tiff_stack(d, max_voxels=LIMIT), (SkelpruneError,), SECONDS)
+        > 100
+    )
 
 
 def _read_geotiff(data: bytes) -> None:
@@ -90,5 +93,10 @@ def _read_npy(data: bytes) -> None:
 def test_mutated_npy_files_are_read_or_refused_by_name() -> None:
     v = np.zeros((4, 8, 8), np.uint8)
     v[1:3, 2:6, 2:6] = 3
-    seeds = [npy_bytes(v), npy_bytes(v != 0), npy_bytes(v.astype(">i4")), npy_bytes(np.asfortranarray(v))]
+    seeds = [
+        npy_bytes(v),
+        npy_bytes(v != 0),
+        npy_bytes(v.astype(">i4")),
+        npy_bytes(np.asfortranarray(v)),
+    ]
     assert fuzz(seeds, _read_npy, (SkelpruneError,), SECONDS) > 100

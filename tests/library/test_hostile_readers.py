@@ -35,8 +35,8 @@ from testkit.hostile_files import (
     looping_tiff,
     npy_bytes,
     npy_with_header,
-    tile_bomb_tiff,
     tiff_with,
+    tile_bomb_tiff,
     write_tiff,
 )
 
@@ -45,7 +45,7 @@ from testkit.hostile_files import (
 def test_a_page_chain_that_loops_is_refused_naming_where_it_goes_back() -> None:
     data = looping_tiff(100)
     assert len(data) < 1100
-    with pytest.raises(InvalidImageError, match="page 100's directory .* back to page 0"):
+    with pytest.raises(InvalidImageError, match=r"page 100's directory .* back to page 0"):
         read_structure(data, 10_000)
     assert tiff_pages(data) == 0  # not a volume: the image reader names the loop
     with pytest.raises(InvalidImageError, match="loops"):
@@ -100,7 +100,7 @@ def test_a_tag_outside_the_file_and_an_unknown_type_are_named() -> None:
     data = bytearray(tiff_with({33432: (2, b"a long copyright text\x00")}))
     entry = bytes(data).index(struct.pack("<HH", 33432, 2))
     struct.pack_into("<I", data, entry + 8, len(data) + 100)  # its values past the end
-    with pytest.raises(InvalidImageError, match="tag 33432 .* outside the file"):
+    with pytest.raises(InvalidImageError, match=r"tag 33432 .* outside the file"):
         read_tiff(bytes(data))
     struct.pack_into("<H", data, entry + 2, 99)  # a type TIFF does not define
     with pytest.raises(InvalidImageError, match="tag 33432 has the unknown type 99"):
@@ -110,7 +110,7 @@ def test_a_tag_outside_the_file_and_an_unknown_type_are_named() -> None:
 def test_the_tile_bomb_limit_follows_the_image_not_the_tile() -> None:
     data = tile_bomb_tiff(16384)
     assert len(data) < 300_000
-    with pytest.raises(ImageTooLargeError, match="16384×16384 tiles .* 1×1 image"):
+    with pytest.raises(ImageTooLargeError, match=r"16384×16384 tiles .* 1×1 image"):
         read_tiff(data)
     # a small image in ordinary tiles (the grid a few times the image) is read
     m = np.zeros((100, 100), np.uint8)
@@ -123,7 +123,7 @@ def test_the_tile_bomb_limit_follows_the_image_not_the_tile() -> None:
 def test_an_orientation_other_than_top_left_is_refused_and_top_left_is_read() -> None:
     m = np.arange(16, dtype=np.uint8).reshape(4, 4)
     assert read_tiff(tiff_with({274: (3, [1])})).shape == (4, 4)
-    with pytest.raises(InvalidImageError, match="Orientation 3 .* top-left"):
+    with pytest.raises(InvalidImageError, match=r"Orientation 3 .* top-left"):
         read_tiff(tiff_with({274: (3, [3])}))
     assert m.shape == (4, 4)
 
@@ -137,7 +137,12 @@ NPY = "{{'descr': {descr}, 'fortran_order': False, 'shape': {shape}, }}"
     [
         ("'|u1'", "(4294967296, 4294967296, 2)", ImageTooLargeError, "36893488147419103232 voxels"),
         ("'|u1'", "(99999999999999999999999, 2, 2)", ImageTooLargeError, "voxels"),
-        ("'|u1'", "(-1, 16, 16)", InvalidImageError, r"shape \(-1, 16, 16\) has a dimension below 1"),
+        (
+            "'|u1'",
+            "(-1, 16, 16)",
+            InvalidImageError,
+            r"shape \(-1, 16, 16\) has a dimension below 1",
+        ),
         ("'|u1'", "(0, 16, 16)", InvalidImageError, "below 1"),
         ("'|u1'", "(True, 16, 16)", InvalidImageError, "not a tuple of whole numbers"),
         ("('|u1', (2, 2))", "(2, 2, 2)", InvalidImageError, "dtype '|V4' is not read"),
@@ -157,7 +162,7 @@ def test_every_npy_header_field_is_checked(descr, shape, error, words) -> None:
 
 
 def test_a_header_length_too_short_is_refused() -> None:
-    with pytest.raises(InvalidImageError, match="cannot read the .npy header"):
+    with pytest.raises(InvalidImageError, match=r"cannot read the .npy header"):
         check_volume_size(b"\x93NUMPY\x01\x00\x02\x00{}", 100)
 
 
@@ -184,7 +189,10 @@ def test_a_valid_geotiff_gives_its_grid_and_crs() -> None:
         (geotiff_with(scale=(2, b"10,10\x00")), "ModelPixelScale is of type ASCII"),
         (geotiff_with(scale=(12, [10.0, 10.0])), "ModelPixelScale holds 2 values"),
         (geotiff_with(tie=(12, [0, 0, 0, 5e5])), "ModelTiepoint holds 4 values"),
-        (geotiff_with([1, 1, 0, 1, 3072, 34736, 1, 0], tag34736=(12, [32633.0])), "3072 is stored as 1 doubles"),
+        (
+            geotiff_with([1, 1, 0, 1, 3072, 34736, 1, 0], tag34736=(12, [32633.0])),
+            "3072 is stored as 1 doubles",
+        ),
         (geotiff_with([1, 1, 0, 1, 3072, 34736, 1, 0], tag34736=(12, [math.nan])), "3072"),
         (geotiff_with([1, 1, 0, 1, 3072, 0, 2, 32633]), "3072 is stored as 2"),
         (geotiff_with([*KEYS, 0]), "code is 0"),
@@ -193,7 +201,10 @@ def test_a_valid_geotiff_gives_its_grid_and_crs() -> None:
         (geotiff_with([*KEYS, 4978]), "geocentric"),
         (geotiff_with([1, 1, 0, 1, 1024, 0, 1, 3]), "model is geocentric"),
         (geotiff_with([1, 1, 0, 9, 1024]), "fewer than its header says"),
-        (geotiff_with(keys=None, tag34735=(12, [1.0, 1, 0, 0])), "GeoKeyDirectory is of type DOUBLE"),
+        (
+            geotiff_with(keys=None, tag34735=(12, [1.0, 1, 0, 0])),
+            "GeoKeyDirectory is of type DOUBLE",
+        ),
         (geotiff_with(scale=(12, [1e308, 1e308, 0])), "pixel size 1e.308"),
         (geotiff_with(scale=(12, [math.inf, 10, 0])), "not finite"),
     ],
@@ -260,7 +271,10 @@ def test_a_gif_mask_prunes_through_the_cli(tmp_path) -> None:
     (tmp_path / "vessels.gif").write_bytes(_gif(m))
     run = subprocess.run(
         [sys.executable, "-m", "skelprune.cli", "prune", str(tmp_path / "vessels.gif")],
-        capture_output=True, text=True, timeout=300, check=True,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=True,
     )
     assert json.loads(run.stdout)["components"]
 
@@ -271,7 +285,10 @@ def test_a_label_image_read_without_labels_says_so_on_stderr(tmp_path) -> None:
     Image.fromarray(lab).save(tmp_path / "cells.png")
     run = subprocess.run(
         [sys.executable, "-m", "skelprune.cli", "prune", str(tmp_path / "cells.png")],
-        capture_output=True, text=True, timeout=300, check=True,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=True,
     )
     assert "looks like a label image" in run.stderr and "--labels" in run.stderr
 
@@ -333,7 +350,9 @@ def test_numbers_that_are_not_finite_are_null_in_every_encoding() -> None:
     json.dumps(res.to_geojson(), allow_nan=False)
 
 
-@pytest.mark.parametrize("spacing", ["1e308,1,1", "1e-308,1,1", "5e-324,1,1", "1_0,1,1", "\u0661,1,1"])
+@pytest.mark.parametrize(
+    "spacing", ["1e308,1,1", "1e-308,1,1", "5e-324,1,1", "1_0,1,1", "\u0661,1,1"]
+)
 def test_spacings_that_would_overflow_or_are_not_plain_numbers_are_refused(spacing) -> None:
     with pytest.raises(InvalidOptionError, match="spacing"):
         VolumeOptions(spacing=spacing)

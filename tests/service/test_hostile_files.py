@@ -70,7 +70,9 @@ def test_validation_errors_are_listed_up_to_twenty_with_their_count(client: Test
     shapes = {"type": "FeatureCollection", "features": features}
     params = "&".join(f"nope{i}=1" for i in range(40))
     resp = client.post(
-        f"/v1/prune?{params}", content=json.dumps(shapes), headers={"content-type": "application/json"}
+        f"/v1/prune?{params}",
+        content=json.dumps(shapes),
+        headers={"content-type": "application/json"},
     )
     assert resp.status_code == 422
     doc = resp.json()

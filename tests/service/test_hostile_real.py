@@ -190,9 +190,13 @@ def test_a_pipelined_bad_request_is_answered_after_the_good_one(
 ) -> None:
     _, port, _ = server
     good = b"GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n"
-    got = answers(exchange(port, good + bad))
+    raw = exchange(port, good + bad)
+    got = answers(raw)
     assert [(s, t) for s, t, _ in got] == [(200, "application/json"), (status, PROBLEM)]
     assert b'"status":"ok"' in got[0][2].replace(b" ", b"")
+    # the bad request's ID is its own (in its header and body), not the good one's
+    rid = json.loads(got[1][2])["request_id"].encode()
+    assert raw.count(rid) == 2
 
 
 def test_a_pipelined_prune_keeps_its_answer_and_nothing_is_logged_as_an_error(

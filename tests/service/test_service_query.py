@@ -92,7 +92,11 @@ def _repeats(query_string: str) -> bool:
 def test_an_option_given_twice_is_refused_naming_it(query_string: str) -> None:
     assert ours(query_string) == {
         "errors": [
-            {"loc": ["query", "beta"], "msg": "given 2 times; give an option once", "type": "repeated"}
+            {
+                "loc": ["query", "beta"],
+                "msg": "given 2 times; give an option once",
+                "type": "repeated",
+            }
         ]
     }
 

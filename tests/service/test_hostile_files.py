@@ -1,7 +1,7 @@
 """The red team's small files and requests: each answers the 4xx that names its problem
 (or its documented success), and the service answers the next small job.
 
-The cases are :data:`testkit.hostile_cases.CASES`; ``python -m testkit.hostile_cases``
+The cases are :data:`testkit.hostile_cases.CASES`; ``python -m testkit.hostile_measure``
 sends the same to a real server and measures the time, ``/healthz`` and memory
 (docs/hostile-input.md).
 """

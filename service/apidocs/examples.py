@@ -367,6 +367,9 @@ PRUNE_REQUEST_BODY: dict[str, Any] = {
     "required": True,
     "content": {
         "image/png": {"schema": {"type": "string", "format": "binary"}},
+        "image/gif": {
+            "schema": {"type": "string", "format": "binary", "description": "A GIF mask."}
+        },
         "image/tiff": {
             "schema": {
                 "type": "string",

@@ -31,7 +31,8 @@ PRUNE_DESCRIPTION = """
 Compute the pruned skeleton of a shape.
 
 **Input** (by `Content-Type`):
-- `image/png`: the PNG itself as the body;
+- `image/png`: the PNG itself as the body; `image/gif`: a one-frame GIF mask, read as a
+  PNG is; the body's bytes must be the declared type (415);
 - `image/tiff`: a single-image TIFF as the body (docs/tables.md#tiff); a GeoTIFF mask
   (GeoTIFF tags: a north-up grid, an EPSG CRS) is its non-zero pixels but nodata, and
   the GeoJSON answer's lines are in its map coordinates and CRS (docs/gis.md);
@@ -41,7 +42,7 @@ Compute the pruned skeleton of a shape.
   (docs/volumes.md). The answer is the 3-D document (`application/json`, points
   `[x, y, z, radius]`), the three projections with the skeleton (`image/png`) or the
   branch table (`text/csv`);
-- `multipart/form-data`: the PNG or TIFF in the field `file`;
+- `multipart/form-data`: the PNG, TIFF or GIF in the field `file`;
 - `application/json` (or `application/geo+json`): a GeoJSON `Polygon`, `MultiPolygon`,
   `Feature` or `FeatureCollection` (holes allowed), or an object
   `{"geojson": <GeoJSON>, <options>}`. The polygon is rasterised (default: a pixel size

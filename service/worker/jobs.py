@@ -263,7 +263,6 @@ def _run_job(job: Job) -> JobResult:
 
 def _run_volume_job(job: Job) -> JobResult:
     """A volume's job: its voxels count against the pixel limit and the budgets."""
-    from skelprune.output.volume import auto_volume_scale
     from skelprune.volume import prune_volume, read_volume, refuse_image_options
 
     refuse_image_options(job.read, job.output)
@@ -273,17 +272,9 @@ def _run_volume_job(job: Job) -> JobResult:
             "image/png (its three projections) or text/csv"
         )
     volume = read_volume(job.data, max_voxels=job.max_pixels)
-    answer = 0
+    answer, scale = 0, 1
     if job.media == "png":
-        z, y, x = volume.shape
-        scale = job.output.overlay_scale or auto_volume_scale(volume.shape)
-        answer = (y + z + 4) * (x + z + 4) * scale * scale
-        if job.max_pixels is not None and answer > job.max_pixels:
-            raise ImageTooLargeError(
-                f"the projections image would have {answer} pixels (overlay_scale {scale} "
-                f"on a {x}×{y}×{z} volume), the limit is {job.max_pixels}; use a smaller "
-                "overlay_scale"
-            )
+        scale, answer = projections_size(job, volume.shape)
     cost = volume_estimate(volume, answer)
     check_budget(cost, job.memory_budget, job.time_budget, VOLUME_BASIS)
     t0 = time.perf_counter()
@@ -291,7 +282,7 @@ def _run_volume_job(job: Job) -> JobResult:
     elapsed = time.perf_counter() - t0
     headers: dict[str, str] = {}
     if job.media == "png":
-        body = res.overlay_png()
+        body = res.overlay_png(scale)
         headers = png_headers([c.to_dict() for c in res.components])
     elif job.media == "csv":
         body = res.to_csv().encode()
@@ -300,6 +291,34 @@ def _run_volume_job(job: Job) -> JobResult:
     return JobResult(
         body=body, media_type=MEDIA_TYPES[job.media], prune_seconds=elapsed, headers=headers
     )
+
+
+def projections_size(job: Job, shape: tuple[int, ...]) -> tuple[int, int]:
+    """The scale and pixels of a volume's projections image: ``overlay_scale``, or the
+    default scale made smaller until the image fits the pixel limit.
+
+    Raises
+    ------
+    ImageTooLargeError
+        When the image is over ``max_pixels`` at the scale asked for (or at 1).
+    """
+    from skelprune.output.volume import auto_volume_scale
+
+    z, y, x = shape
+    base = (y + z + 4) * (x + z + 4)
+    given = job.output.overlay_scale
+    scale = given or auto_volume_scale(shape)
+    if given is None and job.max_pixels is not None:
+        while scale > 1 and base * scale * scale > job.max_pixels:
+            scale -= 1
+    answer = base * scale * scale
+    if job.max_pixels is not None and answer > job.max_pixels:
+        raise ImageTooLargeError(
+            f"the projections image would have {answer} pixels (overlay_scale {scale} "
+            f"on a {x}×{y}×{z} volume), the limit is {job.max_pixels}; use a smaller "
+            "overlay_scale"
+        )
+    return scale, answer
 
 
 def png_headers(values: list[Any]) -> dict[str, str]:

@@ -359,8 +359,8 @@ def _format(data: bytes) -> str:
         what = "empty" if not data else "a format not recognised"
     raise InvalidImageError(
         f"not a PNG, TIFF or GIF file: none of their signatures ({what}); "
-        f"images are read from {', '.join(IMAGE_FORMATS)} files, polygons from GeoJSON "
-        "(.geojson, .json)"
+        f"images are read from {', '.join(IMAGE_FORMATS[:-1])} and {IMAGE_FORMATS[-1]} "
+        "files, polygons from GeoJSON (.geojson, .json)"
     )
 
 

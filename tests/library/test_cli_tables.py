@@ -56,7 +56,7 @@ def test_folder_mode_takes_tiff_and_refuses_other_images_by_name(tmp_path):
     assert all("result" in line for line in lines)
     bad = run("prune", str(tmp_path / "c.jpg"), check=False)
     assert bad.returncode == 1
-    assert "a JPEG image" in bad.stderr and "PNG and TIFF" in bad.stderr
+    assert "a JPEG image" in bad.stderr and "PNG, TIFF and GIF" in bad.stderr
 
 
 def test_csv_usage_errors(tmp_path):

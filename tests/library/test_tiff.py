@@ -147,14 +147,14 @@ def test_garbage_after_the_signature_is_a_clear_error():
         (b"\x00\x00\x27\x0a" + bytes(96), "Shapefile"),
         (
             b"hello",
-            "not a PNG or TIFF file: neither the PNG signature nor the TIFF one .a format not",
+            "not a PNG, TIFF or GIF file: none of their signatures .a format not",
         ),
     ],
 )
 def test_unsupported_files_are_named_with_the_formats_read(head, named):
     with pytest.raises(InvalidImageError, match=named) as err:
         skelprune.prune(head)
-    assert "PNG and TIFF" in str(err.value) and "GeoJSON" in str(err.value)
+    assert "PNG, TIFF and GIF" in str(err.value) and "GeoJSON" in str(err.value)
 
 
 @pytest.mark.parametrize("compression", ["lzw", "packbits", "zlib"])

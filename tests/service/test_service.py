@@ -395,6 +395,7 @@ def test_openapi_lists_every_response_with_examples(client: TestClient) -> None:
     op = schema["paths"]["/v1/prune"]["post"]
     assert set(op["requestBody"]["content"]) == {
         "image/png",
+        "image/gif",
         "image/tiff",
         "application/x-npy",
         "multipart/form-data",

@@ -164,7 +164,7 @@ def test_hostile_tiffs_are_problems_never_500(client: TestClient) -> None:
         assert resp.headers["content-type"] == "application/problem+json"
         assert detail in resp.json()["detail"], name
     jpeg = client.post("/v1/prune", content=b"\xff\xd8\xff\xe0" + bytes(40), headers=head)
-    assert jpeg.status_code == 400 and "PNG and TIFF" in jpeg.json()["detail"]
+    assert jpeg.status_code == 400 and "PNG, TIFF and GIF" in jpeg.json()["detail"]
 
 
 def test_hostile_tiffs_against_the_real_server(real_server) -> None:

@@ -22,7 +22,7 @@ from ..grid3d.tips import VolumeTrim
 from ..options import OutputOptions, PruneOptions
 from ..pruning.bayesian import PruningSequence, target
 from ..pruning.margin import Margins
-from .finite import finite
+from .finite import finite, finite_tree
 
 __all__ = ["VolumeComponent", "VolumeResult"]
 
@@ -226,7 +226,7 @@ class VolumeResult:
         """The document: the volume's shape and spacing, the options, and per component
         its numbers, nodes and branches (points ``[x, y, z, radius]``)."""
         opts = self.options
-        return {
+        doc: dict[str, Any] = {
             "dimensions": 3,
             "width": self.shape[2],
             "height": self.shape[1],
@@ -240,6 +240,7 @@ class VolumeResult:
             "min_margin": opts.min_margin,
             "components": [c.to_dict() for c in self.components],
         }
+        return finite_tree(doc)
 
     def summary(self) -> Any:
         """The branch table: one row per branch of the answer, its length, its width

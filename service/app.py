@@ -37,6 +37,16 @@ def _fixed_paths(app: FastAPI) -> set[str]:
     return {p for p in (getattr(r, "path", "") for r in routes) if p and "{" not in p}
 
 
+def _load_crs_database() -> None:
+    """Load pyproj and its CRS database once, at start and off the event loop: the first
+    request naming a ``crs`` (checked in the main process) would otherwise hold the
+    event loop while they load (~0.2 s)."""
+    from skelprune.io.crs import check_crs, has_pyproj
+
+    if has_pyproj():
+        check_crs("EPSG:4326")
+
+
 def create_app(
     settings: Settings | None = None,
     *,
@@ -83,6 +93,7 @@ def create_app(
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         if settings.warmup:
+            await asyncio.to_thread(_load_crs_database)
             log.info(
                 "starting %d workers: the first one warms up alone, then the others "
                 "(a cold numba cache compiles the kernels first, half a minute to a "

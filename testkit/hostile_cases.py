@@ -206,6 +206,13 @@ def _tiff_cases() -> list[Case]:
             ("tiles",),
         ),
         Case(
+            "tiff-tile-bomb-200-pages",
+            "/v1/prune",
+            _lazy(lambda: tile_bomb_tiff(4096, pages=200), TIFF),
+            (413,),
+            ("tiles",),
+        ),
+        Case(
             "tiff-width-two-values",
             "/v1/prune",
             _body(tiff_with({256: (3, [4, 4])}), TIFF),

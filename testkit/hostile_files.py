@@ -147,9 +147,9 @@ def empty_pages_tiff(pages: int) -> bytes:
     return bytes(out + block)
 
 
-def tile_bomb_tiff(tile: int = 16384) -> bytes:
+def tile_bomb_tiff(tile: int = 16384, pages: int = 1) -> bytes:
     """A 1×1 8-bit image in one ``tile``² tile of Deflate zeros: a few hundred KB that
-    would inflate to ``tile``² bytes."""
+    would inflate to ``tile``² bytes (``pages`` of them: a stack)."""
     raw = zlib.compress(bytes(tile * tile), 9)
     page = TiffPageSpec(
         [
@@ -165,7 +165,7 @@ def tile_bomb_tiff(tile: int = 16384) -> bytes:
         [raw],
         tiles=True,
     )
-    return write_tiff([page])
+    return write_tiff([page] * pages)
 
 
 def npy_with_header(header: str, body: bytes = b"", version: int = 1) -> bytes:

@@ -19,8 +19,8 @@ $(VENV)/.installed-%: pyproject.toml
 comma := ,
 # `make run` adds the graph extra: the README's first example calls to_networkx()
 SERVE := $(VENV)/.installed-service+graph
-TESTS := $(VENV)/.installed-service+test+geo+parallel
-BENCH := $(VENV)/.installed-service+test+geo+parallel+bench
+TESTS := $(VENV)/.installed-service+test+geo+parallel+napari
+BENCH := $(VENV)/.installed-service+test+geo+parallel+napari+bench
 # numba's cache is keyed on each source file's time stamp: compile again when one changes
 KERNELS := $(VENV)/.compiled
 

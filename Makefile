@@ -47,12 +47,18 @@ BROWSER := /usr/bin/chromedriver
 $(BROWSER):
 	bash scripts/install-browser.sh
 
-test: lint $(KERNELS) $(BROWSER)
+# the napari widget's and the QGIS provider's tests (tests/frontends/) need QGIS, Xvfb and
+# the libraries Qt loads: Debian's packages, installed once, with apt
+FRONTENDS := /usr/bin/qgis_process.bin /usr/bin/Xvfb
+$(FRONTENDS):
+	bash scripts/install-frontends.sh
+
+test: lint $(KERNELS) $(BROWSER) $(FRONTENDS)
 	$(BIN)/python -m pytest -q
 
 # ruff (lint and format) for the Python, mypy for the library's types (its settings and
 # gaps: pyproject.toml, docs/typing.md), shellcheck for the shell scripts CI runs
-PY_SOURCES := skelprune service tests testkit benchmarks evaluation
+PY_SOURCES := skelprune service tests testkit benchmarks evaluation qgis
 lint: $(TESTS)
 	$(BIN)/ruff check $(PY_SOURCES)
 	$(BIN)/ruff format --check $(PY_SOURCES)

@@ -21,7 +21,7 @@ class SkelprunePlugin:
         self.iface = iface
         self.provider: Any = None
 
-    def initProcessing(self) -> None:  # noqa: N802 (QGIS's name)
+    def initProcessing(self) -> None:
         from qgis.core import QgsApplication
 
         from .provider import SkelpruneProvider
@@ -29,7 +29,7 @@ class SkelprunePlugin:
         self.provider = SkelpruneProvider()
         QgsApplication.processingRegistry().addProvider(self.provider)
 
-    def initGui(self) -> None:  # noqa: N802 (QGIS's name)
+    def initGui(self) -> None:
         self.initProcessing()
 
     def unload(self) -> None:
@@ -39,6 +39,6 @@ class SkelprunePlugin:
             QgsApplication.processingRegistry().removeProvider(self.provider)
 
 
-def classFactory(iface: Any) -> SkelprunePlugin:  # noqa: N802 (QGIS's name)
+def classFactory(iface: Any) -> SkelprunePlugin:
     """QGIS's entry point."""
     return SkelprunePlugin(iface)

@@ -52,10 +52,10 @@ class _Algorithm(QgsProcessingAlgorithm):
     def group(self) -> str:
         return "Skeletons"
 
-    def groupId(self) -> str:  # noqa: N802 (QGIS's name)
+    def groupId(self) -> str:
         return "skeletons"
 
-    def createInstance(self) -> QgsProcessingAlgorithm:  # noqa: N802 (QGIS's name)
+    def createInstance(self) -> QgsProcessingAlgorithm:
         return type(self)()
 
 
@@ -65,10 +65,10 @@ class CenterlinesAlgorithm(_Algorithm):
     def name(self) -> str:
         return "centerlines"
 
-    def displayName(self) -> str:  # noqa: N802 (QGIS's name)
+    def displayName(self) -> str:
         return "Centre lines of polygons"
 
-    def shortHelpString(self) -> str:  # noqa: N802 (QGIS's name)
+    def shortHelpString(self) -> str:
         return (
             "Map centre lines of every polygon feature, each pruned on its own by the "
             "parameter-free Bayesian skeleton pruning (skelprune centerlines): one row per "
@@ -79,7 +79,7 @@ class CenterlinesAlgorithm(_Algorithm):
             "feature that fails gets a row without geometry whose error says why."
         )
 
-    def initAlgorithm(self, config: Any = None) -> None:  # noqa: N802 (QGIS's name)
+    def initAlgorithm(self, config: Any = None) -> None:
         self.addParameter(
             QgsProcessingParameterFeatureSource(
                 "INPUT", "Polygons", [QgsProcessing.TypeVectorPolygon]
@@ -126,7 +126,7 @@ class CenterlinesAlgorithm(_Algorithm):
             )
         )
 
-    def processAlgorithm(self, parameters: Any, context: Any, feedback: Any) -> dict[str, Any]:  # noqa: N802
+    def processAlgorithm(self, parameters: Any, context: Any, feedback: Any) -> dict[str, Any]:
         source = self.parameterAsSource(parameters, "INPUT", context)
         if source is None:
             raise QgsProcessingException("no polygon layer given (INPUT)")
@@ -200,10 +200,10 @@ class RasterlinesAlgorithm(_Algorithm):
     def name(self) -> str:
         return "rasterlines"
 
-    def displayName(self) -> str:  # noqa: N802 (QGIS's name)
+    def displayName(self) -> str:
         return "Centre lines of a raster mask"
 
-    def shortHelpString(self) -> str:  # noqa: N802 (QGIS's name)
+    def shortHelpString(self) -> str:
         return (
             "The pruned skeleton of a raster mask (a band's non-zero pixels that are not "
             "its nodata value: a segmentation's output) as lines in the raster's CRS, one "
@@ -211,14 +211,14 @@ class RasterlinesAlgorithm(_Algorithm):
             "north-up with square pixels."
         )
 
-    def initAlgorithm(self, config: Any = None) -> None:  # noqa: N802 (QGIS's name)
+    def initAlgorithm(self, config: Any = None) -> None:
         self.addParameter(QgsProcessingParameterRasterLayer("INPUT", "Raster mask"))
         self.addParameter(QgsProcessingParameterBand("BAND", "Band", 1, "INPUT", True))
         self.addParameter(
             QgsProcessingParameterFeatureSink("OUTPUT", "Lines", QgsProcessing.TypeVectorLine)
         )
 
-    def processAlgorithm(self, parameters: Any, context: Any, feedback: Any) -> dict[str, Any]:  # noqa: N802
+    def processAlgorithm(self, parameters: Any, context: Any, feedback: Any) -> dict[str, Any]:
         from osgeo import gdal
 
         layer = self.parameterAsRasterLayer(parameters, "INPUT", context)

@@ -14,9 +14,9 @@ class SkelpruneProvider(QgsProcessingProvider):
     def name(self) -> str:
         return "skelprune"
 
-    def longName(self) -> str:  # noqa: N802 (QGIS's name)
+    def longName(self) -> str:
         return "skelprune: parameter-free skeleton pruning"
 
-    def loadAlgorithms(self) -> None:  # noqa: N802 (QGIS's name)
+    def loadAlgorithms(self) -> None:
         self.addAlgorithm(CenterlinesAlgorithm())
         self.addAlgorithm(RasterlinesAlgorithm())

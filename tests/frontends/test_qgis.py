@@ -25,9 +25,9 @@ pytestmark = pytest.mark.timeout(300)
 QGIS = "/usr/bin/qgis_process.bin"
 
 
-def _qgis(home: Path, *arguments: str, python: str | None = sys.executable) -> str:
-    """``qgis_process.bin ARGUMENTS`` with the plugin folder of this checkout, a QGIS
-    profile of its own under ``home``, and the library's Python."""
+def _env(home: Path, python: str | None) -> dict[str, str]:
+    """The plugin folder of this checkout, a QGIS profile of its own under ``home``, and
+    the library's Python (none: unset)."""
     env = {
         **os.environ,
         "QGIS_PLUGINPATH": str(REPO / "qgis"),
@@ -39,7 +39,14 @@ def _qgis(home: Path, *arguments: str, python: str | None = sys.executable) -> s
     env.pop("SKELPRUNE_PYTHON", None)
     if python is not None:
         env["SKELPRUNE_PYTHON"] = python
-    run = subprocess.run([QGIS, *arguments], env=env, capture_output=True, text=True, timeout=240)
+    return env
+
+
+def _qgis(home: Path, *arguments: str, python: str | None = sys.executable) -> str:
+    """``qgis_process.bin ARGUMENTS`` (:func:`_env`): its output, having succeeded."""
+    run = subprocess.run(
+        [QGIS, *arguments], env=_env(home, python), capture_output=True, text=True, timeout=240
+    )
     assert run.returncode == 0, run.stdout + run.stderr
     return run.stdout
 
@@ -98,11 +105,11 @@ def test_centerlines_are_those_of_the_command_line(home: Path, tmp_path: Path, o
             "-m",
             "skelprune.cli",
             "centerlines",
-            str(given),
-            str(cli),
+            given,
+            cli,
             "--no-progress",
             *options,
-        ],  # fmt: skip
+        ],
         capture_output=True,
         text=True,
         timeout=240,
@@ -167,13 +174,13 @@ def test_rasterlines_are_the_librarys_lines_in_the_rasters_crs(home: Path, tmp_p
 def test_without_the_librarys_python_the_run_says_how_to_set_it(home: Path, tmp_path: Path) -> None:
     given = tmp_path / "in.gpkg"
     _polygons(given)
-    env = {**os.environ, "QGIS_PLUGINPATH": str(REPO / "qgis"), "QT_QPA_PLATFORM": "offscreen",
-           "HOME": str(home), "XDG_CONFIG_HOME": str(home / ".config"),
-           "XDG_DATA_HOME": str(home / ".local" / "share")}  # fmt: skip
-    env.pop("SKELPRUNE_PYTHON", None)
+    out = tmp_path / "out.gpkg"
     run = subprocess.run(
-        [QGIS, "run", "skelprune:centerlines", "--", f"INPUT={given}", f"OUTPUT={tmp_path / 'o.gpkg'}"],
-        env=env, capture_output=True, text=True, timeout=240,
-    )  # fmt: skip
+        [QGIS, "run", "skelprune:centerlines", "--", f"INPUT={given}", f"OUTPUT={out}"],
+        env=_env(home, None),
+        capture_output=True,
+        text=True,
+        timeout=240,
+    )
     assert run.returncode != 0
     assert "SKELPRUNE_PYTHON" in run.stdout + run.stderr

@@ -8,19 +8,20 @@ from __future__ import annotations
 
 import sys
 
-from qgis.core import (
-    QgsApplication,
-    QgsFillSymbol,
-    QgsLineSymbol,
-    QgsMapRendererParallelJob,
-    QgsMapSettings,
-    QgsVectorLayer,
-)
-from qgis.PyQt.QtCore import QSize
-from qgis.PyQt.QtGui import QColor
-
 
 def main(polygons: str, lines: str, out: str) -> None:
+    # QGIS's Python only (not the project's .venv, whose tests import this file)
+    from qgis.core import (
+        QgsApplication,
+        QgsFillSymbol,
+        QgsLineSymbol,
+        QgsMapRendererParallelJob,
+        QgsMapSettings,
+        QgsVectorLayer,
+    )
+    from qgis.PyQt.QtCore import QSize
+    from qgis.PyQt.QtGui import QColor
+
     app = QgsApplication([], False)
     app.initQgis()
     shape = QgsVectorLayer(polygons, "polygons", "ogr")

@@ -76,6 +76,9 @@ def test_a_label_image_prunes_into_the_librarys_answer(make_napari_viewer, qtbot
     viewer.window.add_dock_widget(widget)
     widget.prune_form.fields["beta"].setText("6")
     _prune(qtbot, viewer, widget)
+    # the progress bar counted the three cells as the worker pruned them
+    qtbot.waitUntil(lambda: widget.progress.value() == 3, timeout=10_000)
+    assert widget.progress.maximum() == 3 and widget.button.isEnabled()
     expected = skelprune.prune(labels, beta=6.0, labels=True, pixel_size=0.5)
     doc = expected.to_dict()
     branches = viewer.layers["cells branches"]

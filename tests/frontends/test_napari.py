@@ -48,6 +48,16 @@ def test_the_manifest_names_the_widget_and_the_samples() -> None:
     assert sample_vessel()[0][0].ndim == 3
 
 
+def test_napari_opens_the_sample_data_and_the_widget(make_napari_viewer, qtbot) -> None:
+    viewer = make_napari_viewer()
+    viewer.open_sample("skelprune", "cells")
+    np.testing.assert_array_equal(viewer.layers["cells"].data, cells())
+    _, widget = viewer.window.add_plugin_dock_widget("skelprune", "Skeleton pruning")
+    assert isinstance(widget, PruneWidget)
+    _prune(qtbot, viewer, widget)  # the sample layer is the selected one
+    assert "cells branches" in viewer.layers
+
+
 def test_the_form_is_made_from_the_option_definitions(make_napari_viewer) -> None:
     from dataclasses import fields
 

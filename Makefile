@@ -19,8 +19,8 @@ $(VENV)/.installed-%: pyproject.toml
 comma := ,
 # `make run` adds the graph extra: the README's first example calls to_networkx()
 SERVE := $(VENV)/.installed-service+graph
-TESTS := $(VENV)/.installed-service+test+geo+parallel
-BENCH := $(VENV)/.installed-service+test+geo+parallel+bench
+TESTS := $(VENV)/.installed-service+test+geo+parallel+napari
+BENCH := $(VENV)/.installed-service+test+geo+parallel+napari+bench
 # numba's cache is keyed on each source file's time stamp: compile again when one changes
 KERNELS := $(VENV)/.compiled
 
@@ -47,12 +47,18 @@ BROWSER := /usr/bin/chromedriver
 $(BROWSER):
 	bash scripts/install-browser.sh
 
-test: lint $(KERNELS) $(BROWSER)
+# the napari widget's and the QGIS provider's tests (tests/frontends/) need QGIS, Xvfb and
+# the libraries Qt loads: Debian's packages, installed once, with apt
+FRONTENDS := /usr/bin/qgis_process.bin /usr/bin/Xvfb
+$(FRONTENDS):
+	bash scripts/install-frontends.sh
+
+test: lint $(KERNELS) $(BROWSER) $(FRONTENDS)
 	$(BIN)/python -m pytest -q
 
 # ruff (lint and format) for the Python, mypy for the library's types (its settings and
 # gaps: pyproject.toml, docs/typing.md), shellcheck for the shell scripts CI runs
-PY_SOURCES := skelprune service tests testkit benchmarks evaluation
+PY_SOURCES := skelprune service tests testkit benchmarks evaluation qgis
 lint: $(TESTS)
 	$(BIN)/ruff check $(PY_SOURCES)
 	$(BIN)/ruff format --check $(PY_SOURCES)

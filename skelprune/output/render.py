@@ -19,8 +19,13 @@ READABLE_SIDE = 512
 MAX_SCALE = 16
 #: Skeleton lines are about one pixel wide per this many pixels of the longer side ...
 LINE_EVERY = 400
-#: ... and node markers this fraction of it in radius.
+#: ... and node markers this fraction of it in radius ...
 MARK_EVERY = 150
+#: ... but at most this fraction of their object's skeleton (its pixels) in radius, so
+#: that the two end marks of a small object's axis cover at most a sixth of it ...
+MARK_SHARE = 1 / 12
+#: ... and never under half an input pixel.
+MARK_LEAST = 0.5
 
 COLOURS = {
     "background": (255, 255, 255),
@@ -59,7 +64,7 @@ def _mark(
     img: np.ndarray, r: int, c: int, colour: tuple[int, int, int], scale: int, radius: float
 ) -> None:
     h, w = img.shape[:2]
-    if radius <= 1.5:  # a 3 × 3 square
+    if scale == 1 and radius <= 1.5:  # a 3 × 3 square
         img[max(r - 1, 0) : min(r + 2, h), max(c - 1, 0) : min(c + 2, w)] = colour
         return
     cy, cx = (r + 0.5) * scale, (c + 0.5) * scale
@@ -150,7 +155,10 @@ def render_overlay(
         Skeleton pixels and their squared radii; their disks' union is the reconstruction.
     endpoints, junctions : (k, 2) int arrays, optional
         (row, col) of the nodes to mark: a 3 × 3 square at scale 1, else a disc 1.5
-        input pixels in radius.
+        input pixels in radius (larger on a large picture), and at most
+        :data:`MARK_SHARE` of the skeleton pixels of the node's object (its label, or
+        its 8-connected component), at least :data:`MARK_LEAST` of a pixel: a small
+        object's axis stays in sight.
     scale : int
         Each input pixel becomes ``scale`` × ``scale`` pixels (nearest neighbour: the
         mask stays crisp, the skeleton's lines are ``scale`` pixels wide).
@@ -197,10 +205,39 @@ def render_overlay(
     if scale > 1:
         img = np.repeat(np.repeat(img, scale, axis=0), scale, axis=1)
     radius = max(1.5 * scale, min(side / MARK_EVERY, thick * scale))
-    for kind, nodes in (("endpoint", endpoints), ("junction", junctions)):
-        for r, c in np.zeros((0, 2), int) if nodes is None else nodes:
-            _mark(img, int(r), int(c), COLOURS[kind], scale, radius)
+    marks = [
+        (kind, np.zeros((0, 2), int) if nodes is None else np.asarray(nodes, int).reshape(-1, 2))
+        for kind, nodes in (("endpoint", endpoints), ("junction", junctions))
+    ]
+    at = np.concatenate([nodes for _, nodes in marks])
+    if at.size:
+        caps = iter(_object_caps(mask, labels, rows, cols, at) * scale)
+    for kind, nodes in marks:
+        for r, c in nodes:
+            cap = float(next(caps))
+            _mark(img, int(r), int(c), COLOURS[kind], scale, min(radius, cap))
     return img if legend is None else _legend(img, legend, labels is not None)
+
+
+def _object_caps(
+    mask: np.ndarray,
+    labels: np.ndarray | None,
+    rows: np.ndarray,
+    cols: np.ndarray,
+    at: np.ndarray,
+) -> np.ndarray:
+    """The largest mark radius (input pixels) at each node ``at`` (row, col): its object's
+    skeleton pixels times :data:`MARK_SHARE`, at least :data:`MARK_LEAST`."""
+    from scipy import ndimage  # only for a picture with nodes: kept off the import path
+
+    if labels is not None:
+        objects = np.unique(labels, return_inverse=True)[1].reshape(labels.shape)
+    else:
+        objects = ndimage.label(mask, structure=np.ones((3, 3), bool))[0]
+    skeleton = np.bincount(objects[rows, cols], minlength=int(objects.max()) + 1)
+    r = np.clip(at[:, 0], 0, mask.shape[0] - 1)
+    c = np.clip(at[:, 1], 0, mask.shape[1] - 1)
+    return np.maximum(skeleton[objects[r, c]] * MARK_SHARE, MARK_LEAST)
 
 
 def result_overlay(result: Any, scale: int = 1, legend: bool = False) -> np.ndarray:

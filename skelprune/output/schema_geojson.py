@@ -62,7 +62,9 @@ class BranchPropertiesDoc(TypedDict):
     angle_target: Annotated[float | None, Doc("Degrees, leaving the target node.")]
     junction_angle_source: float | None
     junction_angle_target: float | None
-    strahler: Annotated[int | None, Doc("Horton–Strahler order (a tree's branches only).")]
+    strahler: Annotated[
+        int | None, Doc("Horton–Strahler order (null: off the widest spanning tree).")
+    ]
 
 
 class NodePropertiesDoc(TypedDict):

@@ -16,11 +16,12 @@ picture is seen (y up: an image's rows are flipped), in ``(-180, 180]``.
   node, from the node's position to the path's point three node radii (at least 3 px)
   along it, or its far end if nearer; ``junction_angle_*``: at a junction, the smallest
   angle between that direction and another branch's leaving the same junction.
-- ``strahler``: in a component whose skeleton is a tree, the Horton–Strahler order: a
-  branch splits the tree in two, the order of each side follows Strahler's rule (an end
-  is 1; where branches meet, their largest order, plus one where two or more share it),
-  and the branch takes the lesser (the tree rooted at its centre). End branches are 1.
-  Null in a component with a cycle.
+- ``strahler``: the Horton–Strahler order: a branch splits the tree in two, the order
+  of each side follows Strahler's rule (an end is 1; where branches meet, their largest
+  order, plus one where two or more share it), and the branch takes the lesser (the
+  tree rooted at its centre). End branches are 1. A skeleton with cycles (a vessel
+  network's loops) is read on its widest spanning tree, which drops from every cycle
+  its narrowest branch: those branches, and loop branches, are null.
 """
 
 from __future__ import annotations
@@ -170,18 +171,48 @@ def _combine(orders: list[int]) -> int:
     return top + 1 if orders.count(top) >= 2 else top
 
 
+def _spanning_tree(t: BranchTable) -> list[bool]:
+    """Which branches the Strahler orders are read on: all of a tree's; in a skeleton with
+    cycles, the widest spanning tree (Kruskal's, branches by mean radius, widest first,
+    ties by id), which drops from every cycle its narrowest branch (in a vessel network
+    the thin anastomosis that closes a loop, not the trunk). A loop branch is never in it."""
+    src, dst = t.source.tolist(), t.target.tolist()
+    if t.n_branches == t.n_nodes - 1 and all(s != d for s, d in zip(src, dst, strict=True)):
+        return [True] * t.n_branches
+    width = [
+        float(t.radius[t.paths[t.path_offsets[j] : t.path_offsets[j + 1]]].mean())
+        for j in range(t.n_branches)
+    ]
+    root = list(range(t.n_nodes))
+
+    def find(v: int) -> int:
+        while root[v] != v:
+            root[v] = root[root[v]]
+            v = root[v]
+        return v
+
+    kept = [False] * t.n_branches
+    for j in sorted(range(t.n_branches), key=lambda j: (-width[j], j)):
+        a, b = find(src[j]), find(dst[j])
+        if a != b:
+            root[a] = b
+            kept[j] = True
+    return kept
+
+
 def _strahler(t: BranchTable) -> list[int | None]:
-    """Horton–Strahler orders of a tree's branches (module docstring): each branch's order
-    is the lesser of the orders computed from its two sides, which is the tree rooted at
-    its centre; all None if the skeleton has a cycle."""
+    """Horton–Strahler orders of the branches (module docstring): each branch's order is
+    the lesser of the orders computed from its two sides of the tree, which is the tree
+    rooted at its centre; on a skeleton with cycles, the tree of :func:`_spanning_tree`,
+    the branches it drops None."""
     n, nb = t.n_nodes, t.n_branches
     src, dst = t.source.tolist(), t.target.tolist()
-    if nb != n - 1 or any(s == d for s, d in zip(src, dst, strict=True)):
-        return [None] * nb
+    kept = _spanning_tree(t)
     at: list[list[int]] = [[] for _ in range(n)]
     for b, (s, d) in enumerate(zip(src, dst, strict=True)):
-        at[s].append(b)
-        at[d].append(b)
+        if kept[b]:
+            at[s].append(b)
+            at[d].append(b)
     # a breadth-first order from node 0: each node's branch toward the root
     up_branch = [-1] * n
     seen = [False] * n
@@ -209,7 +240,7 @@ def _strahler(t: BranchTable) -> list[int | None]:
             if up_branch[v] >= 0:
                 feeding.append(above[up_branch[v]])
             above[b] = _combine(feeding)
-    return [min(below[b], above[b]) for b in range(nb)]
+    return [min(below[b], above[b]) if kept[b] else None for b in range(nb)]
 
 
 def _component_branches(

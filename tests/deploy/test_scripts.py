@@ -74,8 +74,8 @@ def test_unknown_option_is_a_usage_error() -> None:
 
 def test_make_run_installs_only_the_serving_extras() -> None:
     """``make run`` sets up with the service extra and the graph one (the README's first
-    example calls ``to_networkx()``) alone; ``make test`` adds the test, geo and parallel
-    ones (dask: ``prune_many``'s tests start a real cluster)."""
+    example calls ``to_networkx()``) alone; ``make test`` adds the test, geo, parallel and
+    napari ones (dask: ``prune_many``'s tests start a real cluster; napari: the plugin's)."""
 
     def installs(target: str) -> list[str]:
         """The extras each editable pip install of ``make -n TARGET`` asks for."""
@@ -91,7 +91,7 @@ def test_make_run_installs_only_the_serving_extras() -> None:
 
     assert installs("run") == ["service,graph"]
     test = installs("test")  # (and the service extra alone, which the kernels' stamp needs)
-    assert "service,test,geo,parallel" in test  # their tests run in make test too
+    assert "service,test,geo,parallel,napari" in test  # their tests run in make test too
     assert not [extras for extras in test if "bench" in extras]
     assert "bench" in installs("bench")[0]
     assert installs("client") == ["service,client"]

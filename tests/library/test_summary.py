@@ -133,14 +133,30 @@ def test_strahler_orders_of_a_known_tree():
     assert sorted(o for o, _ in inner) == [2, 2, 2, 2, 3]
 
 
-def test_strahler_is_null_with_a_cycle():
+def test_strahler_orders_of_a_network_with_a_cycle_are_its_widest_trees():
+    # the H of H's with a thin vessel joining two of its tips: one cycle
+    m = tree() | capsule_segments([((30, 90), (30, 210))], 5, (300, 400))
+    rows = skelprune.prune(m).summary()
+    assert int(skelprune.prune(m).summary("component")["cycles"][0]) == 1
+    narrow = rows["width_mean"].idxmin()
+    assert rows["width_mean"][narrow] < 7  # the thin vessel: off the tree, no order
+    assert rows["strahler"].isna().tolist() == [j == narrow for j in range(len(rows))]
+    orders = rows["strahler"].dropna().astype(int)
+    assert orders[rows["kind"] == "end-junction"].eq(1).all()
+    # the wide tree keeps the H of H's orders: the centre 3, the four forks 2
+    inner = rows[(rows["kind"] == "junction-junction") & rows["strahler"].notna()]
+    assert inner.sort_values("length")["strahler"].iloc[-1] == 3
+    assert sorted(inner["strahler"][inner["length"] > 80].astype(int)) == [2, 2, 2, 2, 3]
+
+
+def test_strahler_of_a_ring_drops_one_side():
     m = np.zeros((80, 80), bool)
     m[10:70, 10:70] = True
     m[30:50, 30:50] = False
     rows = skelprune.prune(m).summary()
-    assert rows["strahler"].isna().all()
-    comp = skelprune.prune(m).summary("component")
-    assert int(comp["cycles"][0]) == 1
+    assert int(skelprune.prune(m).summary("component")["cycles"][0]) == 1
+    assert rows["strahler"].isna().sum() == 1  # the cycle's one branch off the tree
+    assert rows["strahler"][rows["kind"] == "end-junction"].eq(1).all()
 
 
 def test_tables_columns_units_and_csv():

@@ -18,6 +18,7 @@ import heapq
 import math
 from dataclasses import dataclass, replace
 from functools import cached_property
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
@@ -27,6 +28,8 @@ if TYPE_CHECKING:
     from .pruning.limbs import LimbGuard
 
 from .grid import IDENTITY_ORIENTATION, Orientation, oriented
+from .grid._roughness import boundary_roughness
+from .grid._rowcover import cover_counts, uncover_count
 from .grid.coverage import Coverage
 from .grid.graph import SQRT2, BranchGraph, step_length
 from .grid.medial_axis import oriented_medial_axis, squared_distance
@@ -89,6 +92,18 @@ def _path_lengths(nbr, seed):
                 dist[q] = nd
                 heapq.heappush(heap, (nd, q))
     return dist
+
+
+def grown_r2(r2: np.ndarray, reach: float) -> np.ndarray:
+    """Integer squared radii of the disks ``|p − s| < r + reach``: with integer squared
+    distances, ``d² < x`` is ``d² < ⌈x⌉`` (a hair below an integer counts as it, so
+    that rounding never moves a pixel in or out).
+
+    >>> grown_r2(np.array([0, 1, 2, 4]), 1.0).tolist()
+    [1, 4, 6, 9]
+    """
+    grown = (np.sqrt(np.asarray(r2, np.float64)) + reach) ** 2
+    return np.ceil(grown - 1e-9).astype(np.int64)
 
 
 @dataclass(frozen=True, eq=False)
@@ -156,6 +171,26 @@ class Skeleton:
     def with_graph(self, graph: BranchGraph) -> Skeleton:
         """The same shape and pixels with another graph over them (a stage's answer)."""
         return replace(self, graph=graph)
+
+    #: A pixel.
+    grid_step: ClassVar[float] = 1.0
+
+    def boundary_roughness(self) -> float:
+        """Pixels a one-pixel opening and closing change, per boundary pixel."""
+        return boundary_roughness(self.mask)
+
+    def lost_along(self, reach: float, removals: Sequence[np.ndarray]) -> np.ndarray:
+        """Pixels of the shape no disk of this skeleton grown by ``reach`` covers, then
+        after each removal of ``removals`` in turn (the grid interface)."""
+        pad = math.ceil(reach) + 1  # grown disks stay on the canvas
+        shape = np.pad(self.mask, pad)
+        rows, cols, r2 = self.rows + pad, self.cols + pad, grown_r2(self.r2, reach)
+        idx = self.points()
+        c = cover_counts(shape.shape[0], shape.shape[1], rows[idx], cols[idx], r2[idx])
+        lost = [int(np.count_nonzero(shape & (c == 0)))]
+        for pts in removals:
+            lost.append(lost[-1] + uncover_count(c, shape, rows[pts], cols[pts], r2[pts]))
+        return np.asarray(lost, np.int64)
 
     def working_graph(self) -> BranchGraph:
         """A copy of the graph that a stage may change."""

@@ -124,8 +124,8 @@ def test_one_pixel_end_branches_keep_their_endpoint_nodes():
 
 
 def test_rectangle_has_four_endpoints_and_small_error():
-    m = np.zeros((40, 90), bool)
-    m[5:35, 5:85] = True
+    m = np.zeros((70, 170), bool)
+    m[5:65, 5:165] = True
     comp = skelprune.prune(m).to_dict()["components"][0]
     assert len(comp["skeleton"]["endpoints"]) == 4
     assert comp["rer"] < 0.02

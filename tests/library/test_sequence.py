@@ -123,7 +123,7 @@ def test_the_command_line_prints_the_sequence_on_request() -> None:
             [*cli, "--sequence"], capture_output=True, text=True, timeout=300, check=True
         ).stdout
     )
-    assert with_seq["components"][0]["sequence"]["start"] == "coarse"
+    assert with_seq["components"][0]["sequence"]["start"] == "medial_axis"
     del with_seq["components"][0]["sequence"]
     assert with_seq == plain
 

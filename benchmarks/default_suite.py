@@ -171,6 +171,11 @@ def markdown(rows: Sequence[Row]) -> str:
     return table(HEADER, _cells(rows))
 
 
+def _plain(value: Any) -> Any:
+    """numpy scalars as plain numbers, for JSON."""
+    return value.item() if hasattr(value, "item") else str(value)
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(
         prog="python -m benchmarks default",
@@ -219,7 +224,7 @@ def main(argv: list[str] | None = None) -> None:
         print(f"\nnote: {note}")
     print(f"\n{time.perf_counter() - t:.0f} s")
     if args.json is not None:
-        args.json.write_text(json.dumps([r.__dict__ for r in rows], indent=1))
+        args.json.write_text(json.dumps([r.__dict__ for r in rows], indent=1, default=_plain))
 
 
 if __name__ == "__main__":

@@ -50,6 +50,10 @@ def test_short_end_branches_counts_spurs_not_branches_or_border_ends() -> None:
     edge[30, 60:70] = True  # the line runs off the image, 5 px beyond a junction:
     edge[31:46, 64] = True  # its end there is where it leaves the image, not a tip
     assert short_end_branches(edge) == 0
+    stub = bare.copy()
+    stub[31, 40] = stub[32, 41] = True  # two pixels off the line: its staircase
+    assert short_end_branches(stub) == 0
+    assert short_end_branches(stub, stub=0.0) == 1
     thick = m.copy()
     thick[31, 10:30] = True  # two pixels wide for a while: corners are not spurs
     assert short_end_branches(thick) == 2

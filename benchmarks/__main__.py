@@ -1,7 +1,8 @@
 """Run the benchmarks named on the command line (default: all) and print their tables.
 
 Arguments after a benchmark's name that are not benchmark names are its own (``python -m
-benchmarks default --quick --data DIR``); they go to its ``main(argv)``.
+benchmarks default --quick --data DIR``); they go to its ``main(argv)``, for the
+benchmarks whose ``main`` takes ``argv``.
 """
 
 from __future__ import annotations
@@ -51,17 +52,17 @@ def main(argv: list[str]) -> None:
     for name, args in runs:
         print(f"\n## {name}\n", flush=True)
         bench = importlib.import_module(f"benchmarks.bench_{name}").main
-        takes_arguments = bool(inspect.signature(bench).parameters)
+        takes_arguments = "argv" in inspect.signature(bench).parameters
         if args and not takes_arguments:
             print(
                 f"python -m benchmarks {name} takes no arguments ({' '.join(args)})",
                 file=sys.stderr,
             )
             sys.exit(2)
-        if takes_arguments:
-            bench(args)
+        if args:
+            bench(argv=args)
         else:
-            bench()
+            bench()  # as it always ran
 
 
 if __name__ == "__main__":

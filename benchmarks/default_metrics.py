@@ -6,8 +6,9 @@ skeleton points (:meth:`skelprune.PruneResult.skeleton_points`), or skan's prune
 
 - :func:`centre_line_kept`: the share of the raw centre line (``skeletonize``'s pixels)
   within 2 px of the answer: what of the structure the answer keeps;
-- :func:`short_end_branches`: the answer's end branches (junction to free end) shorter
-  than 10 px whose free end is off the image border: the spurs a person would cut.
+- :func:`short_end_branches`: the answer's end branches (junction to free end) longer
+  than two pixels and shorter than 10 px whose free end is off the image border: the
+  spurs a person would cut.
 """
 
 from __future__ import annotations
@@ -70,12 +71,16 @@ def centre_line_kept(raw: np.ndarray, answer: np.ndarray, tolerance: float = 2.0
     return float(near[raw].mean())
 
 
-def short_end_branches(answer: np.ndarray, shorter: float = 10.0) -> int:
-    """End branches (junction to free end, skan's branch type 1) shorter than ``shorter``
-    px whose free end lies off the image border (an end on the border is where the
-    structure leaves the image, not a tip). The answer is thinned to one pixel first
-    (``skeletonize``), so that a pixel set two pixels wide in places is not read as
-    corners of one-pixel branches.
+#: The longest stub (px) read as a pixel staircase, not a branch: two diagonal steps.
+STUB = 2 * 2**0.5 + 1e-6
+
+
+def short_end_branches(answer: np.ndarray, shorter: float = 10.0, stub: float = STUB) -> int:
+    """End branches (junction to free end, skan's branch type 1) longer than ``stub`` and
+    shorter than ``shorter`` px whose free end lies off the image border (an end on the
+    border is where the structure leaves the image, not a tip). The answer is thinned to
+    one pixel first (``skeletonize``), and a stub of one or two pixels beside a line is
+    its pixels' staircase, not a branch: neither is read as a spur.
 
     >>> m = np.zeros((30, 40), bool); m[15, 3:37] = True; m[16:21, 20] = True
     >>> short_end_branches(m)  # a 5-px spur off a 34-px line
@@ -95,6 +100,7 @@ def short_end_branches(answer: np.ndarray, shorter: float = 10.0) -> int:
     for i in np.flatnonzero(
         (branches["branch_type"].to_numpy() == 1)
         & (branches["branch_distance"].to_numpy() < shorter)
+        & (branches["branch_distance"].to_numpy() > stub)
     ):
         path = np.asarray(skel.path_coordinates(int(i)))
         for r, c in (path[0], path[-1]):

@@ -178,7 +178,7 @@ def _silhouette_rows(ctx: Context, results: list[Any]) -> list[Row]:
             f"{ends[0]}/{ends[1]}",
             "-",
             "all",
-            ends[0] == ends[1],
+            bool(ends[0] == ends[1]),
             {"skelprune": ends[0] / max(ends[1], 1)},
         ),
     ]

@@ -10,6 +10,7 @@ The groups (``--only`` takes a comma-separated list of their names):
 - ``networks``: the drawn vessel, crack and road networks of :mod:`testkit.networks`;
 - ``silhouettes``: SkelNetOn dev F1, median RER, limbs kept, round ends centred;
 - ``stability``: the anchor masks against the authors' code, on two fixed halves;
+- ``outlines``: kimia216 and kimia99 under pixel flips and resampled contour noise;
 - ``trees``: random branching tubes (:mod:`testkit.volumes`), smooth and voxel-rough;
 - ``neurons``: navis's example neurons voxelized from their radii (:mod:`testkit.neurons`).
 
@@ -83,9 +84,9 @@ class Group:
 
 
 def _groups() -> dict[str, Group]:
-    from . import default_planar, default_silhouettes, default_volumes
+    from . import default_outlines, default_planar, default_silhouettes, default_volumes
 
-    parts = (default_planar, default_silhouettes, default_volumes)
+    parts = (default_planar, default_silhouettes, default_outlines, default_volumes)
     return {g.name: g for part in parts for g in part.GROUPS}
 
 
@@ -96,6 +97,7 @@ GROUPS: tuple[str, ...] = (
     "networks",
     "silhouettes",
     "stability",
+    "outlines",
     "trees",
     "neurons",
 )
@@ -171,6 +173,11 @@ def markdown(rows: Sequence[Row]) -> str:
     return table(HEADER, _cells(rows))
 
 
+def _plain(value: Any) -> Any:
+    """numpy scalars as plain numbers, for JSON."""
+    return value.item() if hasattr(value, "item") else str(value)
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(
         prog="python -m benchmarks default",
@@ -219,7 +226,7 @@ def main(argv: list[str] | None = None) -> None:
         print(f"\nnote: {note}")
     print(f"\n{time.perf_counter() - t:.0f} s")
     if args.json is not None:
-        args.json.write_text(json.dumps([r.__dict__ for r in rows], indent=1))
+        args.json.write_text(json.dumps([r.__dict__ for r in rows], indent=1, default=_plain))
 
 
 if __name__ == "__main__":

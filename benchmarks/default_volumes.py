@@ -20,6 +20,7 @@ most the best peer's.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -50,15 +51,15 @@ def skelprune_volume(volume: np.ndarray, spacing: Any, options: dict[str, Any]) 
 
 
 def measure_volume(
-    truth: Any, options: dict[str, Any], copies: int, seed: int
+    truth: Any, options: dict[str, Any], copies: int, seed: int, peers: Sequence[str] = PEERS
 ) -> dict[str, dict[str, list[float]]]:
-    """Every method's scores on the clean volume (``clean ...``) and on ``copies`` rough
-    ones (``rough ...``), and its end counts on each."""
+    """skelprune's and every peer's scores on the clean volume (``clean ...``) and on
+    ``copies`` rough ones (``rough ...``), and the end counts on each."""
     from .volume_methods import METHODS, scores
 
     methods = {
         "skelprune": lambda v, sp: skelprune_volume(v, sp, options),
-        **{m: METHODS[m] for m in PEERS},
+        **{m: METHODS[m] for m in peers},
     }
     volumes = [("clean", truth.volume())]
     volumes += [("rough", truth.volume(NOISE, seed=1000 * seed + k)) for k in range(copies)]
@@ -74,6 +75,7 @@ def measure_volume(
 def volume_rows(dataset: str, results: list[dict[str, dict[str, list[float]]]]) -> list[Row]:
     """The volume rows of one data set from :func:`measure_volume`'s results."""
     methods = list(results[0])
+    peers = methods[1:]
 
     def values(m: str, key: str) -> list[float]:
         return [v for r in results for v in r[m][key]]
@@ -95,13 +97,13 @@ def volume_rows(dataset: str, results: list[dict[str, dict[str, list[float]]]]) 
         change[m] = float(np.mean(steps))
 
     def row(metric: str, got: dict[str, float], fmt: Any, higher: bool) -> Row:
-        best = (max if higher else min)(got[m] for m in PEERS)
+        best = (max if higher else min)(got[m] for m in peers)
         ok = got["skelprune"] >= best if higher else got["skelprune"] <= best
         return Row(
             f"{dataset} ({len(results)})",
             metric,
             fmt(got["skelprune"]),
-            " · ".join(f"{m} {fmt(got[m])}" for m in PEERS),
+            " · ".join(f"{m} {fmt(got[m])}" for m in peers),
             "≥ best peer" if higher else "≤ best peer",
             bool(ok),
             got,

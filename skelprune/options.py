@@ -75,8 +75,9 @@ METHODS = ("bayesian", "dce")
 MAX_BETA = 1_000_000_000
 #: Spellings of ``coarse``: the name ``"none"`` is the full medial axis (``None``).
 COARSE = ("dce", "none")
-#: The margin below which the answer's end branches go unless told otherwise: chosen by
-#: the stability benchmark over noise models and sizes (docs/stability-findings.md).
+#: The margin below which the answer's end branches go unless told otherwise, measured on
+#: the choice's own λ: with the noise-floor choice it takes the short ends that boundary
+#: noise leaves on networks and keeps their vessels (docs/default.md).
 DEFAULT_MIN_MARGIN = 0.01
 #: The DCE stop of ``method="dce"`` on relevance (scale-free: lengths over the perimeter,
 #: angle in radians): docs/dce.md gives the evidence.
@@ -103,9 +104,10 @@ class PruneOptions:
 
     Examples
     --------
-    >>> PruneOptions(coarse="none")  # doctest: +NORMALIZE_WHITESPACE
-    PruneOptions(beta=9.0, method='bayesian', coarse=None, dce_threshold=None,
-                 min_margin=None, choice='argmin', trim=True, scope='global', window=None)
+    >>> PruneOptions(coarse="dce")  # doctest: +NORMALIZE_WHITESPACE
+    PruneOptions(beta=9.0, method='bayesian', coarse='dce', dce_threshold=None,
+                 min_margin=None, choice='noise-floor', trim=True, scope='global',
+                 window=None)
     >>> PruneOptions(beta=-1)
     Traceback (most recent call last):
     ...
@@ -124,9 +126,10 @@ class PruneOptions:
         METHODS,
     )
     coarse: str | None = _option(
-        "dce",
-        "dce: a coarse DCE stage before the Bayesian pruning (the default); none: "
-        "start from the full medial axis. Ignored by method=dce.",
+        "none",
+        "none: start from the full medial axis (the default); dce: a coarse DCE stage "
+        "before the Bayesian pruning (faster on large shapes, but it may remove ends the "
+        "pruning would keep, such as vessels of a large tree). Ignored by method=dce.",
         _choice(COARSE),
         COARSE,
     )
@@ -140,16 +143,16 @@ class PruneOptions:
         None,
         "For method=bayesian: also drop the answer's end branches whose margin is "
         f"below this, >= 0, cheapest first, as the sequence goes on (default "
-        f"{DEFAULT_MIN_MARGIN:g}, chosen for endpoint stability under noise, turns and "
-        "scaling at every size; 0: the argmin of λ over the sequence, which never removes "
-        "a limb: docs/algorithm.md).",
+        f"{DEFAULT_MIN_MARGIN:g}, measured on the choice's λ; 0: the choice's least λ; "
+        "docs/algorithm.md).",
         _number(0, strict=False),
     )
     choice: str = _option(
-        "argmin",
-        "For method=bayesian: argmin (the paper's answer: the skeleton of least λ) or "
-        "noise-floor (least λ with the reconstruction error counted only deeper than the "
-        "boundary's one-pixel rim, which a one-pixel boundary move changes).",
+        "noise-floor",
+        "For method=bayesian: noise-floor (the default: least λ with the reconstruction "
+        "error counted only beyond the boundary's own noise depth, measured on the shape, "
+        "so that spurs of boundary noise go and thin real branches stay) or argmin (the "
+        "paper's answer: the skeleton of least λ).",
         _choice(CHOICES),
         CHOICES,
     )

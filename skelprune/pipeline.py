@@ -40,12 +40,17 @@ def dce_support(medial: Skeleton, n_vertices: int | None, threshold: float | Non
 
 
 def prune_component(
-    crop: np.ndarray, origin: tuple[int, int], options: PruneOptions
+    crop: np.ndarray,
+    origin: tuple[int, int],
+    options: PruneOptions,
+    image_shape: tuple[int, int] | None = None,
 ) -> ComponentResult:
     """Medial axis and pruning of one padded component crop.
 
     With ``coarse="dce"`` the Bayesian sequence (and so its curve, ``chosen_step``,
-    ``α`` and ``ℓ̄``) starts from the DCE-pruned skeleton.
+    ``α`` and ``ℓ̄``) starts from the DCE-pruned skeleton. With ``image_shape`` (the
+    image the crop's corner ``origin`` is in), an end where the shape runs off the image
+    is kept whole (docs/algorithm.md, "Ends on the image border").
 
     Everything runs in the crop's canonical orientation (:meth:`Skeleton.medial_axis`),
     ties included, so that a shape turned by 90° or mirrored gets the turned or mirrored
@@ -53,7 +58,7 @@ def prune_component(
     """
     options = options.resolved()  # the method's defaults filled in
     beta = options.beta
-    medial = Skeleton.medial_axis(crop, origin)
+    medial = Skeleton.medial_axis(crop, origin, image_shape)
     fewer = False  # the start has fewer points than the medial axis
     if options.method == "dce":
         norm = medial.normalisation(beta)
@@ -124,7 +129,7 @@ def prune_components(
     )
     parts = shape.components()
     for k, (crop, origin, label) in enumerate(parts):
-        component = prune_component(crop, origin, options)
+        component = prune_component(crop, origin, options, shape.mask.shape)
         component.label = label  # None unless a label image
         result.components.append(component)
         if progress is not None:

@@ -18,18 +18,23 @@ import heapq
 import math
 from dataclasses import dataclass, replace
 from functools import cached_property
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 from numba import njit
+from scipy import ndimage
 
 if TYPE_CHECKING:
     from .pruning.limbs import LimbGuard
 
 from .grid import IDENTITY_ORIENTATION, Orientation, oriented
+from .grid._roughness import boundary_roughness
+from .grid._rowcover import cover_counts, uncover_count
 from .grid.coverage import Coverage
 from .grid.graph import SQRT2, BranchGraph, step_length
-from .grid.medial_axis import oriented_medial_axis, squared_distance
+from .grid._open_edge import open_edge, open_extension
+from .grid.medial_axis import MedialAxis, oriented_medial_axis, squared_distance
 from .grid.reconstruction import reconstruction
 
 __all__ = ["Normalisation", "Skeleton", "normalisation"]
@@ -91,6 +96,27 @@ def _path_lengths(nbr, seed):
     return dist
 
 
+def _connected(rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int]) -> bool:
+    """Whether the pixels are one non-empty 8-connected set."""
+    if rows.size == 0:
+        return False
+    img = np.zeros(shape, bool)
+    img[rows, cols] = True
+    return int(ndimage.label(img, np.ones((3, 3), bool))[1]) == 1
+
+
+def grown_r2(r2: np.ndarray, reach: float) -> np.ndarray:
+    """Integer squared radii of the disks ``|p − s| < r + reach``: with integer squared
+    distances, ``d² < x`` is ``d² < ⌈x⌉`` (a hair below an integer counts as it, so
+    that rounding never moves a pixel in or out).
+
+    >>> grown_r2(np.array([0, 1, 2, 4]), 1.0).tolist()
+    [1, 4, 6, 9]
+    """
+    grown = (np.sqrt(np.asarray(r2, np.float64)) + reach) ** 2
+    return np.ceil(grown - 1e-9).astype(np.int64)
+
+
 @dataclass(frozen=True, eq=False)
 class Skeleton:
     """A skeleton of one component, in the canonical frame of its padded crop.
@@ -125,16 +151,66 @@ class Skeleton:
     graph: BranchGraph
     orientation: Orientation = IDENTITY_ORIENTATION
     origin: tuple[int, int] = (0, 0)
+    #: Where the shape runs off the image: per pixel next to an open run (its open edge,
+    #: seen in ``orientation``, grown by a pixel), that run's number from 1, else 0. One
+    #: end at each run is kept whole. None: no such edge.
+    open_near: np.ndarray | None = None
 
     @classmethod
-    def medial_axis(cls, crop: np.ndarray, origin: tuple[int, int] = (0, 0)) -> Skeleton:
+    def medial_axis(
+        cls,
+        crop: np.ndarray,
+        origin: tuple[int, int] = (0, 0),
+        image_shape: tuple[int, int] | None = None,
+    ) -> Skeleton:
         """The medial axis of a padded one-component crop, in the crop's canonical
         orientation: the frame every stage works in (ties included), so that a turned or
-        mirrored shape gets the turned or mirrored result."""
+        mirrored shape gets the turned or mirrored result. With ``image_shape`` (the
+        crop's corner at ``origin`` in that image), a shape cut by the image's border
+        goes on across it (:mod:`skelprune.grid._open_edge`)."""
         shape, orientation = oriented(crop)
-        axis = oriented_medial_axis(shape, squared_distance(shape))
+        r2 = squared_distance(shape)
+        edge = None if image_shape is None else open_edge(crop, origin, image_shape)
+        if edge is None:
+            axis = oriented_medial_axis(shape, r2)
+            graph = BranchGraph(axis.rows, axis.cols, shape.shape)
+            return cls(shape, axis.rows, axis.cols, axis.r2, graph, orientation, origin)
+        edge = np.ascontiguousarray(orientation.apply(edge))
+        # the axis of the shape gone on beyond the image, cut back at the border
+        ext, o = open_extension(shape, edge)
+        far = oriented_medial_axis(ext, squared_distance(ext))
+        rows, cols = far.rows - o, far.cols - o
+        h, w = shape.shape
+        inside = (rows >= 0) & (rows < h) & (cols >= 0) & (cols < w)
+        inside[inside] = shape[rows[inside], cols[inside]]
+        rows, cols = rows[inside], cols[inside]
+        if not _connected(rows, cols, shape.shape):  # the cut split it: keep the plain one
+            axis = oriented_medial_axis(shape, r2)
+            graph = BranchGraph(axis.rows, axis.cols, shape.shape)
+            return cls(shape, axis.rows, axis.cols, axis.r2, graph, orientation, origin)
+        axis = MedialAxis(rows, cols, r2[rows, cols])
         graph = BranchGraph(axis.rows, axis.cols, shape.shape)
-        return cls(shape, axis.rows, axis.cols, axis.r2, graph, orientation, origin)
+        runs = ndimage.label(ndimage.binary_dilation(edge, np.ones((5, 5), bool)))[0] * edge
+        near = ndimage.grey_dilation(runs, size=(3, 3))
+        return cls(shape, axis.rows, axis.cols, axis.r2, graph, orientation, origin, near)
+
+    def open_ends(self, points: Sequence[int]) -> set[int]:
+        """Of these end points, those that end the shape where it runs off the image: at
+        each open run, the end nearest to the run's middle (the structure's own end;
+        others there are judged as any end)."""
+        near = self.open_near
+        if near is None:
+            return set()
+        best: dict[int, tuple[float, int]] = {}
+        centres = ndimage.center_of_mass(near > 0, near, range(1, int(near.max()) + 1))
+        for p in points:
+            run = int(near[self.rows[p], self.cols[p]])
+            if run:
+                cy, cx = centres[run - 1]
+                d = float((self.rows[p] - cy) ** 2 + (self.cols[p] - cx) ** 2)
+                if run not in best or (d, p) < best[run]:
+                    best[run] = (d, p)
+        return {p for _, p in best.values()}
 
     # -- the grid interface (skelprune.pruning.grid) ------------------------------------
     #: Axial and diagonal steps: 1 and √2.
@@ -151,11 +227,37 @@ class Skeleton:
         """The limbs of ``graph`` (docs/algorithm.md, "Limbs")."""
         from .pruning.limbs import LimbGuard
 
-        return LimbGuard(graph, self.mask, self.r2)
+        guard = LimbGuard(graph, self.mask, self.r2)
+        if self.open_near is not None:  # where the shape runs off the image, its end stays
+            ends = sorted(graph.ends)
+            kept = self.open_ends([graph.endpoint(b) for b in ends])
+            for b in ends:
+                guard.limb[b] |= graph.endpoint(b) in kept
+        return guard
 
     def with_graph(self, graph: BranchGraph) -> Skeleton:
         """The same shape and pixels with another graph over them (a stage's answer)."""
         return replace(self, graph=graph)
+
+    #: A pixel.
+    grid_step: ClassVar[float] = 1.0
+
+    def boundary_roughness(self) -> float:
+        """Pixels a one-pixel opening and closing change, per boundary pixel."""
+        return boundary_roughness(self.mask)
+
+    def lost_along(self, reach: float, removals: Sequence[np.ndarray]) -> np.ndarray:
+        """Pixels of the shape no disk of this skeleton grown by ``reach`` covers, then
+        after each removal of ``removals`` in turn (the grid interface)."""
+        pad = math.ceil(reach) + 1  # grown disks stay on the canvas
+        shape = np.pad(self.mask, pad)
+        rows, cols, r2 = self.rows + pad, self.cols + pad, grown_r2(self.r2, reach)
+        idx = self.points()
+        c = cover_counts(shape.shape[0], shape.shape[1], rows[idx], cols[idx], r2[idx])
+        lost = [int(np.count_nonzero(shape & (c == 0)))]
+        for pts in removals:
+            lost.append(lost[-1] + uncover_count(c, shape, rows[pts], cols[pts], r2[pts]))
+        return np.asarray(lost, np.int64)
 
     def working_graph(self) -> BranchGraph:
         """A copy of the graph that a stage may change."""

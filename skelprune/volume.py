@@ -413,18 +413,13 @@ def prune_volume(
     EmptyMaskError
         No voxel inside.
     InvalidOptionError
-        An option that holds for images only (``method="dce"``, ``choice="noise-floor"``,
-        ``scope="local"``).
+        An option that holds for images only (``method="dce"``, ``scope="local"``).
     """
     applied = options.resolved()
     if applied.method != "bayesian":
         raise InvalidOptionError(
             "method='dce' follows a contour and holds for images only; a volume is pruned "
             "with method='bayesian'"
-        )
-    if applied.choice != "argmin":
-        raise InvalidOptionError(
-            f"choice={applied.choice!r} holds for images only; a volume's answer is the argmin"
         )
     if applied.scope != "global":
         raise InvalidOptionError(

@@ -332,10 +332,15 @@ def medial_axis(padded: np.ndarray, r2: np.ndarray | None = None) -> MedialAxis:
     return MedialAxis(rows, cols, r2[rows, cols])
 
 
-def oriented_medial_axis(padded: np.ndarray, r2: np.ndarray) -> MedialAxis:
+def oriented_medial_axis(
+    padded: np.ndarray, r2: np.ndarray, thinning_r2: np.ndarray | None = None
+) -> MedialAxis:
     """:func:`medial_axis` of a shape already in its canonical orientation
-    (:func:`skelprune.api.oriented`), without finding that orientation again."""
-    rows, cols = _medial_axis_pixels(np.asarray(padded, dtype=np.bool_), r2)
+    (:func:`skelprune.api.oriented`), without finding that orientation again.
+    ``thinning_r2``, when given, orders and anchors the thinning instead of ``r2`` (the
+    distances of a shape that goes on beyond the image); the radii stay ``r2``'s."""
+    order = r2 if thinning_r2 is None else thinning_r2
+    rows, cols = _medial_axis_pixels(np.asarray(padded, dtype=np.bool_), order)
     return MedialAxis(rows, cols, r2[rows, cols])
 
 

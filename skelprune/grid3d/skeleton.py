@@ -11,11 +11,13 @@ skeleton they are given: they take :meth:`VolumeSkeleton.working_graph` and answ
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
 
+from ..grid._roughness import volume_roughness
 from ..skeleton import Normalisation
 from ._topology import OFFSETS, step_lengths
 from .balls import reconstruction
@@ -111,6 +113,38 @@ class VolumeSkeleton:
     def limb_test(self, graph: VolumeBranchGraph) -> VolumeLimbs:
         """The limbs of ``graph`` (docs/volumes.md, "Limbs")."""
         return VolumeLimbs(graph, self.volume, self.z, self.y, self.x, self.r2, self.spacing)
+
+    @property
+    def grid_step(self) -> float:
+        """The smallest voxel side."""
+        return float(min(self.spacing))
+
+    def boundary_roughness(self) -> float:
+        """Voxels a one-voxel opening and closing change, per boundary voxel."""
+        return volume_roughness(self.volume)
+
+    def lost_along(self, reach: float, removals: Sequence[np.ndarray]) -> np.ndarray:
+        """Voxels of the shape no ball of this skeleton grown by ``reach`` (physical
+        units) covers, then after each removal of ``removals`` in turn."""
+        idx = self.points()
+        labels = np.full(self.z.size, len(removals) + 1, np.int64)
+        for i, pts in enumerate(removals):  # a removal's balls go together
+            labels[pts] = i + 1
+        grown = (np.sqrt(self.r2[idx]) + reach) ** 2
+        cov = VolumeCoverage(
+            self.volume,
+            self.z[idx],
+            self.y[idx],
+            self.x[idx],
+            grown,
+            labels[idx],
+            len(removals) + 2,
+            self.spacing,
+        )
+        lost = [cov.lost]
+        for i in range(len(removals)):
+            lost.append(lost[-1] + cov.remove_label(i + 1))
+        return np.asarray(lost, np.int64)
 
     # -- what the pipeline and the outputs ask ------------------------------------------
     @property

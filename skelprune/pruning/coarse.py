@@ -32,6 +32,7 @@ from itertools import chain
 import numba
 import numpy as np
 
+from ..grid._roughness import boundary_roughness
 from ..grid.graph import BranchGraph
 from ..skeleton import Skeleton
 from ._generating import SegmentRaster, rim_label_set, rim_labels
@@ -66,84 +67,6 @@ ROUGHNESS_FLOOR: float = 0.15
 #: ... by this many pixels of relevance per unit of roughness (boundary noise N(0, 1)
 #: measures about 0.44, so its threshold is about 8.3 px; U(-1, 1) about 0.32, 5.9 px).
 ROUGHNESS_GAIN: float = 20.0
-
-
-def boundary_roughness(mask: np.ndarray) -> float:
-    """Pixels a one-pixel opening and closing change, per boundary pixel.
-
-    A clean digital boundary only loses its corner pixels to a 3×3-cross opening and
-    closing; a boundary with pixel-scale noise loses its spikes and gets its notches
-    filled all along. The ratio is scale-free in the sense that matters here: it counts
-    per boundary pixel, not per shape.
-
-    Parameters
-    ----------
-    mask : (H, W) bool array
-
-    Returns
-    -------
-    float
-        0 for a shape no opening or closing changes; typically 0.01–0.14 for a clean
-        silhouette and 0.3–0.7 under boundary noise of one pixel or more.
-
-    Examples
-    --------
-    >>> m = np.zeros((40, 40), bool); m[5:35, 5:35] = True
-    >>> round(boundary_roughness(m), 3)  # only the 4 corner pixels change
-    0.034
-    >>> comb = m.copy(); comb[4, 5:35:2] = comb[5:35:2, 4] = True; comb[6, 6:34:2] = False
-    >>> boundary_roughness(comb) > 0.1  # 1-px teeth and notches along two sides
-    True
-    """
-    mask = np.asarray(mask, dtype=bool)
-    m = np.zeros((mask.shape[0] + 4, mask.shape[1] + 4), bool)  # np.pad costs more here
-    m[2:-2, 2:-2] = mask
-    perimeter, changed = _opening_closing_changes(m)
-    return changed / perimeter if perimeter else 0.0
-
-
-@numba.njit(cache=True)
-def _opening_closing_changes(m: np.ndarray) -> tuple[int, int]:
-    """Boundary pixels of ``m``, and pixels a 3×3-cross opening or closing changes.
-
-    ``m`` has two empty rows/columns on each side, so no operation meets the border.
-    Same counts as ``scipy.ndimage`` binary_erosion / binary_opening / binary_closing
-    with the cross (``tests/library/test_coarse.py`` checks), in two passes and no temporaries
-    beyond the eroded and dilated images.
-    """
-    h, w = m.shape
-    eroded = np.zeros((h, w), np.bool_)
-    dilated = np.zeros((h, w), np.bool_)
-    perimeter = 0
-    for i in range(1, h - 1):
-        for j in range(1, w - 1):
-            around = (m[i - 1, j], m[i + 1, j], m[i, j - 1], m[i, j + 1])
-            if m[i, j]:
-                eroded[i, j] = around[0] and around[1] and around[2] and around[3]
-                perimeter += not eroded[i, j]
-                dilated[i, j] = True
-            else:
-                dilated[i, j] = around[0] or around[1] or around[2] or around[3]
-    changed = 0
-    for i in range(1, h - 1):
-        for j in range(1, w - 1):
-            if m[i, j]:  # removed by the opening: no eroded pixel in its cross
-                changed += not (
-                    eroded[i, j]
-                    or eroded[i - 1, j]
-                    or eroded[i + 1, j]
-                    or eroded[i, j - 1]
-                    or eroded[i, j + 1]
-                )
-            else:  # added by the closing: its whole cross is dilated
-                changed += (
-                    dilated[i, j]
-                    and dilated[i - 1, j]
-                    and dilated[i + 1, j]
-                    and dilated[i, j - 1]
-                    and dilated[i, j + 1]
-                )
-    return perimeter, changed
 
 
 def coarse_threshold(mask: np.ndarray) -> float:

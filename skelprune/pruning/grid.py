@@ -165,6 +165,23 @@ class GridAxis(Protocol[G]):
         """The grid's limb test on ``graph`` (read, never changed), or ``None``."""
         ...
 
+    @property
+    def grid_step(self) -> float:
+        """The grid's finest step, in the unit of the radii (a pixel; the smallest
+        voxel side)."""
+        ...
+
+    def boundary_roughness(self) -> float:
+        """Elements a one-step opening and closing of the shape change, per boundary
+        element (about 0.03-0.15 for a clean digital boundary, 0.3-0.7 for a noisy one)."""
+        ...
+
+    def lost_along(self, reach: float, removals: Sequence[np.ndarray]) -> np.ndarray:
+        """Elements of the shape that no point of this skeleton covers with its disk
+        (ball) grown by ``reach``, then the same after each removal of ``removals``
+        (point indices) in turn: ``len(removals) + 1`` counts."""
+        ...
+
 
 def path_length(steps: Sequence[int], weights: np.ndarray) -> float:
     """``Σ steps[k]·weights[k]``, summed in the order of the kinds.

@@ -286,7 +286,10 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
     graph = answer.working_graph()
     area = answer.area
     tips = _Tips(answer, graph)
-    ends = graph.free_ends()
+    # an end where the shape runs off the image is no tip: never cut
+    free = graph.free_ends()
+    off = answer.open_ends([graph.free_end_point(b, e) for b, e in free])
+    ends = [(b, e) for b, e in free if graph.free_end_point(b, e) not in off]
     # The order: longest cut on Ŝ alone first, then endpoint (row, col).
     keyed = []
     first = {}

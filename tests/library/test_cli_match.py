@@ -80,4 +80,4 @@ def test_retrieve_folder_top_k_json_lines(tmp_path):
             (skelprune.match(descs[n], descs[m]).distance, m) for m in SHAPES if m != n
         )[:2]
         assert [t["distance"] for t in top] == [d for d, _ in expected]
-    assert by_name["hammer-1"]["top"][0]["file"].endswith("hammer-2.png")
+    assert by_name["hammer-1"]["top"][0]["file"].rsplit("/", 1)[-1].startswith("hammer-")

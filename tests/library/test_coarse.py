@@ -118,11 +118,12 @@ def test_generating_segments_agrees_with_the_support_test():
 @pytest.mark.parametrize("kind,scale", [("gaussian", 1.0), ("gaussian", 1.5), ("uniform", 1.5)])
 @pytest.mark.parametrize("seed", range(3))
 def test_noisy_rectangle_gets_one_branch_per_corner(kind, scale, seed):
-    """The paper's Table 2 setting: 4 endpoints, one at each corner, after both stages."""
+    """The paper's Table 2 setting: 4 endpoints, one at each corner, after both stages
+    (the coarse stage before the paper's argmin; the default gets 4 as well: test_margin)."""
     import skelprune
 
     mask, _ = noisy_rectangle(60, 160, kind, scale, rng=seed)
-    comp = skelprune.prune(mask, coarse="dce").components[0]
+    comp = skelprune.prune(mask, coarse="dce", choice="argmin").components[0]
     ends = comp.to_dict()["skeleton"]["endpoints"]
     assert len(ends) == 4
     h, w = mask.shape

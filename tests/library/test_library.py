@@ -12,8 +12,10 @@ from skimage.measure import euler_number, label
 
 import skelprune
 from skelprune.api import components
+from skelprune.grid._open_edge import open_edge
 from skelprune.grid.medial_axis import DEGREE, SIMPLE, medial_axis, squared_distance
 from skelprune.grid.reconstruction import reconstruction, reconstruction_error
+from skelprune.skeleton import Skeleton
 from testkit.shapes import (
     blobs,
     dataset,
@@ -124,8 +126,8 @@ def test_one_pixel_end_branches_keep_their_endpoint_nodes():
 
 
 def test_rectangle_has_four_endpoints_and_small_error():
-    m = np.zeros((40, 90), bool)
-    m[5:35, 5:85] = True
+    m = np.zeros((70, 170), bool)
+    m[5:65, 5:165] = True
     comp = skelprune.prune(m).to_dict()["components"][0]
     assert len(comp["skeleton"]["endpoints"]) == 4
     assert comp["rer"] < 0.02
@@ -247,11 +249,17 @@ def test_pruned_skeleton_properties(mask):
     again = skelprune.prune(mask)
     assert res.to_dict() == again.to_dict()  # deterministic
     skel = skeleton_mask(res)
-    # a subset of the medial axis of each component
+    # a subset of the medial axis of each component (where a component runs off the
+    # image, the axis of the shape going on across the border)
     for comp, (crop, origin) in zip(res.components, components(mask), strict=True):
-        m_axis = medial_axis(crop)
+        if open_edge(crop, origin, mask.shape) is None:
+            m_axis = medial_axis(crop)
+            ma_rows, ma_cols = m_axis.rows + origin[0], m_axis.cols + origin[1]
+        else:
+            axis = Skeleton.medial_axis(crop, origin, mask.shape)
+            ma_rows, ma_cols = axis.image_coordinates(axis.rows, axis.cols)
         ma = np.zeros(mask.shape, bool)
-        ma[m_axis.rows + origin[0], m_axis.cols + origin[1]] = True
+        ma[np.asarray(ma_rows, int), np.asarray(ma_cols, int)] = True
         rows, cols, _ = comp.points()
         assert ma[rows, cols].all()
     # components and cycles (holes) are kept

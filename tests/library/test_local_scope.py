@@ -94,8 +94,9 @@ def test_crop_property_on_networks(net: object) -> None:
         worst_local = min(worst_local, agreement(local[window][inner], alone))
         worst_global = min(worst_global, agreement(whole[window][inner], alone))
     assert worst_local >= AGREE, worst_local
-    # the test tells: the global scope's answer depends on the image's extent
-    assert worst_global < 0.97, worst_global
+    # the default's noise floor and margin judge a branch by what it alone reaches, so
+    # the global scope's answer hardly depends on the image's extent either
+    assert worst_global >= 0.98, worst_global
 
 
 def test_no_kept_road_lost(net: object) -> None:

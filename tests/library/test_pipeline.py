@@ -152,13 +152,13 @@ CHANGES: dict[str, tuple[dict[str, Any], Any]] = {
     # PruneOptions: in the document's top level
     "beta": ({"beta": 4.0}, lambda r: _doc(r)["beta"]),
     "method": ({"method": "dce"}, lambda r: _doc(r)["method"]),
-    "coarse": ({"coarse": None}, lambda r: _doc(r)["coarse"]),
+    "coarse": ({"coarse": "dce"}, lambda r: _doc(r)["coarse"]),
     "dce_threshold": (
         {"method": "dce", "dce_threshold": 0.05},
         lambda r: _doc(r)["dce_threshold"],
     ),
     "min_margin": ({"min_margin": 0.2}, lambda r: _doc(r)["min_margin"]),
-    "choice": ({"choice": "noise-floor"}, lambda r: _doc(r)["choice"]),
+    "choice": ({"choice": "argmin"}, lambda r: _doc(r)["choice"]),
     "trim": ({"trim": False}, lambda r: _doc(r)["trim"]),
     # the paper's global scope goes unsaid (documents stay as they were); local is shown
     "scope": ({"scope": "local"}, lambda r: _doc(r).get("scope", "global")),

@@ -55,9 +55,9 @@ def error_pixels(seq: dict, k: int, shape: tuple[int, int]) -> int:
 
 
 CASES = [
+    ("kimia216/bird-2.png", {"coarse": "dce"}),
     ("kimia216/bird-2.png", {}),
-    ("kimia216/bird-2.png", {"coarse": None}),
-    ("kimia99/hand-1.png", {}),
+    ("kimia99/hand-1.png", {"coarse": "dce"}),
     ("kimia216/elephant-1.png", {"method": "dce"}),
 ]
 
@@ -71,7 +71,7 @@ def test_every_step_follows_from_the_sequence(name: str, options: dict) -> None:
     seq = doc["sequence"]
     n = len(comp.sequence.removed)
     assert len(doc["curve"]) == n + 1
-    assert seq["start"] == ("coarse" if options == {} else "medial_axis")
+    assert seq["start"] == ("coarse" if options.get("coarse") == "dce" else "medial_axis")
     for k in range(n + 1):
         truth = comp.sequence.skeleton_at(k)
         nb, ne, pixels = step_skeleton(seq, k)
@@ -94,7 +94,7 @@ def test_every_step_follows_from_the_sequence(name: str, options: dict) -> None:
 
 def test_coarse_removed_is_the_rest_of_the_medial_axis() -> None:
     mask = read_mask(DATA / "kimia216/bird-2.png")
-    res = skelprune.prune(mask)
+    res = skelprune.prune(mask, coarse="dce")
     doc = res.to_dict(sequence=True)["components"][0]
     seq = doc["sequence"]
     start = len(step_skeleton(seq, 0)[2])
@@ -123,7 +123,7 @@ def test_the_command_line_prints_the_sequence_on_request() -> None:
             [*cli, "--sequence"], capture_output=True, text=True, timeout=300, check=True
         ).stdout
     )
-    assert with_seq["components"][0]["sequence"]["start"] == "coarse"
+    assert with_seq["components"][0]["sequence"]["start"] == "medial_axis"
     del with_seq["components"][0]["sequence"]
     assert with_seq == plain
 

@@ -312,7 +312,7 @@ def test_a_hair_one_pixel_wide_is_not_a_remnant(tip_rule):
     assert reach() < 40
 
 
-@pytest.mark.parametrize("size", [(40, 100), (160, 300)])
+@pytest.mark.parametrize("size", [(70, 170), (160, 300)])
 def test_a_corner_loses_its_staircase_spur_and_no_more(size):
     # the corner branches' last pixels go (a spur the trade-off does not want), but
     # the cut stays at the pixel scale whatever the rectangle's size

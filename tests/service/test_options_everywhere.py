@@ -189,7 +189,7 @@ def test_trim_and_choice_reach_the_library_from_query_and_body(client: TestClien
     buf = io.BytesIO()
     Image.fromarray(mask.astype(np.uint8) * 255).save(buf, "PNG")
     png = buf.getvalue()
-    for opts in ({"trim": "false"}, {"choice": "noise-floor"}, {}):
+    for opts in ({"trim": "false"}, {"choice": "argmin"}, {}):
         query = client.post(
             "/v1/prune", params={**opts, "curve": "false"}, content=png, headers=PNG
         )
@@ -198,7 +198,7 @@ def test_trim_and_choice_reach_the_library_from_query_and_body(client: TestClien
             data={**opts, "curve": "false"},
             files={"file": ("s.png", png, "image/png")},
         )
-        kw = {"trim": opts.get("trim") != "false", "choice": opts.get("choice", "argmin")}
+        kw = {"trim": opts.get("trim") != "false", "choice": opts.get("choice", "noise-floor")}
         want = skelprune.prune(mask, **kw).to_dict(curve=False)
         for resp in (query, form):
             assert resp.status_code == 200, resp.text

@@ -132,7 +132,7 @@ def test_page_and_assets_are_served_by_the_service(server: Running) -> None:
 
 
 @pytest.mark.parametrize(
-    "query", ["sequence=true", "sequence=true&coarse=none", "sequence=true&method=dce", ""]
+    "query", ["sequence=true&coarse=dce", "sequence=true", "sequence=true&method=dce", ""]
 )
 def test_the_sequence_opt_in_is_in_the_schema(server: Running, query: str) -> None:
     _, base = server
@@ -147,7 +147,7 @@ def test_the_sequence_opt_in_is_in_the_schema(server: Running, query: str) -> No
     seq = doc.components[0].sequence
     assert (seq is None) == (query == "")
     if seq is not None:
-        assert seq.start == ("coarse" if query == "sequence=true" else "medial_axis")
+        assert seq.start == ("coarse" if "coarse=dce" in query else "medial_axis")
         assert bool(seq.coarse_removed) == (seq.start == "coarse")
 
 
@@ -211,25 +211,24 @@ def test_a_shape_and_its_pruning_sequence(server: Running, browser, downloads: P
     assert shown["error"] == _lost_at(comp, n)
     _shot(browser, "bird-last.png")
 
-    # the medial axis the coarse stage pruned, on request
-    assert not browser.find_elements(By.CSS_SELECTOR, "#medial rect")
-    browser.find_element(By.ID, "show-medial").click()
-    assert browser.find_elements(By.CSS_SELECTOR, "#medial rect")
-
-    # another method: the controls re-run the request
+    # the coarse stage on request: the controls re-run the request, and the medial-axis
+    # pixels it pruned are drawn on request
     from selenium.webdriver.support.ui import Select
 
-    Select(browser.find_element(By.ID, "coarse")).select_by_visible_text("none")
-    full = skelprune.prune(read_mask(BIRD), coarse=None).components[0]
+    Select(browser.find_element(By.ID, "coarse")).select_by_visible_text("dce")
+    coarse = skelprune.prune(read_mask(BIRD), coarse="dce").components[0]
     _wait(
         browser,
         lambda d: (
-            _result(d)["step"] == full.chosen_step
-            and "medial axis" in d.find_element(By.ID, "sequence-note").text
+            _result(d)["step"] == coarse.chosen_step
+            and "coarse" in d.find_element(By.ID, "sequence-note").text
         ),
     )
-    assert _result(browser)["drawn"] == full.skeleton.n_branches
-    _shot(browser, "bird-coarse-none.png")
+    assert _result(browser)["drawn"] == coarse.skeleton.n_branches
+    assert not browser.find_elements(By.CSS_SELECTOR, "#medial rect")
+    browser.find_element(By.ID, "show-medial").click()
+    assert browser.find_elements(By.CSS_SELECTOR, "#medial rect")
+    _shot(browser, "bird-coarse-dce.png")
 
 
 def test_several_components(server: Running, browser, tmp_path: Path) -> None:

@@ -230,7 +230,7 @@ def test_beta_and_coarse_none(client: TestClient) -> None:
 
 
 def test_coarse_default_and_none_in_a_polygon_body(client: TestClient) -> None:
-    assert post_png(client, BIRD).json()["coarse"] == "dce"  # the library's default
+    assert post_png(client, BIRD).json()["coarse"] is None  # the library's default: none
     body = {"geojson": {"type": "Polygon", "coordinates": [RECT]}, "coarse": "none"}
     resp = client.post("/v1/prune", json=body)
     assert resp.status_code == 200, resp.text

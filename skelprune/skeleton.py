@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import heapq
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
-from collections.abc import Sequence
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
@@ -29,11 +29,11 @@ if TYPE_CHECKING:
     from .pruning.limbs import LimbGuard
 
 from .grid import IDENTITY_ORIENTATION, Orientation, oriented
+from .grid._open_edge import open_edge, open_extension
 from .grid._roughness import boundary_roughness
 from .grid._rowcover import cover_counts, uncover_count
 from .grid.coverage import Coverage
 from .grid.graph import SQRT2, BranchGraph, step_length
-from .grid._open_edge import open_edge, open_extension
 from .grid.medial_axis import MedialAxis, oriented_medial_axis, squared_distance
 from .grid.reconstruction import reconstruction
 

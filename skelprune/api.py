@@ -108,7 +108,7 @@ def prune(
 
     Examples
     --------
-    >>> m = np.zeros((30, 60), bool); m[5:25, 5:55] = True
+    >>> m = np.zeros((80, 180), bool); m[10:70, 10:170] = True
     >>> res = prune(m)
     >>> comp = res.components[0]
     >>> len(comp.to_dict()["skeleton"]["endpoints"]), comp.rer < 0.05

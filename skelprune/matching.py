@@ -9,7 +9,7 @@ subsequence bijection, OSB); two skeletons by the optimal assignment of their en
 (:func:`match`). ``docs/matching.md`` states every choice where [16] leaves room.
 
 >>> import numpy as np, skelprune
->>> m = np.zeros((40, 80), bool); m[5:35, 5:75] = True
+>>> m = np.zeros((80, 180), bool); m[10:70, 10:170] = True
 >>> res = skelprune.match(m, m)
 >>> res.distance, len(res.pairs)
 (0.0, 4)

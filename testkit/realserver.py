@@ -51,6 +51,7 @@ def running_server(
         "NUMBA_NUM_THREADS": "1",
     }
     env.pop("SKELPRUNE_API_KEY", None)
+    env.pop("SKELPRUNE_MAIN_MEMORY_MB", None)  # the default a user gets (tests/conftest.py)
     env.update(env_extra or {})
     env.update({f"SKELPRUNE_{k.upper()}": v for k, v in settings.items()})
     with log_path.open("wb") as log:

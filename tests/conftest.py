@@ -3,6 +3,7 @@ since test parameters are built from it at collection time)."""
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from contextlib import AbstractContextManager
 from pathlib import Path
@@ -10,6 +11,12 @@ from pathlib import Path
 import pytest
 
 from testkit.realserver import Running, running_server
+
+# The service apps a test makes in its own process share pytest's memory (numba's
+# kernels, Qt and napari, every test's data), which is not a server's main process: their
+# main-memory screen gets room for it. Servers started as users start them
+# (testkit.realserver) keep the default.
+os.environ.setdefault("SKELPRUNE_MAIN_MEMORY_MB", "65536")
 
 
 @pytest.fixture

@@ -138,10 +138,10 @@ class PruneResult:
         Examples
         --------
         >>> import skelprune
-        >>> m = np.zeros((20, 40), bool); m[5:15, 5:35] = True
+        >>> m = np.zeros((80, 180), bool); m[10:70, 10:170] = True
         >>> doc = skelprune.prune(m).to_dict()
         >>> doc["width"], len(doc["components"][0]["skeleton"]["endpoints"])
-        (40, 4)
+        (180, 4)
         """
         frame = self.frame if frame is None else frame
         out = self.output
@@ -264,7 +264,7 @@ class PruneResult:
         Examples
         --------
         >>> import skelprune
-        >>> m = np.zeros((20, 40), bool); m[5:15, 5:35] = True
+        >>> m = np.zeros((80, 180), bool); m[10:70, 10:170] = True
         >>> g = skelprune.prune(m).to_networkx()
         >>> g.number_of_nodes(), g.number_of_edges(), sorted(d for _, d in g.degree())
         (6, 5, [1, 1, 1, 1, 3, 3])

@@ -13,7 +13,7 @@ the identity frame.
 Examples
 --------
 >>> import skelprune
->>> m = np.zeros((20, 40), bool); m[5:15, 5:35] = True
+>>> m = np.zeros((80, 180), bool); m[10:70, 10:170] = True
 >>> t = skelprune.prune(m).components[0].table
 >>> t.n_nodes, t.n_branches, t.kinds().count("endpoint")
 (6, 5, 4)

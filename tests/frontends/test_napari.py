@@ -67,7 +67,7 @@ def test_the_form_is_made_from_the_option_definitions(make_napari_viewer) -> Non
     beta = skelprune.PruneOptions.__dataclass_fields__["beta"]
     assert form.fields["beta"].text() == "9"
     assert form.fields["beta"].toolTip() == beta.metadata["help"]
-    assert form.fields["coarse"].currentText() == "dce"
+    assert form.fields["coarse"].currentText() == "none"  # the definitions' default
     assert "labels" not in widget.read_form.fields
     form.fields["beta"].setText("abc")
     assert widget.run() is None  # nothing selected: refused first

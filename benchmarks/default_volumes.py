@@ -38,16 +38,9 @@ COPIES, COPIES_QUICK = 2, 1
 
 def skelprune_volume(volume: np.ndarray, spacing: Any, options: dict[str, Any]) -> np.ndarray:
     """:func:`skelprune.prune` of a volume at ``options``: its kept skeleton voxels."""
-    import skelprune
+    from .volume_methods import pruned
 
-    res = skelprune.prune(volume, spacing=tuple(spacing), **options)
-    out = np.zeros(volume.shape, dtype=bool)
-    for comp in res.components:
-        sk = comp.skeleton
-        idx = sk.points()
-        oz, oy, ox = sk.origin
-        out[sk.z[idx] + oz, sk.y[idx] + oy, sk.x[idx] + ox] = True
-    return out
+    return pruned(volume, spacing, **options)
 
 
 def measure_volume(

@@ -42,11 +42,12 @@ def medial_axis(volume: np.ndarray, spacing) -> np.ndarray:
     return curve_skeleton(volume, spacing).mask()
 
 
-def pruned(volume: np.ndarray, spacing) -> np.ndarray:
-    """:func:`skelprune.prune` at its default options: the curve skeleton pruned."""
+def pruned(volume: np.ndarray, spacing, **options) -> np.ndarray:
+    """:func:`skelprune.prune` at ``options`` (the library's defaults unless given): the
+    curve skeleton pruned, as a voxel mask."""
     import skelprune
 
-    res = skelprune.prune(volume, spacing=tuple(spacing))
+    res = skelprune.prune(volume, spacing=tuple(spacing), **options)
     out = np.zeros(volume.shape, dtype=bool)
     for comp in res.components:
         sk = comp.skeleton

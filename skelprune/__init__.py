@@ -24,12 +24,19 @@ Options travel as one value each (:mod:`skelprune.options`), or as keywords:
 >>> doc["version"] == {"library": skelprune.__version__, "algorithm": ALGORITHM_VERSION}
 True
 
-``__all__`` is what a user needs: :func:`prune`, :func:`read_input` and :func:`match`
-(with :func:`describe`), the options classes, the result types (:class:`PruneResult`,
-:class:`ComponentResult`, :class:`Skeleton`, :class:`Match`, :class:`Input` with its
-:class:`PixelFrame`), the paper's medial axis and reconstruction, and the errors. The
-graph, the kernels and the other readers are reached through their modules
-(``skelprune.grid.graph.BranchGraph``, ``skelprune.io.png.read_mask``, ...).
+``__all__`` is what a user needs: :func:`prune` and :func:`encode` (every front's way
+through: the command line, the service and data-set runs call these two), the
+:class:`Limits` an input is held to, :func:`read_input`, :func:`match` (with
+:func:`describe`), the options classes, the result types (:class:`PruneResult`,
+:class:`ComponentResult`, :class:`Skeleton`, :class:`Match`, :class:`Input`), the paper's
+medial axis, and the errors. The graph, the kernels, the frame and the other readers are
+reached through their modules (``skelprune.grid.graph.BranchGraph``,
+``skelprune.io.frame.PixelFrame``, ``skelprune.io.png.read_mask``, ...).
+
+>>> skelprune.encode(skelprune.prune(m), "geojson")[:30]
+b'{"type":"FeatureCollection","f'
+>>> len(skelprune.__all__) <= 25
+True
 
 The names below are imported when first used (``import skelprune`` alone loads neither
 numba nor scipy): a command line that prints its help, or a program that only needs the
@@ -54,32 +61,28 @@ from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions, Vo
 
 if TYPE_CHECKING:
     from .api import prune
-    from .grid.medial_axis import MedialAxis, medial_axis
-    from .grid.reconstruction import reconstruction, reconstruction_error
-    from .io.frame import PixelFrame
+    from .grid.medial_axis import medial_axis
     from .io.input import Input, read_input
-    from .matching import Match, SkeletonDescriptor, UnmatchableShapeError, describe, match
+    from .limits import Limits
+    from .matching import Match, describe, match
     from .output.component import ComponentResult
     from .output.document import PruneResult
+    from .output.encode import encode
     from .skeleton import Skeleton
 
 #: Where each lazily imported name lives (a submodule of this package).
 _LAZY = {
     "prune": "api",
-    "PixelFrame": "io.frame",
+    "encode": "output.encode",
+    "Limits": "limits",
     "Input": "io.input",
     "read_input": "io.input",
     "Match": "matching",
-    "SkeletonDescriptor": "matching",
-    "UnmatchableShapeError": "matching",
     "describe": "matching",
     "match": "matching",
-    "MedialAxis": "grid.medial_axis",
     "medial_axis": "grid.medial_axis",
     "ComponentResult": "output.component",
     "PruneResult": "output.document",
-    "reconstruction": "grid.reconstruction",
-    "reconstruction_error": "grid.reconstruction",
     "Skeleton": "skeleton",
 }
 
@@ -97,24 +100,20 @@ __all__ = [
     "InvalidOptionError",
     "InvalidPolygonError",
     "JobTooLargeError",
+    "Limits",
     "Match",
-    "MedialAxis",
     "OutputOptions",
-    "PixelFrame",
     "PruneOptions",
     "PruneResult",
     "RasterOptions",
     "ReadOptions",
     "Skeleton",
-    "SkeletonDescriptor",
     "SkelpruneError",
-    "UnmatchableShapeError",
     "VolumeOptions",
     "describe",
+    "encode",
     "match",
     "medial_axis",
     "prune",
     "read_input",
-    "reconstruction",
-    "reconstruction_error",
 ]

@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Collection
+from dataclasses import fields, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .errors import EmptyMaskError
+from .budget import VOLUME_BASIS, check_budget, estimate, out_of_memory, volume_estimate
+from .errors import EmptyMaskError, InvalidOptionError
 from .grid import components8
 from .io.input import Input, read_input
+from .limits import Limits, overlay_pixels, projections_scale
 from .options import (
     METHODS,
     OutputOptions,
@@ -20,12 +23,13 @@ from .options import (
     resolve_options,
     volume_value,
 )
+from .options_where import refuse_misplaced
 from .output.document import PruneResult
 from .pipeline import prune_component, prune_components
 
 if TYPE_CHECKING:
     from .output.volume import VolumeResult
-from .volume import is_volume, prune_volume
+from .volume import is_volume, prune_volume, read_volume
 
 __all__ = ["METHODS", "components", "prune", "prune_component", "prune_input"]
 
@@ -47,12 +51,18 @@ def prune(
     raster: RasterOptions | None = None,
     output: OutputOptions | None = None,
     volume: VolumeOptions | None = None,
+    limits: Limits | None = None,
+    answers: Collection[str] | None = None,
     progress: Callable[[int, int], None] | None = None,
     **keywords: Any,
 ) -> PruneResult | VolumeResult:
     """Pruned skeleton of every 8-connected component of a shape: a mask, an image or a
     polygon; or of every 26-connected component of a volume (a 3-D array, a ``.npy``
     file or a TIFF stack, docs/volumes.md).
+
+    The one entry of the pipeline: the command line, the service and data-set runs call
+    it with their limits and the answers they will give, then
+    :func:`skelprune.encode` writes each answer.
 
     Parameters
     ----------
@@ -67,21 +77,26 @@ def prune(
         carry the raster's ``warnings``.
     options : PruneOptions, optional
         How to prune (:class:`skelprune.options.PruneOptions`: ``beta``, ``method``,
-        ``coarse``, ``dce_threshold``, ``min_margin``, ``choice``, ``trim``; the defaults:
-        the paper's pruning from a coarse DCE skeleton, the answer's end branches of
-        margin below 0.01 dropped, their tips cut back).
+        ``coarse``, ``dce_threshold``, ``min_margin``, ``choice``, ``trim``, ``scope``,
+        ``window``).
     read : ReadOptions, optional
-        Image input: which pixels are the shape (``foreground``).
+        Image input: which pixels are the shape (``foreground``, ``labels``, ...).
     raster : RasterOptions, optional
         Polygon input: how it becomes pixels (``pixel_size``, ``longest_side``,
-        ``pixels_per_width``, ``pixel_budget``, ``repair``).
+        ``pixels_per_width``, ``pixel_budget``, ``repair``, ``crs``).
     output : OutputOptions, optional
-        What the result's outputs hold by default (``curve``, ``sequence``, ``overlay``,
-        ``overlay_scale``, ``overlay_legend``, ``simplify``, ``cut_ends``).
+        What the result's answers hold by default (``curve``, ``sequence``, ``overlay``,
+        ``overlay_scale``, ``overlay_legend``, ``simplify``, ``cut_ends``, ``table``).
     volume : VolumeOptions, optional
-        Volume input (a 3-D array or a ``.npy`` path): the voxel ``spacing``
-        ``(dz, dy, dx)``. A volume is pruned as docs/volumes.md says, and answers with a
-        :class:`~skelprune.output.volume.VolumeResult`.
+        Volume input: the voxel ``spacing`` ``(dz, dy, dx)``. A volume answers with a
+        :class:`~skelprune.output.volume.VolumeResult` (docs/volumes.md).
+    limits : Limits, optional
+        What the input may cost (:class:`skelprune.limits.Limits`: pixels, positions,
+        estimated memory and time); default: no limit.
+    answers : collection of str, optional
+        The answers that will be encoded (``"json"``, ``"geojson"``, ``"csv"``,
+        ``"graphml"``, ``"png"``, ``"swc"``): an option that applies to none of them is
+        refused, and an answer image counts against the limits. Default: any answer.
     progress : callable, optional
         ``progress(done, total)``, called as each component (with ``scope="local"``: each
         window) is pruned: for a progress bar on a large image.
@@ -94,15 +109,18 @@ def prune(
     -------
     PruneResult or VolumeResult
         The components' answers, the input (mask, frame, foreground) and every option:
-        its outputs need no further argument. A volume answers with a
-        :class:`~skelprune.output.volume.VolumeResult` (docs/volumes.md).
+        its outputs need no further argument.
 
     Raises
     ------
     EmptyMaskError
         When the shape has no pixel.
     InvalidOptionError
-        For an option its class refuses.
+        For an option its class refuses, or one given where it does not apply (an
+        image's ``foreground`` for a polygon, a GeoJSON ``simplify`` for a volume:
+        each option's definition says where it applies).
+    ImageTooLargeError, JobTooLargeError
+        For an input over ``limits``.
     TypeError
         For an unknown option, or a class's value and its fields both given.
 
@@ -128,19 +146,72 @@ def prune(
     >>> line["type"], all(0 <= x <= 1000 and 0 <= y <= 20 for x, y in line["coordinates"])
     ('LineString', True)
     """
+    named = set(keywords)
     volume = volume_value(volume, keywords)
     options, read, raster, output = resolve_options(options, read, raster, output, keywords)
-    if volume is not None or is_volume(source):
-        if read is not None or raster is not None:
-            raise TypeError("read and raster options apply to images and polygons, not volumes")
-        return prune_volume(source, options, volume or VolumeOptions(), output)
-    if isinstance(source, Input):
-        if read is not None or raster is not None:
-            raise TypeError("read and raster options apply to reading; this input is read")
-        shape = source
-    else:
-        shape = read_input(source, read=read, raster=raster)
-    return prune_input(shape, options, output, progress)
+    given = named | _changed(read, raster, output, volume)
+    limits = limits or Limits()
+    try:
+        if volume is not None or is_volume(source):
+            refuse_misplaced(given, "volume", answers, output.overlay)
+            return _prune_volume(source, options, volume or VolumeOptions(), output, limits, answers)
+        if isinstance(source, Input):
+            if read is not None or raster is not None:
+                raise InvalidOptionError(
+                    "read and raster options apply to reading; this input is read already"
+                )
+            shape = source
+        else:
+            shape = read_input(
+                source,
+                read=read,
+                raster=raster,
+                max_pixels=limits.max_pixels,
+                max_vertices=limits.max_vertices,
+            )
+        refuse_misplaced(
+            given, "polygon" if shape.kind == "geojson" else "image", answers, output.overlay
+        )
+        image = answers is None or "png" in answers or ("json" in answers and output.overlay)
+        answer_pixels = (
+            overlay_pixels(shape.mask.shape, output, limits.max_pixels)
+            if image and answers is not None
+            else 0
+        )
+        cost = estimate(shape.mask, answer_pixels, options.scope, shape.labels)
+        check_budget(cost, limits.memory, limits.seconds)
+        return prune_input(shape, options, output, progress)
+    except MemoryError:  # the input's size: the same error as an estimate over the budget
+        raise out_of_memory(limits.memory) from None
+
+
+def _changed(*values: Any) -> set[str]:
+    """The names of the options set to other than their defaults in option values."""
+    return {
+        f.name
+        for value in values
+        if value is not None
+        for f in fields(value)
+        if getattr(value, f.name) != f.default
+    }
+
+
+def _prune_volume(
+    source: Any,
+    options: PruneOptions,
+    volume: VolumeOptions,
+    output: OutputOptions,
+    limits: Limits,
+    answers: Collection[str] | None,
+) -> VolumeResult:
+    """A volume, read within the pixel limit, its estimate within the budget."""
+    voxels = read_volume(source, max_voxels=limits.max_pixels)
+    answer_pixels = 0
+    if answers is not None and "png" in answers:
+        scale, answer_pixels = projections_scale(voxels.shape, output, limits.max_pixels)
+        output = replace(output, overlay_scale=scale)
+    check_budget(volume_estimate(voxels, answer_pixels), limits.memory, limits.seconds, VOLUME_BASIS)
+    return prune_volume(voxels, options, volume, output)
 
 
 def prune_input(

@@ -217,45 +217,72 @@ class PruneOptions:
         return replace(self, dce_threshold=None, min_margin=margin)
 
 
+#: Where the output options apply (read by :mod:`skelprune.options_where`): the JSON
+#: document of an image or a polygon (a volume's document is its graph) ...
+_DOCUMENT: dict[str, tuple[str, ...] | None] = {"image": ("json",), "polygon": ("json",)}
+#: ... the overlay image (image/png, or inside the document with overlay=true) ...
+_OVERLAY = ("png", "overlay")
+#: ... and the GeoJSON answer, which a volume has not.
+_PLANAR_GEOJSON: dict[str, tuple[str, ...] | None] = {
+    "image": ("geojson",),
+    "polygon": ("geojson",),
+}
+
+
 @dataclass(frozen=True)
 class OutputOptions:
     """What the output document holds."""
 
-    curve: bool = _option(True, "Include the pruning curve (α·AR, LR and λ at every step).", _flag)
-    overlay: bool = _option(False, "Add the overlay image as a base64 PNG (overlay_png).", _flag)
+    curve: bool = _option(
+        True,
+        "Include the pruning curve (α·AR, LR and λ at every step).",
+        _flag,
+        where=_DOCUMENT,
+    )
+    overlay: bool = _option(
+        False, "Add the overlay image as a base64 PNG (overlay_png).", _flag, where=_DOCUMENT
+    )
     sequence: bool = _option(
         False,
         "Add the pruning sequence (sequence): every branch and junction of the "
         "starting skeleton with its points and the step that removes it, from which a "
         "viewer draws the skeleton of any step.",
         _flag,
+        where=_DOCUMENT,
     )
     overlay_scale: int | None = _option(
         None,
         "Overlay image: each input pixel as N × N pixels, a whole number from 1 to "
         "16 (default: the smallest that makes the longer side at least 512 px).",
         _integer(1, 16),
+        where={"image": _OVERLAY, "polygon": _OVERLAY, "volume": ("png",)},
     )
     overlay_legend: bool = _option(
-        False, "Overlay image: add a strip with the colour key, RER and SS.", _flag
+        False,
+        "Overlay image: add a strip with the colour key, RER and SS.",
+        _flag,
+        where={"image": _OVERLAY, "polygon": _OVERLAY},
     )
     simplify: float = _option(
         0.5,
         "GeoJSON answer: simplify each line within this many pixels, >= 0, keeping its "
         "nodes, keeping it inside the shape and off the other lines (0: every pixel).",
         _number(0, strict=False),
+        where=_PLANAR_GEOJSON,
     )
     cut_ends: bool = _option(
         False,
         "GeoJSON answer: end a reach cut straight across at the middle of the cut, not "
         "in a fork to its two corners (the JSON document keeps the fork).",
         _flag,
+        where=_PLANAR_GEOJSON,
     )
     table: str = _option(
         "branch",
         "CSV answer: the table, one row per branch (branch) or per component (component).",
         _choice(TABLES),
         TABLES,
+        where={"image": ("csv",), "polygon": ("csv",)},
     )
 
     def __post_init__(self) -> None:

@@ -15,13 +15,24 @@ from typing import Any
 from .errors import InvalidOptionError, shown
 
 
+#: The kinds of input (:mod:`skelprune.options_where` says which answers each has).
+INPUT_KINDS = ("image", "polygon", "volume")
+#: Where an option applies when its definition says nothing: every input, every answer.
+EVERYWHERE: dict[str, tuple[str, ...] | None] = dict.fromkeys(INPUT_KINDS)
+
+
 def _option(
     default: Any,
     help: str,
     check: Callable[[str, Any], Any],
     choices: tuple[str, ...] | None = None,
+    where: dict[str, tuple[str, ...] | None] | None = None,
 ) -> Any:
-    return field(default=default, metadata={"help": help, "choices": choices, "check": check})
+    """An option's field: its default, help text, check, spellings, and ``where`` it
+    applies: ``{input kind: the answers it applies to, or None for every answer}``
+    (the kinds left out are the inputs it does not apply to)."""
+    metadata = {"help": help, "choices": choices, "check": check, "where": where or EVERYWHERE}
+    return field(default=default, metadata=metadata)
 
 
 def _with_schema(check: Callable[[str, Any], Any], **schema: Any) -> Callable[[str, Any], Any]:

@@ -54,6 +54,12 @@ DEFAULT_PIXELS_PER_WIDTH = 3.0
 DEFAULT_PIXEL_BUDGET = 2048 * 2048
 
 
+#: Where the input's options apply (:mod:`skelprune.options_where`): an image's pixels ...
+_IMAGE: dict[str, tuple[str, ...] | None] = {"image": None}
+#: ... a polygon's raster (``pixel_size`` also sets the unit of an image's tables).
+_POLYGON: dict[str, tuple[str, ...] | None] = {"polygon": None}
+
+
 @dataclass(frozen=True)
 class ReadOptions:
     """Which pixels of an image are the shape (image input only)."""
@@ -65,6 +71,7 @@ class ReadOptions:
         "or zero.",
         _choice(FOREGROUND_RULES),
         FOREGROUND_RULES,
+        where=_IMAGE,
     )
     # label images and cleaning (docs/graph.md#label-images, #cleaning)
     labels: bool = _option(
@@ -72,18 +79,21 @@ class ReadOptions:
         "Label image: every distinct non-zero value of an integer image is its own shape, "
         "pruned on its own even where two labels touch; each component carries its label.",
         _flag,
+        where=_IMAGE,
     )
     fill_holes: int = _option(
         0,
         "Fill the shape's holes of fewer pixels than this, a whole number from 0 to "
         f"{MAX_CLEAN_AREA} (default 0: every hole kept).",
         _integer(0, MAX_CLEAN_AREA),
+        where=_IMAGE,
     )
     min_area: int = _option(
         0,
         "Drop the components of fewer pixels than this, a whole number from 0 to "
         f"{MAX_CLEAN_AREA} (default 0: every component kept).",
         _integer(0, MAX_CLEAN_AREA),
+        where=_IMAGE,
     )
 
     def __post_init__(self) -> None:
@@ -111,6 +121,7 @@ class RasterOptions:
         "see pixels_per_width). For an image: the side of a pixel in your units, which "
         "the tables (summary, CSV) measure in (default: pixels).",
         _scale,
+        where={"polygon": None, "image": ("csv", "graphml")},
     )
     longest_side: int | None = _option(
         None,
@@ -118,6 +129,7 @@ class RasterOptions:
         f"{LONGEST_SIDE_RANGE[0]} to {LONGEST_SIDE_RANGE[1]} (instead of pixel_size; "
         "default: fitted to the polygon).",
         _integer(*LONGEST_SIDE_RANGE),
+        where=_POLYGON,
     )
     pixels_per_width: float = _option(
         DEFAULT_PIXELS_PER_WIDTH,
@@ -126,17 +138,20 @@ class RasterOptions:
         f"coarser than {DEFAULT_LONGEST_SIDE} px along the longer side and holds at most "
         "pixel_budget pixels.",
         _number(1, strict=False),
+        where=_POLYGON,
     )
     pixel_budget: int = _option(
         DEFAULT_PIXEL_BUDGET,
         "Most pixels of a raster fitted to the polygon, a whole number from 4096 to "
         f"{1 << 28} (default {DEFAULT_PIXEL_BUDGET}).",
         _integer(4096, 1 << 28),
+        where=_POLYGON,
     )
     repair: bool = _option(
         True,
         "Repair self-intersections with shapely's make_valid (true) or refuse them.",
         _flag,
+        where=_POLYGON,
     )
     crs: str | None = _option(
         None,
@@ -149,6 +164,7 @@ class RasterOptions:
         "pixel_size, lengths and radii in metres, lines back in longitude/latitude. Needs "
         "the geo extra (pyproj).",
         _crs_name,
+        where=_POLYGON,
     )
 
     def __post_init__(self) -> None:
@@ -178,6 +194,7 @@ class VolumeOptions:
         "second and last axis), three numbers > 0 (default 1, 1, 1). Distances, radii, "
         "lengths and widths are in its units; volumes are counted in voxels.",
         _spacing,
+        where={"volume": None},
     )
 
     def __post_init__(self) -> None:

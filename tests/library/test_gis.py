@@ -230,7 +230,7 @@ def test_prune_takes_a_mapping_or_a_shapely_geometry() -> None:
         for node in comp["skeleton"]["nodes"]:
             assert poly.buffer(a.frame.pixel_size).contains(Point(node["x"], node["y"]))
     # the raster's own pixels on request
-    pixels = a.to_dict(frame=skelprune.PixelFrame())
+    pixels = a.to_dict(frame=skelprune.io.frame.PixelFrame())
     assert pixels["components"][0]["skeleton"]["nodes"][0]["x"] == int(
         pixels["components"][0]["skeleton"]["nodes"][0]["x"]
     )

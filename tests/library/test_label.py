@@ -49,7 +49,7 @@ def test_import_loads_no_pipeline_and_keeps_the_function_names():
         "import sys, skelprune\n"
         "heavy = [m for m in ('numba', 'scipy', 'PIL', 'cv2', 'shapely') if m in sys.modules]\n"
         "import skelprune.grid.medial_axis, skelprune.grid.reconstruction\n"
-        "print(heavy, callable(skelprune.medial_axis), callable(skelprune.reconstruction),\n"
+        "print(heavy, callable(skelprune.medial_axis), callable(skelprune.encode),\n"
         "      type(skelprune.prune).__name__, 'scipy.optimize' in sys.modules,\n"
         "      skelprune.api.prune is skelprune.prune, hasattr(skelprune, 'no_such_name'))\n"
     )

@@ -158,7 +158,7 @@ def test_frame_maps_coordinates_and_lengths():
     m[5:25, 5:55] = True
     res = skelprune.prune(m)
     plain = res.to_dict(curve=False)["components"][0]["skeleton"]
-    frame = skelprune.PixelFrame(x0=100.0, y0=50.0, pixel_size=0.5, flip_y=True)
+    frame = skelprune.io.frame.PixelFrame(x0=100.0, y0=50.0, pixel_size=0.5, flip_y=True)
     mapped = res.to_dict(curve=False, frame=frame)["components"][0]["skeleton"]
     n0, m0 = plain["nodes"][0], mapped["nodes"][0]
     assert m0["x"] == pytest.approx(100 + 0.5 * n0["x"])

@@ -155,7 +155,7 @@ def test_skeleton_without_two_endpoints_is_refused():
     ring = np.zeros((60, 60), bool)
     cv2.circle(ring.view(np.uint8), (30, 30), 25, 1, -1)
     cv2.circle(ring.view(np.uint8), (30, 30), 12, 0, -1)
-    with pytest.raises(skelprune.UnmatchableShapeError, match="endpoint"):
+    with pytest.raises(skelprune.matching.UnmatchableShapeError, match="endpoint"):
         skelprune.match(ring, kimia("bird-2"))
 
 
@@ -168,7 +168,7 @@ def test_skeleton_with_too_many_endpoints_is_refused():
     res = skelprune.prune(m, coarse=None)
     ends = len(res.to_dict()["components"][0]["skeleton"]["endpoints"])
     assert ends > skelprune.matching.MAX_ENDPOINTS
-    with pytest.raises(skelprune.UnmatchableShapeError, match="more than"):
+    with pytest.raises(skelprune.matching.UnmatchableShapeError, match="more than"):
         skelprune.match(res, res)
 
 

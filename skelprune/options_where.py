@@ -1,0 +1,125 @@
+"""Where each option applies, read from its own definition, and the one check of it.
+
+Every option's field says the inputs it applies to and, for each, the answers
+(``where`` in :func:`skelprune.options_checks._option`). :func:`refuse_misplaced` is the
+one check: :func:`skelprune.prune` runs it on what it is given, and the service runs it
+on a request before queueing its work, so that every front refuses the same options with
+the same words.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import fields
+
+from .errors import InvalidOptionError
+from .options import GROUPS, VolumeOptions
+from .options_checks import INPUT_KINDS
+
+__all__ = ["ANSWERS", "ANSWERS_OF", "INPUT_KINDS", "option_where", "refuse_misplaced"]
+
+#: What each answer is called in a message (the media type in brackets).
+ANSWERS = {
+    "json": "the JSON document (application/json)",
+    "png": "the overlay image (image/png)",
+    "overlay": "overlay=true",
+    "geojson": "the GeoJSON answer (application/geo+json)",
+    "csv": "the CSV tables (text/csv)",
+    "graphml": "the GraphML graph (application/graphml+xml)",
+    "swc": "the SWC answer (text/plain)",
+}
+#: The answers each kind of input has.
+ANSWERS_OF = {
+    "image": ("json", "png", "geojson", "csv", "graphml"),
+    "polygon": ("json", "png", "geojson", "csv", "graphml"),
+    "volume": ("json", "png", "csv", "swc"),
+}
+_INPUTS = {
+    "image": "image input (PNG or TIFF)",
+    "polygon": "polygon input (GeoJSON)",
+    "volume": "volume input (a .npy file or a TIFF stack)",
+}
+_WHERE = {f.name: f.metadata["where"] for group in (*GROUPS, VolumeOptions) for f in fields(group)}
+
+
+def option_where(name: str) -> dict[str, tuple[str, ...] | None]:
+    """Where option ``name`` applies: ``{input kind: its answers, or None for all}``.
+
+    >>> option_where("foreground"), option_where("table")
+    ({'image': None}, {'image': ('csv',), 'polygon': ('csv',)})
+    """
+    return _WHERE[name]
+
+
+def _answers(answers: Iterable[str]) -> str:
+    return " or ".join(ANSWERS[a] for a in answers)
+
+
+def _places(where: dict[str, tuple[str, ...] | None]) -> str:
+    """Where an option applies, in words."""
+    kinds = list(where)
+    answers = set(where.values())
+    if len(answers) == 1:
+        only = next(iter(answers))
+        inputs = " or ".join(_INPUTS[k].split(" input")[0] for k in kinds) + " input"
+        if len(kinds) == 1:
+            inputs = _INPUTS[kinds[0]]
+        return inputs if only is None else f"{_answers(only)} of {inputs}"
+    return ", or ".join(
+        _INPUTS[k] if a is None else f"{_INPUTS[k]} with {_answers(a)}" for k, a in where.items()
+    )
+
+
+def refuse_misplaced(
+    given: Iterable[str], kind: str, answer: str | None = None, overlay: bool = False
+) -> None:
+    """Refuse the options given where they do not apply.
+
+    Parameters
+    ----------
+    given : names of the options given (a value other than the default, or named in a
+        request)
+    kind : ``"image"``, ``"polygon"`` or ``"volume"``
+    answer : the answer asked for (a key of :data:`ANSWERS`), or None when every answer
+        may be asked of the result later (the library's result)
+    overlay : the JSON document carries the overlay image (``overlay=true``)
+
+    Raises
+    ------
+    InvalidOptionError
+        Naming the options and where they apply.
+
+    Examples
+    --------
+    >>> refuse_misplaced(["beta", "foreground"], "image", "json")
+    >>> refuse_misplaced(["foreground", "fill_holes"], "polygon")
+    Traceback (most recent call last):
+    ...
+    skelprune.errors.InvalidOptionError: option(s) foreground, fill_holes only apply to image input (PNG or TIFF)
+    >>> refuse_misplaced(["simplify"], "image", "csv")
+    Traceback (most recent call last):
+    ...
+    skelprune.errors.InvalidOptionError: option(s) simplify only apply to the GeoJSON answer (application/geo+json) of image or polygon input, not to the CSV tables (text/csv)
+    """
+    if answer is not None and answer not in ANSWERS_OF[kind]:
+        raise InvalidOptionError(
+            f"{_INPUTS[kind]} has no {ANSWERS[answer]}; its answers: "
+            + ", ".join(ANSWERS[a] for a in ANSWERS_OF[kind])
+        )
+    asked = {answer, "overlay"} if answer == "json" and overlay else {answer}
+    wrong_input: dict[str, list[str]] = {}
+    wrong_answer: dict[str, list[str]] = {}
+    for name in given:
+        where = _WHERE[name]
+        if kind not in where:
+            wrong_input.setdefault(_places(where), []).append(name)
+            continue
+        answers = where[kind]
+        if answer is not None and answers is not None and not asked & set(answers):
+            wrong_answer.setdefault(_places(where), []).append(name)
+    for place, names in wrong_input.items():
+        raise InvalidOptionError(f"option(s) {', '.join(names)} only apply to {place}")
+    for place, names in wrong_answer.items():
+        raise InvalidOptionError(
+            f"option(s) {', '.join(names)} only apply to {place}, not to {ANSWERS[str(answer)]}"
+        )

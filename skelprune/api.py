@@ -152,9 +152,11 @@ def prune(
     given = named | _changed(read, raster, output, volume)
     limits = limits or Limits()
     try:
-        if volume is not None or is_volume(source):
+        if is_volume(source, spacing_given=volume is not None):
             refuse_misplaced(given, "volume", answers, output.overlay)
-            return _prune_volume(source, options, volume or VolumeOptions(), output, limits, answers)
+            return _prune_volume(
+                source, options, volume or VolumeOptions(), output, limits, answers
+            )
         if isinstance(source, Input):
             if read is not None or raster is not None:
                 raise InvalidOptionError(
@@ -172,12 +174,8 @@ def prune(
         refuse_misplaced(
             given, "polygon" if shape.kind == "geojson" else "image", answers, output.overlay
         )
-        image = answers is None or "png" in answers or ("json" in answers and output.overlay)
-        answer_pixels = (
-            overlay_pixels(shape.mask.shape, output, limits.max_pixels)
-            if image and answers is not None
-            else 0
-        )
+        image = answers is not None and ("png" in answers or ("json" in answers and output.overlay))
+        answer_pixels = overlay_pixels(shape.mask.shape, output, limits.max_pixels) if image else 0
         cost = estimate(shape.mask, answer_pixels, options.scope, shape.labels)
         check_budget(cost, limits.memory, limits.seconds)
         return prune_input(shape, options, output, progress)
@@ -210,7 +208,9 @@ def _prune_volume(
     if answers is not None and "png" in answers:
         scale, answer_pixels = projections_scale(voxels.shape, output, limits.max_pixels)
         output = replace(output, overlay_scale=scale)
-    check_budget(volume_estimate(voxels, answer_pixels), limits.memory, limits.seconds, VOLUME_BASIS)
+    check_budget(
+        volume_estimate(voxels, answer_pixels), limits.memory, limits.seconds, VOLUME_BASIS
+    )
     return prune_volume(voxels, options, volume, output)
 
 

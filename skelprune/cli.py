@@ -18,9 +18,8 @@ import importlib.util
 import json
 import os
 import sys
-from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from typer.exceptions import TyperException
@@ -33,44 +32,15 @@ from .cli_match import match_command as match_command  # importable from here to
 from .cli_match import register as register_match
 from .cli_match import retrieve_command as retrieve_command  # importable from here too
 from .cli_options import (
-    HELP,
-    BetaOption,
-    Choice,
-    ChoiceOption,
-    Coarse,
-    CoarseOption,
-    CrsOption,
-    CurveOption,
-    CutEndsOption,
-    FillHolesOption,
-    ForegroundOption,
-    LabelsOption,
-    LongestSideOption,
-    MarginOption,
-    Method,
-    MethodOption,
-    MinAreaOption,
-    OverlayScaleOption,
-    PixelBudgetOption,
-    PixelSizeOption,
-    PixelsPerWidthOption,
-    RepairOption,
-    Rule,
-    Scope,
-    ScopeOption,
-    SequenceOption,
-    SimplifyOption,
-    SpacingOption,
-    ThresholdOption,
-    TrimOption,
-    WindowOption,
+    AS_FILES,
+    PRUNE_GROUPS,
     _CleanCommand,
     _options_or_exit,
     _usage,
-    _volume_or_exit,
+    with_options,
 )
 from .errors import SkelpruneError
-from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
+from .options import VolumeOptions
 
 # A command imports what it uses, in its own body: `--help` and `--version` load typer and
 # the option definitions only (numpy, numba and the pipeline come with `prune` and co.).
@@ -104,7 +74,12 @@ def _main(
     """Parameter-free Bayesian skeleton pruning."""
 
 
+#: The flags that write an answer to a file, by answer.
+FILE_FLAGS = {"png": "--overlay", "csv": "--csv", "graphml": "--graphml", "swc": "--swc"}
+
+
 @app.command("prune", cls=_CleanCommand)
+@with_options(*PRUNE_GROUPS, skip=AS_FILES)
 def prune_command(
     files: Annotated[
         list[Path],
@@ -115,40 +90,24 @@ def prune_command(
             "case).",
         ),
     ],
-    beta: BetaOption = PruneOptions.beta,
-    method: MethodOption = Method(PruneOptions.method),
-    coarse: CoarseOption = Coarse(PruneOptions.coarse),
-    dce_threshold: ThresholdOption = None,
-    min_margin: MarginOption = None,
-    choice: ChoiceOption = Choice(PruneOptions.choice),
-    trim: TrimOption = PruneOptions.trim,
-    scope: ScopeOption = Scope(PruneOptions.scope),
-    window: WindowOption = None,
-    foreground: ForegroundOption = Rule(ReadOptions.foreground),
-    labels: LabelsOption = ReadOptions.labels,
-    fill_holes: FillHolesOption = ReadOptions.fill_holes,
-    min_area: MinAreaOption = ReadOptions.min_area,
     csv: Annotated[
         Path | None,
         typer.Option(
-            help="Write the branch table (docs/tables.md) here as CSV (one input file only)."
+            help="Write the table (--table: branch or component rows; docs/tables.md) here "
+            "as CSV (one input file only)."
         ),
     ] = None,
     overlay: Annotated[
         Path | None, typer.Option(help="Write the overlay PNG here (one input file only).")
     ] = None,
-    overlay_scale: OverlayScaleOption = None,
-    overlay_legend: Annotated[
-        bool, typer.Option(help=HELP["overlay_legend"])
-    ] = OutputOptions.overlay_legend,
-    curve: CurveOption = OutputOptions.curve,
-    sequence: SequenceOption = OutputOptions.sequence,
-    pixel_size: PixelSizeOption = None,
-    longest_side: LongestSideOption = None,
-    pixels_per_width: PixelsPerWidthOption = RasterOptions.pixels_per_width,
-    pixel_budget: PixelBudgetOption = RasterOptions.pixel_budget,
-    repair: RepairOption = RasterOptions.repair,
-    crs: CrsOption = None,
+    graphml: Annotated[
+        Path | None,
+        typer.Option(help="Write the skeleton as GraphML here (one input file only)."),
+    ] = None,
+    swc: Annotated[
+        Path | None,
+        typer.Option(help="Write a volume's skeleton as SWC here (one input file only)."),
+    ] = None,
     geojson: Annotated[
         bool,
         typer.Option(
@@ -157,35 +116,31 @@ def prune_command(
             "instead of the document.",
         ),
     ] = False,
-    simplify: SimplifyOption = OutputOptions.simplify,
-    cut_ends: CutEndsOption = OutputOptions.cut_ends,
     workers: Annotated[
         int, typer.Option(help="Worker processes for several files, >= 0 (0: one a CPU core).")
     ] = 0,
-    spacing: SpacingOption = None,
+    *,
+    options: dict[str, Any],
 ) -> None:
-    """Prune the skeleton of each shape (or volume, from a .npy file) and print the result
-    as JSON."""
-    # checked once, before any file is read; the JSON document holds no overlay image
-    options, read, raster, output = _options_or_exit(
-        {**locals(), "overlay": False, "csv": None},
-        PruneOptions,
-        ReadOptions,
-        RasterOptions,
-        OutputOptions,
-    )
-    volume = _volume_or_exit(spacing)
+    """Prune the skeleton of each shape (or volume) and print the result as JSON."""
+    # checked once, before any file is read
+    prune_opts, read, raster, volume, output = _options_or_exit(options, *PRUNE_GROUPS)
     if workers < 0:
         raise _usage(f"--workers must be >= 0 (0: one a CPU core), got {workers}")
-    for flag, out in (("--overlay", overlay), ("--csv", csv)):
+    files_asked = {"png": overlay, "csv": csv, "graphml": graphml, "swc": swc}
+    for answer, out in files_asked.items():
         if out is not None and not out.parent.is_dir():
-            raise _usage(f"{flag}: folder {str(out.parent)!r} does not exist")
+            raise _usage(f"{FILE_FLAGS[answer]}: folder {str(out.parent)!r} does not exist")
     inputs = _expand(files)
     if not inputs:
         raise _usage("no PNG, TIFF, GeoJSON or .npy file given")
+    spacing = None if volume == VolumeOptions() else volume
     if len(inputs) == 1 and not files[0].is_dir():
+        answers = tuple(a for a, out in files_asked.items() if out is not None)
         try:
-            res, doc = _prune(str(inputs[0]), options, read, raster, output, geojson, volume)
+            res, answer = _prune(
+                str(inputs[0]), prune_opts, read, raster, output, geojson, spacing, answers
+            )
         except (SkelpruneError, OSError) as exc:
             typer.echo(f"error: {inputs[0]}: {exc}", err=True)
             raise typer.Exit(1) from None
@@ -193,23 +148,22 @@ def prune_command(
             typer.echo(f"warning: {inputs[0]}: {warning['message']}", err=True)
         if getattr(getattr(res, "input", None), "hint", None):  # a label image, labels off
             typer.echo(f"warning: {inputs[0]}: {res.input.hint}", err=True)
-        written: tuple[tuple[str, Path | None, Callable[[], bytes]], ...] = (
-            ("--overlay", overlay, res.overlay_png),
-            ("--csv", csv, lambda: res.to_csv().encode()),
-        )
-        for flag, out, what in written:
+        from .output.encode import encode
+
+        for kind, out in files_asked.items():
             if out is None:
                 continue
             try:
-                out.write_bytes(what())
+                out.write_bytes(encode(res, kind))
             except OSError as exc:
-                typer.echo(f"error: {flag} {out}: {exc.strerror or exc}", err=True)
+                typer.echo(f"error: {FILE_FLAGS[kind]} {out}: {exc.strerror or exc}", err=True)
                 raise typer.Exit(1) from None
-        json.dump(doc, sys.stdout)
-        sys.stdout.write("\n")
+        sys.stdout.buffer.write(answer + b"\n")
+        sys.stdout.flush()
         return
-    if overlay is not None or csv is not None:
-        raise _usage(f"{'--overlay' if overlay is not None else '--csv'} takes one input file")
+    for answer, out in files_asked.items():
+        if out is not None:
+            raise _usage(f"{FILE_FLAGS[answer]} takes one input file")
     from concurrent.futures import ProcessPoolExecutor
 
     from tqdm import tqdm
@@ -221,12 +175,12 @@ def prune_command(
         jobs = pool.map(
             _prune_file,
             [str(p) for p in inputs],
-            [options] * k,
+            [prune_opts] * k,
             [read] * k,
             [raster] * k,
             [output] * k,
             [geojson] * k,
-            [volume] * k,
+            [spacing] * k,
         )
         for line in tqdm(jobs, total=len(inputs), file=sys.stderr, unit="shape"):
             failed += "error" in line
@@ -241,6 +195,7 @@ register_match(app)
 
 
 @app.command("prune-many", cls=_CleanCommand)
+@with_options(*PRUNE_GROUPS, skip=AS_FILES)
 def prune_many_command(
     inputs: Annotated[
         list[str],
@@ -252,8 +207,19 @@ def prune_many_command(
         ),
     ],
     out: Annotated[
-        Path, typer.Option(help="Folder for the results: NAME.json an input, problems.jsonl.")
+        Path,
+        typer.Option(
+            help="Folder for the results: NAME.json an input (NAME.png with --overlay, "
+            "NAME.csv with --csv), problems.jsonl."
+        ),
     ],
+    overlay: Annotated[
+        bool, typer.Option("--overlay", help="Also write each input's overlay as NAME.png.")
+    ] = False,
+    csv: Annotated[
+        bool,
+        typer.Option("--csv", help="Also write each input's table (--table) as NAME.csv."),
+    ] = False,
     jobs: Annotated[
         int | None,
         typer.Option(help="Worker processes of a local Dask cluster (default: one a core)."),
@@ -262,34 +228,13 @@ def prune_many_command(
         str | None,
         typer.Option(help="Run on this Dask scheduler instead (tcp://HOST:8786)."),
     ] = None,
-    beta: BetaOption = PruneOptions.beta,
-    method: MethodOption = Method(PruneOptions.method),
-    coarse: CoarseOption = Coarse(PruneOptions.coarse),
-    dce_threshold: ThresholdOption = None,
-    min_margin: MarginOption = None,
-    choice: ChoiceOption = Choice(PruneOptions.choice),
-    trim: TrimOption = PruneOptions.trim,
-    scope: ScopeOption = Scope(PruneOptions.scope),
-    window: WindowOption = None,
-    fill_holes: FillHolesOption = ReadOptions.fill_holes,
-    min_area: MinAreaOption = ReadOptions.min_area,
-    foreground: ForegroundOption = Rule(ReadOptions.foreground),
-    curve: CurveOption = OutputOptions.curve,
-    sequence: SequenceOption = OutputOptions.sequence,
-    pixel_size: PixelSizeOption = None,
-    longest_side: LongestSideOption = None,
-    pixels_per_width: PixelsPerWidthOption = RasterOptions.pixels_per_width,
-    pixel_budget: PixelBudgetOption = RasterOptions.pixel_budget,
-    repair: RepairOption = RasterOptions.repair,
-    spacing: SpacingOption = None,
+    *,
+    options: dict[str, Any],
 ) -> None:
     """Prune a whole data set on Dask: one NAME.json an input under --out, written as each
     finishes; failed inputs on stderr and in problems.jsonl; a second run skips what is
     written. Needs the parallel extra (dask, distributed)."""
-    options, read, raster, output = _options_or_exit(
-        locals(), PruneOptions, ReadOptions, RasterOptions, OutputOptions
-    )
-    volume = _volume_or_exit(spacing)
+    prune_opts, read, raster, volume, output = _options_or_exit(options, *PRUNE_GROUPS)
     if jobs is not None and scheduler is not None:
         raise _usage("give --jobs (a local cluster) or --scheduler (a running one), not both")
     if jobs is not None and jobs < 1:
@@ -301,11 +246,12 @@ def prune_many_command(
     code = run_command(
         inputs,
         out,
-        options=options,
+        options=prune_opts,
         read=read,
         raster=raster,
         output=output,
-        volume=volume,
+        volume=None if volume == VolumeOptions() else volume,
+        files=tuple(a for a, asked in (("png", overlay), ("csv", csv)) if asked),
         client=scheduler,
         jobs=jobs,
     )

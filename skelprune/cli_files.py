@@ -5,6 +5,7 @@ terminal), or, in a worker process, its JSON line with the result or the error.
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -24,20 +25,28 @@ def _prune(
     output: OutputOptions,
     geojson: bool = False,
     volume: VolumeOptions | None = None,
-) -> tuple[Any, dict[str, Any]]:
-    """The result and its document (a polygon's in the polygon's own coordinates), or its
-    GeoJSON: the library's one pipeline (``.geojson``/``.json`` files are polygons,
-    ``.npy`` files volumes, pruned with ``volume``'s spacing)."""
+    answers: tuple[str, ...] = (),
+) -> tuple[Any, bytes]:
+    """The result and its answer's bytes (the document, a polygon's in the polygon's own
+    coordinates, or its GeoJSON): the library's one entry and one encoder
+    (``.geojson``/``.json`` files are polygons, ``.npy`` files and TIFF stacks volumes,
+    pruned with ``volume``'s spacing). ``answers``: the files also written (``png``,
+    ``csv``), whose options then apply."""
     from .api import prune
-    from .volume import is_volume
+    from .output.encode import encode
 
-    if is_volume(path):
-        res: Any = prune(Path(path), options, output=output, volume=volume or VolumeOptions())
-    else:
-        res = prune(
-            Path(path), options, read=read, raster=raster, output=output, progress=_progress(path)
-        )
-    return res, res.to_geojson() if geojson else res.to_dict()
+    answer = "geojson" if geojson else "json"
+    res = prune(
+        Path(path),
+        options,
+        read=read,
+        raster=raster,
+        output=output,
+        volume=volume,
+        answers=(answer, *answers),
+        progress=_progress(path),
+    )
+    return res, encode(res, answer)
 
 
 #: A run shows its progress on a terminal once it has taken this long (s): a large image.
@@ -79,8 +88,8 @@ def _prune_file(
     volume: VolumeOptions | None = None,
 ) -> dict[str, Any]:
     try:
-        res, doc = _prune(path, options, read, raster, output, geojson, volume)
-        line = {"file": path, "result": doc}
+        res, answer = _prune(path, options, read, raster, output, geojson, volume)
+        line = {"file": path, "result": json.loads(answer)}
         if res.warnings:
             line["warnings"] = [w["message"] for w in res.warnings]
         return line

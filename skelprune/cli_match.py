@@ -14,21 +14,7 @@ from typing import Annotated, Any
 import typer
 
 from .cli_files import _expand, _prune
-from .cli_options import (
-    BetaOption,
-    Choice,
-    ChoiceOption,
-    Coarse,
-    CoarseOption,
-    ForegroundOption,
-    MarginOption,
-    Method,
-    MethodOption,
-    Rule,
-    ThresholdOption,
-    TrimOption,
-    _options_or_exit,
-)
+from .cli_options import _options_or_exit, with_options
 from .errors import SkelpruneError
 from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
 
@@ -44,26 +30,21 @@ def _describe_file(path: str, options: PruneOptions, read: ReadOptions) -> Any:
         return f"{type(exc).__name__}: {exc}"
 
 
+@with_options(PruneOptions, ReadOptions)
 def match_command(
     a: Annotated[Path, typer.Argument(help="PNG mask a.")],
     b: Annotated[Path, typer.Argument(help="PNG mask b.")],
-    beta: BetaOption = PruneOptions.beta,
-    method: MethodOption = Method(PruneOptions.method),
-    coarse: CoarseOption = Coarse(PruneOptions.coarse),
-    dce_threshold: ThresholdOption = None,
-    min_margin: MarginOption = None,
-    choice: ChoiceOption = Choice(PruneOptions.choice),
-    trim: TrimOption = PruneOptions.trim,
-    foreground: ForegroundOption = Rule(ReadOptions.foreground),
+    *,
+    options: dict[str, Any],
 ) -> None:
     """Match the skeletons of two shapes (path similarity) and print distance and
     endpoint correspondence as JSON."""
     from .matching import match
 
-    options, read = _options_or_exit(locals(), PruneOptions, ReadOptions)
+    prune_opts, read = _options_or_exit(options, PruneOptions, ReadOptions)
     try:
         shapes = [
-            _prune(str(p), options, read, RasterOptions(), OutputOptions())[0] for p in (a, b)
+            _prune(str(p), prune_opts, read, RasterOptions(), OutputOptions())[0] for p in (a, b)
         ]
         res = match(*shapes)
     except (SkelpruneError, OSError) as exc:
@@ -73,18 +54,13 @@ def match_command(
     sys.stdout.write("\n")
 
 
+@with_options(PruneOptions, ReadOptions)
 def retrieve_command(
     folder: Annotated[list[Path], typer.Argument(help="Folders of PNG masks, or PNG files.")],
     top: Annotated[int, typer.Option(min=1, help="Closest shapes listed per shape.")] = 10,
-    beta: BetaOption = PruneOptions.beta,
-    method: MethodOption = Method(PruneOptions.method),
-    coarse: CoarseOption = Coarse(PruneOptions.coarse),
-    dce_threshold: ThresholdOption = None,
-    min_margin: MarginOption = None,
-    choice: ChoiceOption = Choice(PruneOptions.choice),
-    trim: TrimOption = PruneOptions.trim,
-    foreground: ForegroundOption = Rule(ReadOptions.foreground),
     workers: Annotated[int, typer.Option(help="Worker processes (0: one a core).")] = 0,
+    *,
+    options: dict[str, Any],
 ) -> None:
     """Match every shape with every other and print, per shape, its closest ones as JSON
     lines: {"file", "top": [{"file", "distance"}, ...]} (or {"file", "error"})."""
@@ -95,7 +71,7 @@ def retrieve_command(
 
     from .matching import distance_matrix
 
-    options, read = _options_or_exit(locals(), PruneOptions, ReadOptions)
+    prune_opts, read = _options_or_exit(options, PruneOptions, ReadOptions)
     inputs = _expand(folder)
     if not inputs:
         typer.echo("error: no PNG file given", err=True)
@@ -105,7 +81,7 @@ def retrieve_command(
     with ProcessPoolExecutor(max_workers=n) as pool:
         described = list(
             tqdm(
-                pool.map(_describe_file, [str(p) for p in inputs], [options] * k, [read] * k),
+                pool.map(_describe_file, [str(p) for p in inputs], [prune_opts] * k, [read] * k),
                 total=k,
                 file=sys.stderr,
                 unit="shape",

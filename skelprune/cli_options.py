@@ -7,19 +7,18 @@ into option values (a usage error, exit status 2, when a class refuses them).
 from __future__ import annotations
 
 import enum
+import functools
+import inspect
+import typing
+from collections.abc import Callable
 from dataclasses import fields
-from typing import Annotated, Any
+from typing import Annotated, Any, TypeVar
 
 import typer
 import typer.core
 
 from .errors import SkelpruneError
 from .options import (
-    CHOICES,
-    COARSE,
-    FOREGROUND_RULES,
-    METHODS,
-    SCOPES,
     OutputOptions,
     PruneOptions,
     RasterOptions,
@@ -27,6 +26,8 @@ from .options import (
     VolumeOptions,
     option_fields,
 )
+
+T = TypeVar("T")
 
 
 def _usage(message: str) -> typer.Exit:
@@ -68,45 +69,83 @@ HELP = {
         PruneOptions, OutputOptions, ReadOptions, RasterOptions, VolumeOptions
     )
 }
+#: The option classes every pruning command takes, in --help's order.
+PRUNE_GROUPS: tuple[type, ...] = (
+    PruneOptions,
+    ReadOptions,
+    RasterOptions,
+    VolumeOptions,
+    OutputOptions,
+)
+#: Options a command writes as files, not as flags of their own: the overlay image
+#: (``--overlay FILE``), written beside the document rather than inside it.
+AS_FILES = ("overlay",)
 
 
-def _geojson_only(name: str) -> str:
-    return "GeoJSON input: " + HELP[name][0].lower() + HELP[name][1:]
+def _choices(name: str, choices: tuple[str, ...]) -> type[enum.Enum]:
+    # typer lists an Enum's values in --help; made from the definition's spellings
+    return enum.Enum(name.title().replace("_", ""), {c: c for c in choices}, type=str)  # type: ignore[return-value]
 
 
-# the choices as typer shows them (it lists an Enum's values in --help); made from the
-# tuples of skelprune.options, where each is defined once, which mypy cannot read
-Method = enum.Enum("Method", {name: name for name in METHODS}, type=str)  # type: ignore[misc]
-Coarse = enum.Enum("Coarse", {name: name for name in COARSE}, type=str)  # type: ignore[misc]
-Rule = enum.Enum("Rule", {n: n for n in FOREGROUND_RULES}, type=str)  # type: ignore[misc]
-# the options every pruning command takes, declared once
-BetaOption = Annotated[float, typer.Option(help=HELP["beta"])]
-MethodOption = Annotated[Method, typer.Option(help=HELP["method"])]
-CoarseOption = Annotated[Coarse, typer.Option(help=HELP["coarse"])]
-ThresholdOption = Annotated[float | None, typer.Option(help=HELP["dce_threshold"])]
-MarginOption = Annotated[float | None, typer.Option(help=HELP["min_margin"])]
-TrimOption = Annotated[bool, typer.Option(help=HELP["trim"])]
-Choice = enum.Enum("Choice", {name: name for name in CHOICES}, type=str)  # type: ignore[misc]
-ChoiceOption = Annotated[Choice, typer.Option(help=HELP["choice"])]
-ForegroundOption = Annotated[Rule, typer.Option(help=HELP["foreground"])]
-LabelsOption = Annotated[bool, typer.Option(help=HELP["labels"])]
-FillHolesOption = Annotated[int, typer.Option(help=HELP["fill_holes"])]
-MinAreaOption = Annotated[int, typer.Option(help=HELP["min_area"])]
-CurveOption = Annotated[bool, typer.Option(help=HELP["curve"])]
-SequenceOption = Annotated[bool, typer.Option(help=HELP["sequence"])]
-PixelSizeOption = Annotated[float | None, typer.Option(help=HELP["pixel_size"])]
-LongestSideOption = Annotated[int | None, typer.Option(help=_geojson_only("longest_side"))]
-PixelsPerWidthOption = Annotated[float, typer.Option(help=_geojson_only("pixels_per_width"))]
-PixelBudgetOption = Annotated[int, typer.Option(help=_geojson_only("pixel_budget"))]
-RepairOption = Annotated[bool, typer.Option(help=_geojson_only("repair"))]
-CrsOption = Annotated[str | None, typer.Option(help=_geojson_only("crs"))]
-SimplifyOption = Annotated[float, typer.Option(help=HELP["simplify"])]
-CutEndsOption = Annotated[bool, typer.Option(help=HELP["cut_ends"])]
-OverlayScaleOption = Annotated[int | None, typer.Option(help=HELP["overlay_scale"])]
-Scope = enum.Enum("Scope", {name: name for name in SCOPES}, type=str)  # type: ignore[misc]
-ScopeOption = Annotated[Scope, typer.Option(help=HELP["scope"])]
-WindowOption = Annotated[int | None, typer.Option(help=HELP["window"])]
-SpacingOption = Annotated[str | None, typer.Option(help=HELP["spacing"] + " Written DZ,DY,DX.")]
+def _parameter(group: type, f: Any, hints: dict[str, Any]) -> inspect.Parameter:
+    """A command's parameter for one option field: its flag, help and default."""
+    help_text = f.metadata["help"]
+    default = f.default
+    kind: Any = hints[f.name]
+    if f.metadata["choices"]:
+        kind = _choices(f.name, f.metadata["choices"])
+        default = kind(default if default is not None else "none")
+    elif f.name == "spacing":
+        kind, default = str | None, None
+        help_text += " Written DZ,DY,DX."
+    elif f.default is None:
+        kind = kind if type(None) in typing.get_args(kind) else kind | None
+    annotation = Annotated[kind, typer.Option(help=help_text, show_default=default is not None)]
+    return inspect.Parameter(
+        f.name, inspect.Parameter.KEYWORD_ONLY, default=default, annotation=annotation
+    )
+
+
+def option_parameters(*groups: type, skip: tuple[str, ...] = ()) -> list[inspect.Parameter]:
+    """The command-line parameters of every option of ``groups`` (but ``skip``), made
+    from their definitions: a new option is a new flag of every command that takes its
+    class."""
+    out = []
+    for group in groups:
+        hints = typing.get_type_hints(group)
+        out += [_parameter(group, f, hints) for f in fields(group) if f.name not in skip]
+    return out
+
+
+def with_options(
+    *groups: type, skip: tuple[str, ...] = ()
+) -> Callable[[Callable[..., T]], Callable[..., T]]:
+    """Give a command every option of ``groups`` as flags; the command receives them as
+    one dict, ``options`` (read back into values by :func:`_options_or_exit`).
+
+    The command's own parameters come first in --help, the options after them.
+    """
+
+    def decorate(command: Callable[..., T]) -> Callable[..., T]:
+        signature = inspect.signature(command, eval_str=True)
+        own = [p for p in signature.parameters.values() if p.name != "options"]
+        generated = option_parameters(*groups, skip=skip)
+        names = {p.name for p in generated}
+
+        @functools.wraps(command)
+        def run(*args: Any, **kwargs: Any) -> T:
+            options = {k: kwargs.pop(k) for k in list(kwargs) if k in names}
+            return command(*args, options=options, **kwargs)
+
+        params = [
+            p.replace(kind=inspect.Parameter.KEYWORD_ONLY) if p.default is not p.empty else p
+            for p in own
+        ]
+        run.__signature__ = inspect.Signature([*params, *generated])  # type: ignore[attr-defined]
+        run.__annotations__ = {p.name: p.annotation for p in (*params, *generated)}
+        return run
+
+    return decorate
 
 
 def _volume_or_exit(spacing: str | None) -> VolumeOptions:
@@ -127,6 +166,8 @@ def _options_or_exit(params: dict[str, Any], *groups: type) -> tuple[Any, ...]:
     """One value of each options class, from the command's parameters of its fields'
     names (a choice's Enum read as its value): the classes check them, once."""
     values = {k: v.value if isinstance(v, enum.Enum) else v for k, v in params.items()}
+    if "spacing" in values:  # written DZ,DY,DX
+        values["spacing"] = _volume_or_exit(values["spacing"]).spacing
     try:
         return tuple(
             group(**{f.name: values[f.name] for f in fields(group) if f.name in values})

@@ -14,7 +14,6 @@ from typing import Any
 
 from .errors import InvalidOptionError, shown
 
-
 #: The kinds of input (:mod:`skelprune.options_where` says which answers each has).
 INPUT_KINDS = ("image", "polygon", "volume")
 #: Where an option applies when its definition says nothing: every input, every answer.

@@ -9,7 +9,7 @@ the same words.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Collection, Iterable
 from dataclasses import fields
 
 from .errors import InvalidOptionError
@@ -71,7 +71,10 @@ def _places(where: dict[str, tuple[str, ...] | None]) -> str:
 
 
 def refuse_misplaced(
-    given: Iterable[str], kind: str, answer: str | None = None, overlay: bool = False
+    given: Iterable[str],
+    kind: str,
+    answers: str | Collection[str] | None = None,
+    overlay: bool = False,
 ) -> None:
     """Refuse the options given where they do not apply.
 
@@ -80,8 +83,9 @@ def refuse_misplaced(
     given : names of the options given (a value other than the default, or named in a
         request)
     kind : ``"image"``, ``"polygon"`` or ``"volume"``
-    answer : the answer asked for (a key of :data:`ANSWERS`), or None when every answer
-        may be asked of the result later (the library's result)
+    answers : the answer asked for, or several (keys of :data:`ANSWERS`): an option
+        applies when it applies to one of them; None when every answer may be asked of
+        the result later (the library's result)
     overlay : the JSON document carries the overlay image (``overlay=true``)
 
     Raises
@@ -92,21 +96,35 @@ def refuse_misplaced(
     Examples
     --------
     >>> refuse_misplaced(["beta", "foreground"], "image", "json")
-    >>> refuse_misplaced(["foreground", "fill_holes"], "polygon")
-    Traceback (most recent call last):
-    ...
-    skelprune.errors.InvalidOptionError: option(s) foreground, fill_holes only apply to image input (PNG or TIFF)
-    >>> refuse_misplaced(["simplify"], "image", "csv")
-    Traceback (most recent call last):
-    ...
-    skelprune.errors.InvalidOptionError: option(s) simplify only apply to the GeoJSON answer (application/geo+json) of image or polygon input, not to the CSV tables (text/csv)
+    >>> refuse_misplaced(["table"], "image", ("json", "csv"))
+    >>> def refused(*args):
+    ...     try:
+    ...         refuse_misplaced(*args)
+    ...     except InvalidOptionError as exc:
+    ...         return str(exc)
+    >>> refused(["foreground", "fill_holes"], "polygon")
+    'option(s) foreground, fill_holes only apply to image input (PNG or TIFF)'
+    >>> refused(["simplify"], "image", "csv")  # doctest: +NORMALIZE_WHITESPACE
+    'option(s) simplify only apply to the GeoJSON answer (application/geo+json) of image or
+     polygon input, not to the CSV tables (text/csv)'
+    >>> refused(["pixel_size"], "image", "json")  # doctest: +NORMALIZE_WHITESPACE
+    'option(s) pixel_size only apply to polygon input (GeoJSON), or image input (PNG or
+     TIFF) with the CSV tables (text/csv) or the GraphML graph (application/graphml+xml),
+     not to the JSON document (application/json)'
+    >>> refused([], "volume", "geojson")  # doctest: +NORMALIZE_WHITESPACE
+    'volume input (a .npy file or a TIFF stack) has no GeoJSON answer
+     (application/geo+json); its answers: the JSON document (application/json), the
+     overlay image (image/png), the CSV tables (text/csv), the SWC answer (text/plain)'
     """
-    if answer is not None and answer not in ANSWERS_OF[kind]:
-        raise InvalidOptionError(
-            f"{_INPUTS[kind]} has no {ANSWERS[answer]}; its answers: "
-            + ", ".join(ANSWERS[a] for a in ANSWERS_OF[kind])
-        )
-    asked = {answer, "overlay"} if answer == "json" and overlay else {answer}
+    asked = None if answers is None else {answers} if isinstance(answers, str) else set(answers)
+    for answer in sorted(asked or ()):
+        if answer not in ANSWERS_OF[kind]:
+            raise InvalidOptionError(
+                f"{_INPUTS[kind]} has no {ANSWERS[answer].replace('the ', '', 1)}; its answers: "
+                + ", ".join(ANSWERS[a] for a in ANSWERS_OF[kind])
+            )
+    if asked is not None and "json" in asked and overlay:
+        asked.add("overlay")
     wrong_input: dict[str, list[str]] = {}
     wrong_answer: dict[str, list[str]] = {}
     for name in given:
@@ -114,12 +132,13 @@ def refuse_misplaced(
         if kind not in where:
             wrong_input.setdefault(_places(where), []).append(name)
             continue
-        answers = where[kind]
-        if answer is not None and answers is not None and not asked & set(answers):
+        applies = where[kind]
+        if asked is not None and applies is not None and not asked & set(applies):
             wrong_answer.setdefault(_places(where), []).append(name)
     for place, names in wrong_input.items():
         raise InvalidOptionError(f"option(s) {', '.join(names)} only apply to {place}")
     for place, names in wrong_answer.items():
+        shown = " or ".join(ANSWERS[a] for a in sorted(asked or ()) if a != "overlay")
         raise InvalidOptionError(
-            f"option(s) {', '.join(names)} only apply to {place}, not to {ANSWERS[str(answer)]}"
+            f"option(s) {', '.join(names)} only apply to {place}, not to {shown}"
         )

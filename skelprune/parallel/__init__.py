@@ -16,7 +16,7 @@ if TYPE_CHECKING:
     from .items import Labels
     from .run import Outcome, iter_prune_many, prune_many
     from .store import PROBLEMS_FILE
-    from .work import Budget, document_bytes
+    from .work import document_bytes
 
 _LAZY = {
     "Labels": "items",
@@ -24,7 +24,6 @@ _LAZY = {
     "iter_prune_many": "run",
     "prune_many": "run",
     "PROBLEMS_FILE": "store",
-    "Budget": "work",
     "document_bytes": "work",
 }
 
@@ -32,7 +31,6 @@ __getattr__, __dir__ = lazy_exports(__name__, _LAZY, submodules=True)
 
 __all__ = [
     "PROBLEMS_FILE",
-    "Budget",
     "Labels",
     "Outcome",
     "document_bytes",

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import SkelpruneError
+from ..limits import DATASET_LIMITS, Limits
 from ..options import (
     OutputOptions,
     PruneOptions,
@@ -22,7 +23,7 @@ from ..options import (
     resolve_options,
 )
 from .items import Feature, Item
-from .work import Budget, Job, finite_lines, run_item
+from .work import Job, feature_lines, run_item
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -56,14 +57,14 @@ def branch_lines(part: Any, job: Job) -> Any:
     geometries: list[Any] = []
     sources: list[Any] = []
     for position, (index, geom) in enumerate(zip(part.index, part.geometry, strict=True)):
-        line, problem = run_item(Item("", Feature(position, index, geom)), job, finite_lines)
+        lines, problem = run_item(Item("", Feature(position, index, geom)), job, feature_lines)
         if problem is not None:
             rows.append({"problem": problem[0], "detail": problem[1]})
             geometries.append(None)
             sources.append(index)
             continue
-        assert line is not None
-        for feature in line["result"]["features"]:
+        assert lines is not None
+        for feature in lines["features"]:
             if feature["geometry"]["type"] != "LineString":
                 continue  # the nodes: their places are the lines' ends
             props = feature["properties"]
@@ -125,7 +126,7 @@ def prune_geoparquet(
     output: OutputOptions | None = None,
     client: Client | str | None = None,
     jobs: int | None = None,
-    budget: Budget | None = None,
+    limits: Limits | None = None,
     npartitions: int | None = None,
     lines: str | Callable[[Any, Job], Any] = "branches",
     **keywords: Any,
@@ -145,7 +146,7 @@ def prune_geoparquet(
         problem kind) and ``detail``.
     options, raster, output, **keywords
         As for :func:`skelprune.prune` (``pixel_size``, ``simplify``, ...).
-    client, jobs, budget
+    client, jobs, limits
         As for :func:`~skelprune.parallel.prune_many`.
     npartitions : int, optional
         Split the table into this many partitions at least (default: some four a worker).
@@ -167,7 +168,7 @@ def prune_geoparquet(
     options, read, raster, output = resolve_options(options, None, raster, output, keywords)
     if read is not None:
         raise SkelpruneError("a GeoParquet holds polygons: read options do not apply")
-    job = Job(options, None, raster, output, budget=budget or Budget())
+    job = Job(options, None, raster, output, limits=limits or DATASET_LIMITS)
     fn: Callable[[Any, Job], Any]
     if isinstance(lines, str):
         if lines not in LINES:
@@ -175,7 +176,7 @@ def prune_geoparquet(
         fn = LINES[lines]
     else:
         fn = lines
-    with _client(client, jobs, job.budget) as c:
+    with _client(client, jobs, job.limits) as c:
         table = dask_geopandas.read_parquet(source)
         wanted = npartitions or 4 * _workers(c)
         if table.npartitions < wanted:

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 from ..errors import InvalidOptionError, shown
+from ..limits import DATASET_LIMITS, Limits
 from ..options import (
     OutputOptions,
     PruneOptions,
@@ -25,7 +26,7 @@ from ..options import (
 )
 from .items import Item, expand
 from .store import Store
-from .work import WORKER_CRASHED, Budget, Done, Job, run_batch
+from .work import WORKER_CRASHED, Done, Job, run_batch
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -41,6 +42,9 @@ RESTART_TIMEOUT = 60
 #: Memory a worker process holds besides the input it prunes (dask, the library, numba's
 #: kernels), added to the budget for the worker's memory limit.
 WORKER_OWN_MB = 512
+#: The answers a run writes beside each document when asked (``files=``), and their
+#: files' endings.
+FILES = {"png": ".png", "csv": ".csv"}
 
 
 @dataclass(frozen=True)
@@ -64,6 +68,9 @@ class Outcome:
     problem : dict or None
         ``{"input", "kind", "detail"}`` of a failed input: ``kind`` is the service's
         problem type (``invalid-image``, ``empty-mask``, ``job-too-large``, ...).
+    files : dict or None
+        The bytes of the answers asked for with ``files`` (by answer), when there is no
+        ``out`` folder to write them to.
     """
 
     input: str
@@ -72,6 +79,7 @@ class Outcome:
     result: dict[str, Any] | None = None
     path: Path | None = None
     problem: dict[str, str] | None = None
+    files: dict[str, bytes] | None = None
 
 
 def _batches(
@@ -83,7 +91,7 @@ def _batches(
 
 
 @contextlib.contextmanager
-def _client(client: Client | str | None, jobs: int | None, budget: Budget) -> Iterator[Client]:
+def _client(client: Client | str | None, jobs: int | None, limits: Limits) -> Iterator[Client]:
     """The client given, one to the scheduler at an address, or a local cluster of
     ``jobs`` one-thread worker processes (default: one a core), each under a memory
     limit of the budget plus its own needs (the nanny restarts a worker over it)."""
@@ -99,7 +107,7 @@ def _client(client: Client | str | None, jobs: int | None, budget: Budget) -> It
     n = jobs or (
         len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
     )
-    limit = "auto" if budget.memory_mb is None else f"{budget.memory_mb + WORKER_OWN_MB}MiB"
+    limit = "auto" if limits.memory_mb is None else f"{limits.memory_mb + WORKER_OWN_MB}MiB"
     with (
         LocalCluster(
             n_workers=n,
@@ -131,8 +139,9 @@ def iter_prune_many(
     client: Client | str | None = None,
     out: str | os.PathLike[str] | None = None,
     jobs: int | None = None,
-    budget: Budget | None = None,
+    limits: Limits | None = None,
     batch_size: int | None = None,
+    files: tuple[str, ...] = (),
     **keywords: Any,
 ) -> Iterator[Outcome]:
     """:func:`prune_many`'s outcomes one by one, as they finish (skipped inputs first).
@@ -147,7 +156,12 @@ def iter_prune_many(
             raise InvalidOptionError(f"{name} must be a whole number >= 1, got {shown(value)}")
     volume = volume_value(volume, keywords)
     options, read, raster, output = resolve_options(options, read, raster, output, keywords)
-    job = Job(options, read, raster, output, volume, budget or Budget())
+    unknown = [f for f in files if f not in FILES]
+    if unknown:
+        raise InvalidOptionError(
+            f"files: {', '.join(map(repr, unknown))} not one of {', '.join(FILES)}"
+        )
+    job = Job(options, read, raster, output, volume, limits or DATASET_LIMITS, tuple(files))
     # label images, once the read options know them: every object is its own shape
     items = expand(inputs, labels=bool(getattr(job.read, "labels", False)))
     store = None if out is None else Store(out)
@@ -157,7 +171,7 @@ def iter_prune_many(
         done = store is not None and (
             store.has_row(item.name, item.source.row)
             if item.is_row
-            else store.has_document(item.name)
+            else store.has_document(item.name, job.files)
         )
         if done:
             assert store is not None  # only a store says what is done
@@ -189,7 +203,7 @@ def _run(
 ) -> Iterator[Outcome]:
     from distributed import as_completed
 
-    with _client(client, jobs, job.budget) as c:
+    with _client(client, jobs, job.limits) as c:
         batches, futures = {}, []
         workers = _workers(c)
         for batch in _batches(todo, workers, batch_size):
@@ -237,13 +251,16 @@ def _record(done: Done, item: Item, store: Store | None) -> Outcome:
         if store is not None:
             store.write_problem(problem)
         return Outcome(key, done.position, "failed", problem=problem)
-    assert done.payload is not None
+    assert done.answer is not None
     if store is None:
-        return Outcome(key, done.position, "done", result=json.loads(done.payload))
+        result = json.loads(done.answer.payload)
+        return Outcome(key, done.position, "done", result=result, files=done.answer.files)
     if item.is_row:
-        path = store.write_row(item.name, item.source.row, done.payload)
+        path = store.write_row(item.name, item.source.row, done.answer.payload)
     else:
-        path = store.write_document(item.name, done.payload)
+        for kind, payload in done.answer.files.items():  # the document last: it marks done
+            store.write_document(item.name, payload, FILES[kind])
+        path = store.write_document(item.name, done.answer.payload)
     return Outcome(key, done.position, "done", path=path)
 
 
@@ -259,8 +276,9 @@ def prune_many(
     out: str | os.PathLike[str] | None = None,
     ordered: bool = False,
     jobs: int | None = None,
-    budget: Budget | None = None,
+    limits: Limits | None = None,
     batch_size: int | None = None,
+    files: tuple[str, ...] = (),
     **keywords: Any,
 ) -> list[Outcome]:
     """Prune a whole data set on dask.distributed, each input on its own.
@@ -291,11 +309,16 @@ def prune_many(
         results come back in the outcomes.
     ordered : bool
         Outcomes in the inputs' order (default: as they finished, skipped ones first).
-    budget : Budget, optional
-        Each input's memory and time budget and size limits (the service's, by
-        default; a volume's voxels count against ``max_pixels``): an input over it fails
-        as ``job-too-large`` (over a size limit: ``image-too-large``), and a local cluster's
+    limits : Limits, optional
+        Each input's memory and time budget and size limits
+        (:data:`skelprune.limits.DATASET_LIMITS`, the service's, by default; a volume's
+        voxels count against ``max_pixels``): an input over it fails as
+        ``job-too-large`` (over a size limit: ``image-too-large``), and a local cluster's
         workers are restarted past it, so one input cannot sink a worker.
+    files : tuple of {"png", "csv"}
+        Answers written beside each document: ``NAME.png`` the overlay (a volume's: its
+        projections), ``NAME.csv`` the table (``table=``); with ``out`` only (without it,
+        each outcome's ``files`` holds their bytes).
     batch_size : int, optional
         Inputs a task (default: up to 32, some eight tasks a worker).
 
@@ -330,8 +353,9 @@ def prune_many(
         client=client,
         out=out,
         jobs=jobs,
-        budget=budget,
+        limits=limits,
         batch_size=batch_size,
+        files=files,
         **keywords,
     )
     next(it)  # the count

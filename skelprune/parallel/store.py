@@ -61,14 +61,17 @@ class Store:
         self._rows: dict[str, set[int]] = {}
         self._problems: IO[bytes] | None = None
 
-    def document_path(self, name: str) -> Path:
-        return self.folder / f"{name}.json"
+    def document_path(self, name: str, suffix: str = ".json") -> Path:
+        return self.folder / f"{name}{suffix}"
 
     def table_path(self, name: str) -> Path:
         return self.folder / f"{name}.jsonl"
 
-    def has_document(self, name: str) -> bool:
-        return self.document_path(name).is_file()
+    def has_document(self, name: str, files: tuple[str, ...] = ()) -> bool:
+        """Whether ``NAME.json`` is written, and the files asked for beside it."""
+        return all(
+            self.document_path(name, s).is_file() for s in (".json", *(f".{f}" for f in files))
+        )
 
     def has_row(self, name: str, row: int) -> bool:
         if name not in self._rows:
@@ -79,9 +82,10 @@ class Store:
             self._rows[name] = rows
         return row in self._rows[name]
 
-    def write_document(self, name: str, payload: bytes) -> Path:
-        """Write ``NAME.json`` atomically: a temporary file, then a rename."""
-        path = self.document_path(name)
+    def write_document(self, name: str, payload: bytes, suffix: str = ".json") -> Path:
+        """Write ``NAME.json`` (or ``NAME`` and another ``suffix``) atomically: a
+        temporary file, then a rename."""
+        path = self.document_path(name, suffix)
         fd, tmp = tempfile.mkstemp(dir=self.folder, prefix=f".{name}.", suffix=".tmp")
         try:
             with os.fdopen(fd, "wb") as f:

@@ -10,7 +10,7 @@ import typer.main
 import yaml
 
 from skelprune.cli import app
-from skelprune.parallel import Budget
+from skelprune.limits import DATASET_LIMITS
 from skelprune.parallel.run import WORKER_OWN_MB
 from testkit import REPO
 
@@ -85,7 +85,7 @@ def test_workers_are_one_thread_under_the_budget_and_load_the_images_kernels() -
     assert limits["cpu"] == "1", "one worker process of one thread a CPU"
     # the worker's limit is prune_many's own for a local cluster: the budget + its needs
     limit = mib(flag(args, "--memory-limit"))
-    assert limit == Budget().memory_mb + WORKER_OWN_MB
+    assert limit == DATASET_LIMITS.memory_mb + WORKER_OWN_MB
     assert limit <= mib(limits["memory"]) == mib(container["resources"]["requests"]["memory"])
     assert flag(args, "--local-directory").startswith("/tmp/")
     # a read-only root: /tmp is a volume, shared with the init container that seeds

@@ -192,8 +192,11 @@ def test_prune_many_takes_the_scope() -> None:
     m[100:112, 5:295] = m[5:295, 150:162] = True
     options = PruneOptions(scope="local", window=128)
     done = run_batch(list(enumerate(expand({"t": m}))), Job(options=options))
-    assert done[0].payload == document_bytes(skelprune.prune(m, options).to_dict())
-    assert b'"scope": "local"' in done[0].payload or b'"scope":"local"' in done[0].payload
+    assert done[0].answer.payload == document_bytes(skelprune.prune(m, options).to_dict())
+    assert (
+        b'"scope": "local"' in done[0].answer.payload
+        or b'"scope":"local"' in done[0].answer.payload
+    )
 
 
 def test_windows_vote_before_their_tips_are_cut() -> None:

@@ -1,5 +1,5 @@
-"""Every example of the README runs verbatim where ``make run`` leaves a user: its Python
-blocks and its command lines, from the repository's root, with only the packages of the
+"""Every example of the README and of docs/guide.md runs verbatim where ``make run``
+leaves a user: their Python blocks and its command lines, from the repository's root, with only the packages of the
 extras ``make run`` installs (service, graph) importable: the others' are hidden.
 
 The client's fragments (``# examples/client.py``) are checked against the file by
@@ -24,6 +24,8 @@ from testkit import REPO
 pytestmark = pytest.mark.timeout(300)
 
 README = (REPO / "README.md").read_text(encoding="utf-8")
+#: The README and the guide it links to: both show examples that must run.
+PAGES = README + "\n" + (REPO / "docs" / "guide.md").read_text(encoding="utf-8")
 #: The extras ``make run`` installs (the Makefile's SERVE).
 RUN_EXTRAS = ("service", "graph")
 
@@ -78,14 +80,14 @@ def run_env(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
 
 
 def _python_blocks() -> list[str]:
-    blocks = re.findall(r"^( *)```python\n(.*?)^\1```", README, re.S | re.M)
+    blocks = re.findall(r"^( *)```python\n(.*?)^\1```", PAGES, re.S | re.M)
     out = [textwrap.dedent(code) for _, code in blocks]
     return [code for code in out if not code.startswith("# examples/client.py")]
 
 
 def _command_lines() -> list[str]:
-    section = README.split("### Command line", 1)[1].split("### Whole data sets", 1)[0]
-    blocks = re.findall(r"```sh\n(.*?)```", section, re.S)
+    sections = re.findall(r"^#+ Command line\n(.*?)(?=^#)", PAGES, re.S | re.M)
+    blocks = [b for section in sections for b in re.findall(r"```sh\n(.*?)```", section, re.S)]
     return [line for block in blocks for line in block.splitlines() if line.strip()]
 
 

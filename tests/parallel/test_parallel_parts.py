@@ -21,7 +21,8 @@ from skelprune.errors import (
     SkelpruneError,
     problem_kind,
 )
-from skelprune.parallel import Budget, Labels, document_bytes
+from skelprune.limits import DATASET_LIMITS, Limits
+from skelprune.parallel import Labels, document_bytes
 from skelprune.parallel.items import expand
 from skelprune.parallel.store import PROBLEMS_FILE, Store
 from skelprune.parallel.work import INTERNAL_ERROR, WORKER_CRASHED, Job, run_batch
@@ -83,10 +84,10 @@ def test_a_batch_runs_every_item_and_names_each_failure() -> None:
     items = expand({"good": m, "empty": m & False, "missing": Path("/nonexistent/x.png")})
     done = run_batch(list(enumerate(items)), Job())
     assert [d.position for d in done] == [0, 1, 2]
-    assert done[0].payload == document_bytes(skelprune.prune(m).to_dict())
+    assert done[0].answer.payload == document_bytes(skelprune.prune(m).to_dict())
     assert done[1].problem == ("empty-mask", "the mask has no foreground pixel")
-    assert done[2].payload is None and done[2].problem[0] in ("invalid-image", "invalid-input")
-    refused = run_batch([(0, items[0])], Job(budget=Budget(memory_mb=1)))
+    assert done[2].answer is None and done[2].problem[0] in ("invalid-image", "invalid-input")
+    refused = run_batch([(0, items[0])], Job(limits=Limits(memory_mb=1)))
     assert refused[0].problem[0] == "job-too-large"
 
 
@@ -133,7 +134,7 @@ def test_the_default_budget_is_the_services() -> None:
     from service.settings import Settings
 
     settings = Settings()
-    budget = Budget()
+    budget = DATASET_LIMITS
     assert budget.memory_mb == settings.job_memory_mb
     assert budget.seconds == settings.job_timeout
     assert budget.max_pixels == settings.max_pixels

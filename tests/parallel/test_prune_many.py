@@ -17,7 +17,8 @@ import pytest
 from PIL import Image
 
 import skelprune
-from skelprune.parallel import PROBLEMS_FILE, Budget, Labels, prune_many
+from skelprune.limits import Limits
+from skelprune.parallel import PROBLEMS_FILE, Labels, prune_many
 from testkit import REPO
 from testkit.daskcluster import dask_cluster
 from testkit.shapes import dataset
@@ -149,15 +150,15 @@ def test_inputs_over_the_budget_fail_alone_as_job_too_large(scheduler: str) -> N
     rng = np.random.default_rng(3)
     noise = rng.random((512, 512)) < 0.5  # pixel noise: the costliest kind of mask
     small = blob(rng)
-    budget = Budget(seconds=1.0)
+    budget = Limits(seconds=1.0)
     outcomes = prune_many(
-        {"small": small, "noise": noise}, client=scheduler, budget=budget, ordered=True
+        {"small": small, "noise": noise}, client=scheduler, limits=budget, ordered=True
     )
     assert [o.status for o in outcomes] == ["done", "failed"]
     assert outcomes[1].problem["kind"] == "job-too-large"
     assert "time limit of 1 s" in outcomes[1].problem["detail"]
     assert outcomes[0].result == skelprune.prune(small).to_dict()
-    too_many = prune_many([small], client=scheduler, budget=Budget(max_pixels=100))
+    too_many = prune_many([small], client=scheduler, limits=Limits(max_pixels=100))
     assert too_many[0].problem["kind"] == "image-too-large"
 
 
@@ -218,7 +219,7 @@ def test_an_input_that_kills_its_worker_fails_alone_as_worker_crashed() -> None:
     small = blob(np.random.default_rng(5))
     hog = np.zeros((9000, 9000), bool)  # an 81-million-pixel square: far over 700 MiB
     hog[100:-100, 100:-100] = True
-    unlimited = Budget(memory_mb=None, seconds=None, max_pixels=None)
+    unlimited = Limits(memory_mb=None, seconds=None, max_pixels=None)
     with (
         dask.config.set({"distributed.scheduler.allowed-failures": 0}),
         LocalCluster(
@@ -229,7 +230,7 @@ def test_an_input_that_kills_its_worker_fails_alone_as_worker_crashed() -> None:
         outcomes = prune_many(
             {"a": small, "hog": hog, "b": small},
             client=client,
-            budget=unlimited,
+            limits=unlimited,
             batch_size=3,
             ordered=True,
         )

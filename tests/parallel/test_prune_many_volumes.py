@@ -17,8 +17,9 @@ import pytest
 import tifffile
 
 import skelprune
+from skelprune.limits import Limits
 from skelprune.options import ReadOptions, VolumeOptions
-from skelprune.parallel import PROBLEMS_FILE, Budget, document_bytes, prune_many
+from skelprune.parallel import PROBLEMS_FILE, document_bytes, prune_many
 from skelprune.parallel.items import expand
 from skelprune.parallel.work import Job, run_batch
 from testkit import REPO
@@ -67,7 +68,7 @@ def header_only(shape: tuple[int, ...]) -> bytes:
 
 def one(source, job: Job) -> tuple[bytes | None, tuple[str, str] | None]:
     done = run_batch([(0, expand({"x": source})[0])], job)[0]
-    return done.payload, done.problem
+    return (None if done.answer is None else done.answer.payload), done.problem
 
 
 @pytest.mark.slow
@@ -142,28 +143,28 @@ def test_a_volume_is_pruned_in_a_task_with_the_runs_spacing() -> None:
 def test_a_volume_over_the_pixel_limit_is_refused_from_its_header(tmp_path: Path) -> None:
     promise = tmp_path / "promise.npy"
     promise.write_bytes(header_only((30, 30, 30)))  # 27,000 voxels promised, none there
-    _, problem = one(promise, Job(budget=Budget(max_pixels=1000)))
+    _, problem = one(promise, Job(limits=Limits(max_pixels=1000)))
     assert problem is not None and problem[0] == "image-too-large"
     assert "27000 voxels" in problem[1] and "1000" in problem[1]
     # within the limit the same file is read, and found wanting: the refusal above came
     # from the header alone
-    _, problem = one(promise, Job(budget=Budget(max_pixels=None)))
+    _, problem = one(promise, Job(limits=Limits(max_pixels=None)))
     assert problem is not None and problem[0] == "invalid-image"
     stack = tmp_path / "stack.tif"
     tifffile.imwrite(stack, np.ones((10, 20, 20), np.uint8), photometric="minisblack")
-    _, problem = one(stack, Job(budget=Budget(max_pixels=3999)))
+    _, problem = one(stack, Job(limits=Limits(max_pixels=3999)))
     assert problem is not None and problem[0] == "image-too-large" and "4000 voxels" in problem[1]
-    _, problem = one(np.ones((10, 20, 20), bool), Job(budget=Budget(max_pixels=3999)))
+    _, problem = one(np.ones((10, 20, 20), bool), Job(limits=Limits(max_pixels=3999)))
     assert problem is not None and problem[0] == "image-too-large"
 
 
 def test_a_volume_over_the_memory_or_time_budget_fails_as_job_too_large(tmp_path: Path) -> None:
     path = tmp_path / "fork.npy"
     np.save(path, y_tubes(radius=2.5, arm=14.0).volume())
-    _, problem = one(path, Job(budget=Budget(memory_mb=1)))
+    _, problem = one(path, Job(limits=Limits(memory_mb=1)))
     assert problem is not None and problem[0] == "job-too-large"
     assert "the voxels inside" in problem[1] and "memory budget of 1 MiB" in problem[1]
-    _, problem = one(path, Job(budget=Budget(seconds=1e-6)))
+    _, problem = one(path, Job(limits=Limits(seconds=1e-6)))
     assert problem is not None and problem[0] == "job-too-large" and "time limit" in problem[1]
 
 
@@ -185,6 +186,6 @@ def test_image_options_fail_a_volume_alone_and_label_runs_keep_volumes_whole(
     labelled = expand(files["labels"], labels=True)
     assert [(it.name, it.source) for it in labelled] == [("labels", str(files["labels"]))]
     (done,) = run_batch(list(enumerate(labelled)), Job(read=ReadOptions(labels=True)))
-    assert done.payload == document_bytes(skelprune.prune(files["labels"]).to_dict())
+    assert done.answer.payload == document_bytes(skelprune.prune(files["labels"]).to_dict())
     with pytest.raises(TypeError, match="not both"):
         prune_many(files["fork"], volume=VolumeOptions(), spacing=SPACING)

@@ -48,9 +48,9 @@ def test_the_client_runs_against_the_real_server(real_server, tmp_path) -> None:
 
 
 def test_the_readme_uses_the_client_verbatim() -> None:
-    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    readme = (REPO / "docs" / "guide.md").read_text(encoding="utf-8")
     code = CLIENT.read_text(encoding="utf-8")
     blocks = re.findall(r"```python\n# examples/client\.py\n(.*?)```", readme, re.S)
-    assert blocks, "the README shows the client"
+    assert blocks, "the guide shows the client"
     for block in blocks:
         assert block in code, block

@@ -1,6 +1,7 @@
 """Every example of the README and of docs/guide.md runs verbatim where ``make run``
-leaves a user: their Python blocks and its command lines, from the repository's root, with only the packages of the
-extras ``make run`` installs (service, graph) importable: the others' are hidden.
+leaves a user: their Python blocks and command lines, from the repository's root, with
+only the packages of the extras ``make run`` installs (service, graph) importable: the
+others' are hidden.
 
 The client's fragments (``# examples/client.py``) are checked against the file by
 tests/service/test_examples.py; ``prune-many`` needs the ``parallel`` extra (and one of

@@ -190,7 +190,7 @@ def _changed(*values: Any) -> set[str]:
         for value in values
         if value is not None
         for f in fields(value)
-        if getattr(value, f.name) != f.default
+        if getattr(value, f.name) != getattr(type(value)(), f.name)
     }
 
 

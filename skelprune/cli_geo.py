@@ -10,17 +10,20 @@ Shapefile, GeoJSON, GeoParquet). Exit status 1 when a feature failed, 0 otherwis
 from __future__ import annotations
 
 import logging
+from dataclasses import fields
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
+from .cli_options import _options_or_exit, with_options
 from .errors import SkelpruneError
-from .options import RasterOptions
+from .options import PruneOptions, RasterOptions
 
 __all__ = ["register"]
 
 
+@with_options(PruneOptions, RasterOptions)
 def centerlines_command(
     source: Annotated[Path, typer.Argument(metavar="IN", help="Polygon features (any GDAL file).")],
     target: Annotated[
@@ -34,14 +37,9 @@ def centerlines_command(
     layer: Annotated[
         str | None, typer.Option(help="The input's layer (default: the first).")
     ] = None,
-    pixel_size: Annotated[
-        float | None,
-        typer.Option(help="Raster pixel size on the ground (metres for geographic data)."),
-    ] = None,
-    pixels_per_width: Annotated[
-        float, typer.Option(help="Pixels across a polygon's narrowest part.")
-    ] = RasterOptions.pixels_per_width,
     progress: Annotated[bool, typer.Option(help="A progress bar on stderr.")] = True,
+    *,
+    options: dict[str, Any],
 ) -> None:
     """Map centre lines of every polygon feature of IN, written to OUT."""
     from .geo import centerlines, log, read_frame, write_frame
@@ -50,9 +48,15 @@ def centerlines_command(
     if jobs < 1:
         typer.echo(f"error: --jobs must be >= 1, got {jobs}", err=True)
         raise typer.Exit(2)
-    options: dict[str, Any] = {"pixels_per_width": pixels_per_width}
-    if pixel_size is not None:
-        options["pixel_size"] = pixel_size
+    prune_opts, raster = _options_or_exit(options, PruneOptions, RasterOptions)
+    # the options given (their defaults are centerlines' own); the CRS by its name
+    given = {
+        f.name: getattr(value, f.name)
+        for value in (prune_opts, raster)
+        for f in fields(value)
+        if getattr(value, f.name) != getattr(type(value)(), f.name)
+    }
+    crs = given.pop("crs", None)
     try:
         frame = read_frame(source, layer=layer)
     except Exception as exc:  # GDAL's errors are its own classes: say what and where
@@ -65,7 +69,13 @@ def centerlines_command(
 
     try:
         lines = centerlines(
-            frame, jobs=jobs, progress=progress, main_path=main_path, on_feature=report, **options
+            frame,
+            jobs=jobs,
+            progress=progress,
+            main_path=main_path,
+            crs=crs,
+            on_feature=report,
+            **given,
         )
         write_frame(lines, target)
     except SkelpruneError as exc:

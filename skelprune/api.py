@@ -11,7 +11,7 @@ import numpy as np
 from .budget import VOLUME_BASIS, check_budget, estimate, out_of_memory, volume_estimate
 from .errors import EmptyMaskError, InvalidOptionError
 from .grid import components8
-from .io.input import Input, read_input
+from .io.input import Input, Kind, read_input
 from .limits import Limits, overlay_pixels, projections_scale
 from .options import (
     METHODS,
@@ -53,6 +53,7 @@ def prune(
     volume: VolumeOptions | None = None,
     limits: Limits | None = None,
     answers: Collection[str] | None = None,
+    kind: Kind | None = None,
     progress: Callable[[int, int], None] | None = None,
     **keywords: Any,
 ) -> PruneResult | VolumeResult:
@@ -97,6 +98,9 @@ def prune(
         The answers that will be encoded (``"json"``, ``"geojson"``, ``"csv"``,
         ``"graphml"``, ``"png"``, ``"swc"``): an option that applies to none of them is
         refused, and an answer image counts against the limits. Default: any answer.
+    kind : {"image", "geojson"}, optional
+        What ``source`` is, when the caller knows (:func:`skelprune.io.read_input`):
+        then bytes or text are data, never a file's path or another kind's.
     progress : callable, optional
         ``progress(done, total)``, called as each component (with ``scope="local"``: each
         window) is pruned: for a progress bar on a large image.
@@ -168,6 +172,7 @@ def prune(
                 source,
                 read=read,
                 raster=raster,
+                kind=kind,
                 max_pixels=limits.max_pixels,
                 max_vertices=limits.max_vertices,
             )

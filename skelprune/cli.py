@@ -128,9 +128,9 @@ def prune_command(
     if workers < 0:
         raise _usage(f"--workers must be >= 0 (0: one a CPU core), got {workers}")
     files_asked = {"png": overlay, "csv": csv, "graphml": graphml, "swc": swc}
-    for answer, out in files_asked.items():
+    for asked, out in files_asked.items():
         if out is not None and not out.parent.is_dir():
-            raise _usage(f"{FILE_FLAGS[answer]}: folder {str(out.parent)!r} does not exist")
+            raise _usage(f"{FILE_FLAGS[asked]}: folder {str(out.parent)!r} does not exist")
     inputs = _expand(files)
     if not inputs:
         raise _usage("no PNG, TIFF, GeoJSON or .npy file given")
@@ -161,9 +161,9 @@ def prune_command(
         sys.stdout.buffer.write(answer + b"\n")
         sys.stdout.flush()
         return
-    for answer, out in files_asked.items():
+    for asked, out in files_asked.items():
         if out is not None:
-            raise _usage(f"{FILE_FLAGS[answer]} takes one input file")
+            raise _usage(f"{FILE_FLAGS[asked]} takes one input file")
     from concurrent.futures import ProcessPoolExecutor
 
     from tqdm import tqdm

@@ -16,11 +16,12 @@ from typing import Any
 from fastapi.exceptions import RequestValidationError
 from pydantic import BaseModel
 
-from service.http.schemas import POLYGON_ONLY, PruneQuery
+from service.http.schemas import PruneQuery
 from service.settings import Settings
-from service.worker.jobs import MEDIA_TYPES, Job, Media
+from service.worker.jobs import Job, Media
 from service.worker.match_job import MatchJob
 from skelprune.errors import InvalidOptionError
+from skelprune.limits import Limits
 from skelprune.options import (
     GROUPS,
     OutputOptions,
@@ -29,19 +30,10 @@ from skelprune.options import (
     ReadOptions,
     VolumeOptions,
 )
+from skelprune.options_where import refuse_misplaced
 
 __all__ = ["JobBuilder", "job_builder"]
 
-PNG_ONLY = tuple(f.name for f in fields(ReadOptions))
-#: Options of the JSON document only: refused with Accept: image/png or geo+json.
-JSON_ONLY = ("curve", "overlay", "sequence")
-#: Options of the overlay image: for Accept: image/png, or the JSON with overlay=true.
-OVERLAY_ONLY = ("overlay_scale", "overlay_legend")
-#: Options of the GeoJSON answer only.
-GEOJSON_ONLY = ("simplify", "cut_ends")
-#: Options of the tables' answers only (Accept: text/csv; pixel_size too, for an image).
-TABLE_ONLY = ("table",)
-TABLE_OUTPUTS = ("csv", "graphml")
 #: The option groups a request's options are sorted into, each checked by its class.
 OPTION_GROUPS = (*GROUPS, VolumeOptions)
 
@@ -50,7 +42,8 @@ def _gather(
     query: PruneQuery, body: BaseModel | None, polygon: bool, media: Media
 ) -> dict[str, Any]:
     """The request's options: the query's and the body's (JSON envelope or multipart
-    fields), each given once, each where it applies."""
+    fields), each given once, each where its definition says it applies
+    (:func:`skelprune.options_where.refuse_misplaced`, the library's own check)."""
     opts = {k: v for k, v in query.model_dump().items() if v is not None}
     if body is not None:
         for key, value in body.model_dump(exclude={"geojson"}).items():
@@ -59,54 +52,19 @@ def _gather(
             if key in opts:
                 raise InvalidOptionError(f"option {key!r} is given both in the query and the body")
             opts[key] = value
-    if media != "json":
-        misplaced = [k for k in JSON_ONLY if k in opts]
-        if misplaced:
-            raise InvalidOptionError(
-                f"option(s) {', '.join(misplaced)} only apply to the JSON document "
-                f"(Accept: application/json), not to the {MEDIA_TYPES[media]} answer"
-            )
-    if media != "geojson":
-        misplaced = [k for k in GEOJSON_ONLY if k in opts]
-        if misplaced:
-            raise InvalidOptionError(
-                f"option(s) {', '.join(misplaced)} only apply to the GeoJSON answer "
-                "(Accept: application/geo+json)"
-            )
-    if media == "geojson" or (media == "json" and not opts.get("overlay")):
-        misplaced = [k for k in OVERLAY_ONLY if k in opts]
-        if misplaced:
-            raise InvalidOptionError(
-                f"option(s) {', '.join(misplaced)} only apply to the overlay image "
-                "(Accept: image/png, or overlay=true)"
-            )
-    if any(k in opts for k in TABLE_ONLY) and media != "csv":
-        raise InvalidOptionError(
-            f"option(s) {', '.join(k for k in TABLE_ONLY if k in opts)} only apply to the "
-            "tables' answer (Accept: text/csv)"
-        )
-    if not polygon and "pixel_size" in opts and media not in TABLE_OUTPUTS:
-        raise InvalidOptionError(
-            "option(s) pixel_size only apply to polygon input, or to an image's tables "
-            "(Accept: text/csv or application/graphml+xml), whose unit it sets"
-        )
-    if polygon and "spacing" in opts:
-        raise InvalidOptionError(
-            "option(s) spacing only apply to volume input (a .npy or a TIFF stack body)"
-        )
-    if not polygon:
-        misplaced = [k for k in POLYGON_ONLY if k in opts]
-        if misplaced:
-            raise InvalidOptionError(
-                f"option(s) {', '.join(misplaced)} only apply to polygon (JSON) input"
-            )
-    else:
-        misplaced = [k for k in PNG_ONLY if k in opts]
-        if misplaced:
-            raise InvalidOptionError(
-                f"option(s) {', '.join(misplaced)} only apply to PNG input; a polygon's "
-                "shape is its interior"
-            )
+    overlay = bool(opts.get("overlay"))
+    if polygon:
+        refuse_misplaced(opts, "polygon", media, overlay)
+        return opts
+    # an image body may hold a volume (a .npy or a TIFF stack), told when it is read:
+    # an option of either passes here, and the library refuses it there if misplaced
+    try:
+        refuse_misplaced(opts, "image", media, overlay)
+    except InvalidOptionError:
+        try:
+            refuse_misplaced(opts, "volume", media, overlay)
+        except InvalidOptionError:
+            refuse_misplaced(opts, "image", media, overlay)
     return opts
 
 
@@ -172,10 +130,12 @@ class JobBuilder:
             raster=self.raster,
             output=self.output,
             volume=self.volume,
-            max_pixels=settings.max_pixels,
-            max_vertices=settings.max_vertices,
-            memory_budget=settings.job_memory_mb * 2**20,
-            time_budget=settings.estimate_seconds,
+            limits=Limits(
+                memory_mb=settings.job_memory_mb,
+                seconds=settings.estimate_seconds,
+                max_pixels=settings.max_pixels,
+                max_vertices=settings.max_vertices,
+            ),
         )
 
     def match_job(self, a: Job, b: Job) -> MatchJob:

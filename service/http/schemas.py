@@ -42,7 +42,6 @@ from skelprune.output import schema
 from skelprune.output.schema import Doc, Len
 
 __all__ = [
-    "POLYGON_ONLY",
     "FiniteFloat",
     "GeoJSONInput",
     "Health",
@@ -65,11 +64,6 @@ FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 
 
 # --------------------------------------------------------------------- input: options
-#: Options that only apply to polygon (JSON) input.
-# (pixel_size also applies to images: the unit of the tables)
-POLYGON_ONLY = tuple(f.name for f in dataclass_fields(RasterOptions) if f.name != "pixel_size")
-
-
 def _option_models() -> tuple[type[BaseModel], dict[str, Any]]:
     """The query model and the body's option fields, from the library's option classes.
 

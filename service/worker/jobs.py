@@ -14,15 +14,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from skelprune.budget import (
-    VOLUME_BASIS,
-    check_budget,
-    estimate,
-    out_of_memory,
-    volume_estimate,
-)
-from skelprune.errors import ImageTooLargeError, InvalidOptionError
 from skelprune.io.input import Input, Kind, read_input
+from skelprune.limits import Limits
 from skelprune.options import (
     OutputOptions,
     PruneOptions,
@@ -31,13 +24,11 @@ from skelprune.options import (
     VolumeOptions,
 )
 from skelprune.output.finite import finite_text, finite_tree
-from skelprune.output.render import auto_scale
 
 __all__ = [
     "PNG_HEADER_COMPONENTS",
     "Job",
     "JobResult",
-    "answer_pixels",
     "dumps",
     "kernel_counts",
     "read_job",
@@ -64,9 +55,9 @@ class Job:
 
     ``data`` is the body's bytes for ``kind="image"`` (PNG or TIFF; a ``.npy`` or a
     multi-page TIFF is a volume), a GeoJSON mapping for ``kind="geojson"``; the worker
-    reads it with :func:`skelprune.io.read_input` (as data, never a file's name) and
-    prunes it with :func:`skelprune.api.prune_input`, the library's pipeline, or a volume
-    with :func:`skelprune.volume.prune_volume`.
+    prunes it with :func:`skelprune.prune` (as data, never a file's name) under
+    ``limits`` and writes the answer with :func:`skelprune.encode`: the library's one
+    entry and one encoder.
     """
 
     media: Media
@@ -77,10 +68,7 @@ class Job:
     raster: RasterOptions = field(default_factory=RasterOptions)
     output: OutputOptions = field(default_factory=OutputOptions)
     volume: VolumeOptions = field(default_factory=VolumeOptions)
-    max_pixels: int | None = None
-    max_vertices: int | None = None
-    memory_budget: int | None = None  # bytes a worker may hold for the job
-    time_budget: float | None = None  # seconds its time estimate may reach (None: no screen)
+    limits: Limits = field(default_factory=Limits)  # the service's, per job
 
 
 #: Response headers of the PNG answer: one value a component, comma-separated, in the
@@ -176,149 +164,62 @@ WARNING_HEADER = "X-Skelprune-Warning"
 
 
 def read_job(job: Job) -> Input:
-    """The job's input, read with the service's limits."""
+    """The job's input, read with the service's limits (``/v1/match`` reads its two)."""
     return read_input(
         job.data,
         kind=job.kind,
         read=job.read,
         raster=job.raster,
-        max_pixels=job.max_pixels,
-        max_vertices=job.max_vertices,
+        max_pixels=job.limits.max_pixels,
+        max_vertices=job.limits.max_vertices,
     )
-
-
-def answer_pixels(job: Job, shape: tuple[int, int]) -> int:
-    """Pixels of the job's answer image (0 without one); refuses more than the pixel limit.
-
-    Raises
-    ------
-    ImageTooLargeError
-        When ``overlay_scale`` makes the overlay larger than ``max_pixels``.
-    """
-    if job.media != "png" and not job.output.overlay:
-        return 0
-    scale = auto_scale(shape) if job.output.overlay_scale is None else job.output.overlay_scale
-    height, width = shape[0] * scale, shape[1] * scale
-    if job.max_pixels is not None and width * height > job.max_pixels:
-        raise ImageTooLargeError(
-            f"the overlay image would have {width * height} pixels ({width}×{height}: "
-            f"overlay_scale {scale} on {shape[1]}×{shape[0]}), the limit is "
-            f"{job.max_pixels}; use a smaller overlay_scale"
-        )
-    return width * height
 
 
 def run_job(job: Job) -> JobResult:
-    """Decode the input, check its memory estimate, prune it and serialise the answer.
-
-    A ``MemoryError`` anywhere is the input's size: the same 413 as an estimate over
-    the budget (:class:`~skelprune.errors.JobTooLargeError`), not an internal error.
-    """
-    try:
-        return _run_job(job)
-    except MemoryError:
-        raise out_of_memory(job.memory_budget) from None
-
-
-def _run_job(job: Job) -> JobResult:
-    from skelprune.api import prune_input
-    from skelprune.volume import is_volume
-
-    if job.kind == "image" and isinstance(job.data, bytes) and is_volume(job.data):
-        return _run_volume_job(job)
-    if job.volume != VolumeOptions():
-        raise InvalidOptionError(
-            "option(s) spacing only apply to volume input (a .npy or a TIFF stack body)"
-        )
-    shape = read_job(job)
-    cost = estimate(
-        shape.mask, answer_pixels(job, shape.mask.shape), job.options.scope, shape.labels
-    )
-    check_budget(cost, job.memory_budget, job.time_budget)
+    """Prune the job's input under its limits and serialise the answer: the library's
+    :func:`skelprune.prune` and :func:`skelprune.encode`, what every front calls."""
     t0 = time.perf_counter()
-    res = prune_input(shape, job.options, job.output)
+    try:
+        return _answer(job, t0)
+    except MemoryError:  # rendering the answer, past the estimate: the input's size
+        from skelprune.budget import out_of_memory
+
+        raise out_of_memory(job.limits.memory) from None
+
+
+def _answer(job: Job, t0: float) -> JobResult:
+    from skelprune.api import prune
+    from skelprune.output.encode import MEDIA_TYPES as ANSWER_TYPES
+    from skelprune.output.encode import encode
+    from skelprune.output.volume import VolumeResult
+
+    res = prune(
+        job.data,
+        job.options,
+        read=job.read,
+        raster=job.raster,
+        output=job.output,
+        volume=job.volume,
+        limits=job.limits,
+        answers=(job.media,),
+        kind=job.kind,
+    )
     elapsed = time.perf_counter() - t0
+    body = encode(res, job.media)
     headers: dict[str, str] = {}
     if job.media == "png":
-        body = res.overlay_png()
         headers = png_headers(
-            [{k: getattr(c, k) for k in PNG_HEADERS.values()} for c in res.components]
+            [c.to_dict() for c in res.components]
+            if isinstance(res, VolumeResult)
+            else [{k: getattr(c, k) for k in PNG_HEADERS.values()} for c in res.components]
         )
         if res.warnings:  # a polygon the raster does not hold as it is
             headers["X-Skelprune-Warnings"] = str(len(res.warnings))
-    elif job.media == "geojson":
-        body = dumps(res.to_geojson())
-    elif job.media == "csv":  # the tables (docs/tables.md)
-        body = res.to_csv(job.output.table).encode()
-    elif job.media == "graphml":
-        body = res.to_graphml().encode()
-    else:
-        body = dumps(res.to_dict())
-    if shape.hint is not None:  # a label image read without labels: said in every answer
-        headers[WARNING_HEADER] = shape.hint.encode("ascii", "replace").decode("ascii")
-    return JobResult(
-        body=body, media_type=MEDIA_TYPES[job.media], prune_seconds=elapsed, headers=headers
-    )
-
-
-def _run_volume_job(job: Job) -> JobResult:
-    """A volume's job: its voxels count against the pixel limit and the budgets."""
-    from skelprune.volume import prune_volume, read_volume, refuse_image_options
-
-    refuse_image_options(job.read, job.output)
-    if job.media in ("geojson", "graphml"):
-        raise InvalidOptionError(
-            f"a volume has no {MEDIA_TYPES[job.media]} answer; ask for application/json, "
-            "image/png (its three projections) or text/csv"
-        )
-    volume = read_volume(job.data, max_voxels=job.max_pixels)
-    answer, scale = 0, 1
-    if job.media == "png":
-        scale, answer = projections_size(job, volume.shape)
-    cost = volume_estimate(volume, answer)
-    check_budget(cost, job.memory_budget, job.time_budget, VOLUME_BASIS)
-    t0 = time.perf_counter()
-    res = prune_volume(volume, job.options, job.volume, job.output)
-    elapsed = time.perf_counter() - t0
-    headers: dict[str, str] = {}
-    if job.media == "png":
-        body = res.overlay_png(scale)
-        headers = png_headers([c.to_dict() for c in res.components])
-    elif job.media == "csv":
-        body = res.to_csv().encode()
-    else:
-        body = dumps(res.to_dict())
-    return JobResult(
-        body=body, media_type=MEDIA_TYPES[job.media], prune_seconds=elapsed, headers=headers
-    )
-
-
-def projections_size(job: Job, shape: tuple[int, ...]) -> tuple[int, int]:
-    """The scale and pixels of a volume's projections image: ``overlay_scale``, or the
-    default scale made smaller until the image fits the pixel limit.
-
-    Raises
-    ------
-    ImageTooLargeError
-        When the image is over ``max_pixels`` at the scale asked for (or at 1).
-    """
-    from skelprune.output.volume import auto_volume_scale
-
-    z, y, x = shape
-    base = (y + z + 4) * (x + z + 4)
-    given = job.output.overlay_scale
-    scale = given or auto_volume_scale(shape)
-    if given is None and job.max_pixels is not None:
-        while scale > 1 and base * scale * scale > job.max_pixels:
-            scale -= 1
-    answer = base * scale * scale
-    if job.max_pixels is not None and answer > job.max_pixels:
-        raise ImageTooLargeError(
-            f"the projections image would have {answer} pixels (overlay_scale {scale} "
-            f"on a {x}×{y}×{z} volume), the limit is {job.max_pixels}; use a smaller "
-            "overlay_scale"
-        )
-    return scale, answer
+    hint = getattr(getattr(res, "input", None), "hint", None)
+    if hint is not None:  # a label image read without labels: said in every answer
+        headers[WARNING_HEADER] = hint.encode("ascii", "replace").decode("ascii")
+    media_type = MEDIA_TYPES.get(job.media, ANSWER_TYPES[job.media])
+    return JobResult(body=body, media_type=media_type, prune_seconds=elapsed, headers=headers)
 
 
 def png_headers(values: list[Any]) -> dict[str, str]:

@@ -34,7 +34,7 @@ def run_match_job(job: MatchJob) -> MatchResult:
     try:
         return _run_match_job(job)
     except MemoryError:
-        raise out_of_memory(job.a.memory_budget) from None
+        raise out_of_memory(job.a.limits.memory) from None
 
 
 def _run_match_job(job: MatchJob) -> MatchResult:
@@ -42,7 +42,8 @@ def _run_match_job(job: MatchJob) -> MatchResult:
     from skelprune.api import prune_input
 
     a, b = read_job(job.a), read_job(job.b)
-    check_budget(estimate(a.mask) + estimate(b.mask), job.a.memory_budget, job.a.time_budget)
+    limits = job.a.limits
+    check_budget(estimate(a.mask) + estimate(b.mask), limits.memory, limits.seconds)
     t0 = time.perf_counter()
     ra, rb = (
         prune_input(a, job.a.options, job.a.output),

@@ -156,7 +156,9 @@ def prune(
     given = named | _changed(read, raster, output, volume)
     limits = limits or Limits()
     try:
-        if is_volume(source, spacing_given=volume is not None):
+        # an array given a spacing is a volume: a 2-D one is told it is not
+        spacing = volume is not None
+        if is_volume(source, spacing) or (spacing and isinstance(source, np.ndarray)):
             refuse_misplaced(given, "volume", answers, output.overlay)
             return _prune_volume(
                 source, options, volume or VolumeOptions(), output, limits, answers

@@ -115,7 +115,7 @@ def test_prune_takes_an_input_and_carries_its_frame() -> None:
     res = skelprune.prune(shape_)
     assert res.input is shape_ and res.frame == shape_.frame and res.raster is shape_.raster
     assert res.to_dict() == skelprune.prune(L_SHAPE, longest_side=64).to_dict()
-    with pytest.raises(TypeError, match="is read"):
+    with pytest.raises(InvalidOptionError, match="is read"):
         skelprune.prune(shape_, longest_side=32)
 
 

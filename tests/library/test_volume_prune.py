@@ -138,7 +138,8 @@ def test_volume_refusals(tmp_path) -> None:
     bad.write_bytes(b"not an array")
     with pytest.raises(InvalidImageError, match="npy"):
         skelprune.prune(str(bad))
-    with pytest.raises(TypeError, match="volumes"):
+    # the same refusal, in the same words, as the service's and a data-set run's
+    with pytest.raises(InvalidOptionError, match="foreground only apply to image input"):
         skelprune.prune(bar, foreground="zero")
 
 

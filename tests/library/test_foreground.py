@@ -213,4 +213,4 @@ def test_service_polygon_reports_its_interior(client: TestClient) -> None:
         {"json": {"geojson": poly, "foreground": "nonzero"}},
     ):
         resp = client.post("/v1/prune", **kwargs)
-        assert resp.status_code == 422 and "only apply to PNG input" in resp.json()["detail"]
+        assert resp.status_code == 422 and "only apply to image input" in resp.json()["detail"]

@@ -479,7 +479,7 @@ CASES = [
         GOOD_POLY,
         "application/json",
         422,
-        ("only apply to PNG input",),
+        ("only apply to image input",),
         params={"foreground": "zero"},
     ),
     Case(
@@ -487,7 +487,7 @@ CASES = [
         js({"geojson": polygon(RECT), "foreground": "auto"}),
         "application/json",
         422,
-        ("only apply to PNG input",),
+        ("only apply to image input",),
     ),
     Case(
         "unknown-foreground",

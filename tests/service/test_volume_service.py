@@ -70,10 +70,10 @@ def test_a_volume_as_a_picture_and_a_table(client: TestClient, fork: np.ndarray)
 @pytest.mark.parametrize(
     ("query", "accept", "words"),
     [
-        ("", "application/geo+json", "no application/geo+json answer"),
-        ("", "application/graphml+xml", "no application/graphml+xml answer"),
-        ("?labels=true", "application/json", "apply to images"),
-        ("?overlay=true", "application/json", "apply to images"),
+        ("", "application/geo+json", "has no GeoJSON answer (application/geo+json)"),
+        ("", "application/graphml+xml", "has no GraphML graph (application/graphml+xml)"),
+        ("?labels=true", "application/json", "only apply to image input"),
+        ("?overlay=true", "application/json", "of image or polygon input"),
         ("?method=dce", "application/json", "images only"),
         ("?scope=local", "application/json", "images only"),
     ],

@@ -38,7 +38,9 @@ JSON_ONLY = ("curve", "overlay", "sequence")
 #: Options of the overlay image: for Accept: image/png, or the JSON with overlay=true.
 OVERLAY_ONLY = ("overlay_scale", "overlay_legend")
 #: Options of the GeoJSON answer only.
-GEOJSON_ONLY = ("simplify", "cut_ends")
+GEOJSON_ONLY = ("simplify", "cut_ends", "lines")
+#: Options of the skeleton's branches as GeoJSON: the map lines (lines=map) have none.
+BRANCHES_ONLY = ("simplify", "cut_ends")
 #: Options of the tables' answers only (Accept: text/csv; pixel_size too, for an image).
 TABLE_ONLY = ("table",)
 TABLE_OUTPUTS = ("csv", "graphml")
@@ -72,6 +74,18 @@ def _gather(
             raise InvalidOptionError(
                 f"option(s) {', '.join(misplaced)} only apply to the GeoJSON answer "
                 "(Accept: application/geo+json)"
+            )
+    if opts.get("lines", "branches") != "branches":
+        misplaced = [k for k in BRANCHES_ONLY if k in opts]
+        if misplaced:
+            raise InvalidOptionError(
+                f"option(s) {', '.join(misplaced)} only apply to the skeleton's branches "
+                f"(lines=branches), not to lines={opts['lines']}"
+            )
+        if not polygon:
+            raise InvalidOptionError(
+                f"lines={opts['lines']} only applies to polygon (GeoJSON) input: the map "
+                "lines are drawn inside the polygon"
             )
     if media == "geojson" or (media == "json" and not opts.get("overlay")):
         misplaced = [k for k in OVERLAY_ONLY if k in opts]
@@ -204,7 +218,7 @@ def job_builder(
         The service's limits, which every job carries.
     polygon : bool
         The input is GeoJSON (else PNG): the raster options apply, ``foreground`` not.
-    media : {"json", "png", "geojson", "csv", "graphml"}
+    media : {"json", "png", "geojson", "csv", "graphml", "swc"}
         The negotiated answer: the output options apply where they shape it.
     match : bool
         A match: no output option applies.

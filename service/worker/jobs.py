@@ -6,16 +6,16 @@ the worker returns the response body already serialised.
 
 from __future__ import annotations
 
-import json
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
 
 from skelprune.budget import (
     VOLUME_BASIS,
+    Estimate,
     check_budget,
     estimate,
     out_of_memory,
@@ -30,7 +30,7 @@ from skelprune.options import (
     ReadOptions,
     VolumeOptions,
 )
-from skelprune.output.finite import finite_text, finite_tree
+from skelprune.output.finite import finite_json, finite_text
 from skelprune.output.render import auto_scale
 
 __all__ = [
@@ -46,7 +46,7 @@ __all__ = [
 ]
 
 #: The answers a job makes (its media type: :data:`MEDIA_TYPES`).
-Media = Literal["json", "png", "geojson", "csv", "graphml"]
+Media = Literal["json", "png", "geojson", "csv", "graphml", "swc"]
 
 MEDIA_TYPES: dict[str, str] = {
     "json": "application/json",
@@ -54,6 +54,7 @@ MEDIA_TYPES: dict[str, str] = {
     "geojson": "application/geo+json",
     "csv": "text/csv",
     "graphml": "application/graphml+xml",
+    "swc": "text/x-swc",
 }
 
 
@@ -230,10 +231,18 @@ def _run_job(job: Job) -> JobResult:
         raise InvalidOptionError(
             "option(s) spacing only apply to volume input (a .npy or a TIFF stack body)"
         )
+    if job.media == "swc":
+        raise InvalidOptionError(
+            "SWC holds a volume's curve skeleton (a .npy or a TIFF stack body); an image's "
+            "or a polygon's skeleton is application/json, application/geo+json, "
+            "text/csv or application/graphml+xml"
+        )
     shape = read_job(job)
     cost = estimate(
         shape.mask, answer_pixels(job, shape.mask.shape), job.options.scope, shape.labels
     )
+    if job.media == "geojson" and job.output.lines != "branches":
+        return _run_lines_job(job, cost)
     check_budget(cost, job.memory_budget, job.time_budget)
     t0 = time.perf_counter()
     res = prune_input(shape, job.options, job.output)
@@ -261,6 +270,62 @@ def _run_job(job: Job) -> JobResult:
     )
 
 
+def _run_lines_job(job: Job, whole: Estimate) -> JobResult:
+    """The map lines of a polygon job (``lines=map`` or ``main-path``): the library's
+    :func:`skelprune.geo.geojson_lines`, every Feature pruned on its own, as
+    ``skelprune centerlines`` prunes a file of them. ``whole``: the estimate of the
+    whole input read as one raster, the cost of one Feature; a collection's is the sum
+    of its Features' (each read with the job's limits)."""
+    from shapely.geometry import mapping
+
+    from skelprune.geo import geojson_frame, geojson_lines
+    from skelprune.io.input import read_input
+
+    assert isinstance(job.data, dict)  # a polygon job's GeoJSON
+    cost = whole
+    frame = geojson_frame(job.data)
+    if len(frame) > 1:
+        raster = _feature_raster(job, frame)
+        costs = [
+            estimate(
+                read_input(
+                    mapping(g),
+                    kind="geojson",
+                    raster=raster,
+                    max_pixels=job.max_pixels,
+                    max_vertices=job.max_vertices,
+                ).mask
+            )
+            for g in frame.geometry
+            if g is not None and not g.is_empty
+        ]
+        cost = Estimate(max(c.bytes for c in costs), sum(c.seconds for c in costs))
+    check_budget(cost, job.memory_budget, job.time_budget)
+    t0 = time.perf_counter()
+    raster = replace(job.raster, crs=None)  # the CRS goes on its own, as centerlines takes it
+    body = geojson_lines(
+        job.data,
+        main_path=job.output.lines == "main-path",
+        crs=job.raster.crs,
+        options=job.options,
+        raster=raster,
+    )
+    return JobResult(
+        body=body,
+        media_type=MEDIA_TYPES[job.media],
+        prune_seconds=time.perf_counter() - t0,
+    )
+
+
+def _feature_raster(job: Job, frame: Any) -> RasterOptions:
+    """The raster options a Feature of ``frame`` is read with for its estimate: the
+    job's, with the collection's CRS where the job gives none."""
+    from skelprune.io.crs import crs_name
+
+    crs = job.raster.crs or crs_name(frame.crs)
+    return job.raster if crs is None else replace(job.raster, crs=crs)
+
+
 def _run_volume_job(job: Job) -> JobResult:
     """A volume's job: its voxels count against the pixel limit and the budgets."""
     from skelprune.volume import prune_volume, read_volume, refuse_image_options
@@ -269,7 +334,7 @@ def _run_volume_job(job: Job) -> JobResult:
     if job.media in ("geojson", "graphml"):
         raise InvalidOptionError(
             f"a volume has no {MEDIA_TYPES[job.media]} answer; ask for application/json, "
-            "image/png (its three projections) or text/csv"
+            "image/png (its three projections), text/csv or text/x-swc"
         )
     volume = read_volume(job.data, max_voxels=job.max_pixels)
     answer, scale = 0, 1
@@ -286,6 +351,8 @@ def _run_volume_job(job: Job) -> JobResult:
         headers = png_headers([c.to_dict() for c in res.components])
     elif job.media == "csv":
         body = res.to_csv().encode()
+    elif job.media == "swc":
+        body = res.to_swc().encode()
     else:
         body = dumps(res.to_dict())
     return JobResult(
@@ -337,7 +404,6 @@ def png_headers(values: list[Any]) -> dict[str, str]:
 
 
 def dumps(doc: Any) -> bytes:
-    """The answer as compact JSON (what every job serialises with)."""
-    # A number that is not finite is null (the one rule of skelprune.output.finite);
-    # allow_nan=False then only guards that rule.
-    return json.dumps(finite_tree(doc), separators=(",", ":"), allow_nan=False).encode()
+    """The answer as compact JSON (what every job serialises with): a number that is not
+    finite is null, the one rule of :mod:`skelprune.output.finite`."""
+    return finite_json(doc)

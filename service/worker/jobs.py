@@ -299,7 +299,8 @@ def _run_lines_job(job: Job, whole: Estimate) -> JobResult:
             for g in frame.geometry
             if g is not None and not g.is_empty
         ]
-        cost = Estimate(max(c.bytes for c in costs), sum(c.seconds for c in costs))
+        if costs:  # (a collection of null geometries was refused when read)
+            cost = Estimate(max(c.bytes for c in costs), sum(c.seconds for c in costs))
     check_budget(cost, job.memory_budget, job.time_budget)
     t0 = time.perf_counter()
     raster = replace(job.raster, crs=None)  # the CRS goes on its own, as centerlines takes it

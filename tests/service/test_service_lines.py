@@ -175,3 +175,32 @@ def test_a_volume_answers_the_librarys_swc(client: TestClient, name: str) -> Non
         headers={"content-type": "application/x-npy", **GEOJSON},
     )
     assert resp.status_code == 422 and "text/x-swc" in resp.json()["detail"]
+
+
+def test_a_collection_of_map_lines_is_screened_as_the_sum_of_its_features() -> None:
+    """Each Feature is pruned on its own, one after the other: the job's time estimate
+    is their sum, screened before any is pruned."""
+    from service.app import create_app
+    from service.settings import Settings
+    from skelprune.budget import estimate
+    from skelprune.options import RasterOptions
+
+    def square(x0: float) -> dict:
+        return {**mapping(box(x0, 0, x0 + 400, 400)), "crs": awkward.CRS}
+
+    def layer(*geoms: dict) -> dict:
+        feats = [{"type": "Feature", "properties": {}, "geometry": g} for g in geoms]
+        return {"type": "FeatureCollection", "crs": awkward.CRS, "features": feats}
+
+    shape = skelprune.read_input(square(0), raster=RasterOptions(pixel_size=1.0))
+    one = estimate(shape.mask).seconds
+    # a budget of one and a half squares (the job's own time limit stays a minute)
+    settings = Settings(workers=1, queue_size=4, job_timeout=60, time_estimate_scale=40 / one)
+    query = {"lines": "map", "pixel_size": "1"}
+    with TestClient(create_app(settings), raise_server_exceptions=False) as c:
+        alone = c.post("/v1/prune", json=layer(square(0)), params=query, headers=GEOJSON)
+        assert alone.status_code == 200, alone.text
+        both = layer(square(0), square(600))
+        resp = c.post("/v1/prune", json=both, params=query, headers=GEOJSON)
+        assert resp.status_code == 413, resp.text
+        assert "would take about" in resp.json()["detail"]

@@ -48,6 +48,7 @@ __all__ = [
     "DEFAULT_PIXEL_BUDGET",
     "FOREGROUND_RULES",
     "GROUPS",
+    "LINES",
     "LOCAL_HALO_FRACTION",
     "LOCAL_WINDOW_RANGE",
     "LOCAL_WINDOW_WIDTHS",
@@ -84,6 +85,9 @@ DEFAULT_MIN_MARGIN = 0.01
 DEFAULT_DCE_THRESHOLD = 0.01
 #: The tables of :meth:`PruneResult.summary` (docs/tables.md).
 TABLES = ("branch", "component")
+#: The GeoJSON answer's lines: the skeleton's branches, or the map lines of
+#: :func:`skelprune.geo.centerlines` (every line, or one per network: its longest path).
+LINES = ("branches", "map", "main-path")
 #: How the answer is chosen from the sequence (:mod:`skelprune.pruning.choice`).
 CHOICES = ("argmin", "noise-floor")
 #: Where the trade-off is taken (:mod:`skelprune.local`): over each whole component (the
@@ -277,6 +281,15 @@ class OutputOptions:
         _flag,
         where=_PLANAR_GEOJSON,
     )
+    lines: str = _option(
+        "branches",
+        "GeoJSON answer of a polygon: the skeleton's branches and nodes (branches), the "
+        "map lines of skelprune.geo.centerlines, as `skelprune centerlines` writes them "
+        "(map), or one line per network, its longest path (main-path; docs/gis.md).",
+        _choice(LINES),
+        LINES,
+        where={"polygon": ("geojson",)},
+    )
     table: str = _option(
         "branch",
         "CSV answer: the table, one row per branch (branch) or per component (component).",
@@ -402,7 +415,7 @@ def option_fields(*groups: type) -> list[tuple[str, Any, str, tuple[str, ...] | 
 
     >>> [name for name, *_ in option_fields(OutputOptions)]  # doctest: +NORMALIZE_WHITESPACE
     ['curve', 'overlay', 'sequence', 'overlay_scale', 'overlay_legend', 'simplify',
-     'cut_ends', 'table']
+     'cut_ends', 'lines', 'table']
     """
     return [
         (f.name, f.default, f.metadata["help"], f.metadata["choices"])

@@ -26,7 +26,7 @@ ANSWERS = {
     "geojson": "the GeoJSON answer (application/geo+json)",
     "csv": "the CSV tables (text/csv)",
     "graphml": "the GraphML graph (application/graphml+xml)",
-    "swc": "the SWC answer (text/plain)",
+    "swc": "the SWC answer (text/x-swc)",
 }
 #: The answers each kind of input has.
 ANSWERS_OF = {
@@ -114,7 +114,7 @@ def refuse_misplaced(
     >>> refused([], "volume", "geojson")  # doctest: +NORMALIZE_WHITESPACE
     'volume input (a .npy file or a TIFF stack) has no GeoJSON answer
      (application/geo+json); its answers: the JSON document (application/json), the
-     overlay image (image/png), the CSV tables (text/csv), the SWC answer (text/plain)'
+     overlay image (image/png), the CSV tables (text/csv), the SWC answer (text/x-swc)'
     """
     asked = None if answers is None else {answers} if isinstance(answers, str) else set(answers)
     for answer in sorted(asked or ()):

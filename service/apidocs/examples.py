@@ -219,6 +219,73 @@ LISTED = (
 )
 
 _NUMBERS = {"type": "array", "items": {"type": "number"}}
+_POSITION = {**_NUMBERS, "minItems": 2, "maxItems": 3}
+_NUMBER_OR_NULL = {"type": ["number", "null"]}
+#: The map lines (``lines=map`` or ``lines=main-path``, docs/gis.md): the GeoJSON that
+#: ``skelprune centerlines`` writes, one feature per line or point, each with its input
+#: Feature's index and properties.
+MAP_LINES: dict[str, Any] = {
+    "title": "MapLinesGeoJSON",
+    "type": "object",
+    "required": ["type", "features"],
+    "properties": {
+        "type": {"const": "FeatureCollection"},
+        "name": {"type": "string"},
+        "crs": {"type": "object", "description": "The input's CRS, where it named one."},
+        "features": {
+            "type": "array",
+            "items": {
+                "type": "object",
+                "required": ["type", "properties", "geometry"],
+                "properties": {
+                    "type": {"const": "Feature"},
+                    "properties": {
+                        "type": "object",
+                        "description": "`feature` (the input Feature's index), `part` (of "
+                        "its polygon), `kind` (`line` or `point`), `length` and `width` "
+                        "(a point's: its inscribed circle's diameter), `error` (null, or why "
+                        "the Feature has no lines: a row without geometry), then the input "
+                        "Feature's properties.",
+                        "required": ["feature", "part", "kind", "length", "width", "error"],
+                        "properties": {
+                            "feature": {"type": ["integer", "string"]},
+                            "part": {"type": ["integer", "null"]},
+                            "kind": {"enum": ["line", "point", None]},
+                            "length": _NUMBER_OR_NULL,
+                            "width": _NUMBER_OR_NULL,
+                            "error": {"type": ["string", "null"]},
+                        },
+                    },
+                    "geometry": {
+                        "anyOf": [
+                            {
+                                "type": "object",
+                                "required": ["type", "coordinates"],
+                                "properties": {
+                                    "type": {"const": "LineString"},
+                                    "coordinates": {
+                                        "type": "array",
+                                        "items": _POSITION,
+                                        "minItems": 2,
+                                    },
+                                },
+                            },
+                            {
+                                "type": "object",
+                                "required": ["type", "coordinates"],
+                                "properties": {
+                                    "type": {"const": "Point"},
+                                    "coordinates": _POSITION,
+                                },
+                            },
+                            {"type": "null"},
+                        ]
+                    },
+                },
+            },
+        },
+    },
+}
 #: A volume's document (docs/volumes.md, ``VolumeResult.to_dict``): the image document's
 #: graph with ``z``, points ``[x, y, z, radius]``, the voxel ``spacing``.
 VOLUME_DOCUMENT: dict[str, Any] = {
@@ -304,7 +371,8 @@ PRUNE_RESPONSES: dict[int | str, dict[str, Any]] = {
             },
             "image/png": {"schema": {"type": "string", "format": "binary"}},
             "application/geo+json": {
-                "schema": {"$ref": REF + "SkeletonGeoJSON"},
+                # the skeleton's branches and nodes, or the map lines (lines=map)
+                "schema": {"anyOf": [{"$ref": REF + "SkeletonGeoJSON"}, MAP_LINES]},
                 "example": GEOJSON_EXAMPLE,
             },
         },

@@ -40,8 +40,8 @@ Compute the pruned skeleton of a shape.
   pickles) or `image/tiff` with several pages (a stack, one page a slice), as the body;
   its voxels count against the pixel limit, `spacing=dz,dy,dx` gives the voxel's size
   (docs/volumes.md). The answer is the 3-D document (`application/json`, points
-  `[x, y, z, radius]`), the three projections with the skeleton (`image/png`) or the
-  branch table (`text/csv`);
+  `[x, y, z, radius]`), the three projections with the skeleton (`image/png`), the
+  branch table (`text/csv`) or the skeleton as SWC (`text/x-swc`, for neuron tools);
 - `multipart/form-data`: the PNG, TIFF or GIF in the field `file`;
 - `application/json` (or `application/geo+json`): a GeoJSON `Polygon`, `MultiPolygon`,
   `Feature` or `FeatureCollection` (holes allowed), or an object
@@ -55,9 +55,13 @@ Compute the pruned skeleton of a shape.
 (`PruneDocument` below: per component its RER, SS, λ and the skeleton graph, nodes with
 radii and branches as paths), `image/png` the overlay image (the numbers in the
 `X-Skelprune-*` headers), `application/geo+json` the skeleton as GeoJSON (the numbers in
-its properties), `text/csv` the branch table (`table=component`: the component table;
-docs/tables.md), `application/graphml+xml` the skeleton as GraphML. `labels=true` reads
-an integer image as a label image, each value its own shape.
+its properties; for a polygon, `lines=map`: the map lines, the GeoJSON `skelprune
+centerlines` writes, each Feature pruned on its own; `lines=main-path`: one line per
+network, its longest path; docs/gis.md), `text/csv` the branch table (`table=component`:
+the component table; docs/tables.md), `application/graphml+xml` the skeleton as GraphML,
+`text/x-swc` a volume's skeleton as SWC. `labels=true` reads an integer image as a label
+image, each value its own shape. No answer holds NaN or infinity: a number that is not
+defined (a junction angle where a branch has no direction) is null (an empty CSV cell).
 
 Options go in the query string, or in the body (multipart fields beside `file`; the
 JSON envelope), never both; an option where it does not apply is refused (422).

@@ -34,6 +34,8 @@ from skelprune.options_where import refuse_misplaced
 
 __all__ = ["JobBuilder", "job_builder"]
 
+#: Options of the skeleton's branches as GeoJSON: the map lines (lines=map) have none.
+BRANCHES_ONLY = ("simplify", "cut_ends")
 #: The option groups a request's options are sorted into, each checked by its class.
 OPTION_GROUPS = (*GROUPS, VolumeOptions)
 
@@ -55,6 +57,13 @@ def _gather(
     overlay = bool(opts.get("overlay"))
     if polygon:
         refuse_misplaced(opts, "polygon", media, overlay)
+        if opts.get("lines", "branches") != "branches":
+            misplaced = [k for k in BRANCHES_ONLY if k in opts]
+            if misplaced:
+                raise InvalidOptionError(
+                    f"option(s) {', '.join(misplaced)} only apply to the skeleton's branches "
+                    f"(lines=branches), not to lines={opts['lines']}"
+                )
         return opts
     # an image body may hold a volume (a .npy or a TIFF stack), told when it is read:
     # an option of either passes here, and the library refuses it there if misplaced
@@ -164,7 +173,7 @@ def job_builder(
         The service's limits, which every job carries.
     polygon : bool
         The input is GeoJSON (else PNG): the raster options apply, ``foreground`` not.
-    media : {"json", "png", "geojson", "csv", "graphml"}
+    media : {"json", "png", "geojson", "csv", "graphml", "swc"}
         The negotiated answer: the output options apply where they shape it.
     match : bool
         A match: no output option applies.

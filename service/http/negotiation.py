@@ -14,6 +14,7 @@ PRODUCES: dict[str, Media] = {
     "application/geo+json": "geojson",
     "text/csv": "csv",
     "application/graphml+xml": "graphml",
+    "text/x-swc": "swc",
 }
 #: The batch's answer: one JSON document a line.
 NDJSON = "application/x-ndjson"

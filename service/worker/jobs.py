@@ -6,14 +6,14 @@ the worker returns the response body already serialised.
 
 from __future__ import annotations
 
-import json
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
 
+from skelprune.budget import Estimate, check_budget, estimate
 from skelprune.io.input import Input, Kind, read_input
 from skelprune.limits import Limits
 from skelprune.options import (
@@ -23,7 +23,7 @@ from skelprune.options import (
     ReadOptions,
     VolumeOptions,
 )
-from skelprune.output.finite import finite_text, finite_tree
+from skelprune.output.finite import finite_json, finite_text
 
 __all__ = [
     "PNG_HEADER_COMPONENTS",
@@ -37,7 +37,7 @@ __all__ = [
 ]
 
 #: The answers a job makes (its media type: :data:`MEDIA_TYPES`).
-Media = Literal["json", "png", "geojson", "csv", "graphml"]
+Media = Literal["json", "png", "geojson", "csv", "graphml", "swc"]
 
 MEDIA_TYPES: dict[str, str] = {
     "json": "application/json",
@@ -45,6 +45,7 @@ MEDIA_TYPES: dict[str, str] = {
     "geojson": "application/geo+json",
     "csv": "text/csv",
     "graphml": "application/graphml+xml",
+    "swc": "text/x-swc",
 }
 
 
@@ -180,6 +181,8 @@ def run_job(job: Job) -> JobResult:
     :func:`skelprune.prune` and :func:`skelprune.encode`, what every front calls."""
     t0 = time.perf_counter()
     try:
+        if job.media == "geojson" and job.output.lines != "branches":
+            return _run_lines_job(job)
         return _answer(job, t0)
     except MemoryError:  # rendering the answer, past the estimate: the input's size
         from skelprune.budget import out_of_memory
@@ -222,6 +225,65 @@ def _answer(job: Job, t0: float) -> JobResult:
     return JobResult(body=body, media_type=media_type, prune_seconds=elapsed, headers=headers)
 
 
+def _run_lines_job(job: Job) -> JobResult:
+    """The map lines of a polygon job (``lines=map`` or ``main-path``): the library's
+    :func:`skelprune.geo.geojson_lines`, every Feature pruned on its own, as
+    ``skelprune centerlines`` prunes a file of them. The estimate: the whole input's
+    read as one raster for one Feature; a collection's, the sum of its Features' (each
+    read with the job's limits)."""
+    from shapely.geometry import mapping
+
+    from skelprune.geo import geojson_frame, geojson_lines
+    from skelprune.io.input import read_input
+
+    assert isinstance(job.data, dict)  # a polygon job's GeoJSON
+    limits = job.limits
+    whole = read_job(job)
+    cost = estimate(whole.mask, 0, job.options.scope, whole.labels)
+    frame = geojson_frame(job.data)
+    if len(frame) > 1:
+        raster = _feature_raster(job, frame)
+        costs = [
+            estimate(
+                read_input(
+                    mapping(g),
+                    kind="geojson",
+                    raster=raster,
+                    max_pixels=limits.max_pixels,
+                    max_vertices=limits.max_vertices,
+                ).mask
+            )
+            for g in frame.geometry
+            if g is not None and not g.is_empty
+        ]
+        if costs:  # (a collection of null geometries was refused when read)
+            cost = Estimate(max(c.bytes for c in costs), sum(c.seconds for c in costs))
+    check_budget(cost, limits.memory, limits.seconds)
+    t0 = time.perf_counter()
+    raster = replace(job.raster, crs=None)  # the CRS goes on its own, as centerlines takes it
+    body = geojson_lines(
+        job.data,
+        main_path=job.output.lines == "main-path",
+        crs=job.raster.crs,
+        options=job.options,
+        raster=raster,
+    )
+    return JobResult(
+        body=body,
+        media_type=MEDIA_TYPES[job.media],
+        prune_seconds=time.perf_counter() - t0,
+    )
+
+
+def _feature_raster(job: Job, frame: Any) -> RasterOptions:
+    """The raster options a Feature of ``frame`` is read with for its estimate: the
+    job's, with the collection's CRS where the job gives none."""
+    from skelprune.io.crs import crs_name
+
+    crs = job.raster.crs or crs_name(frame.crs)
+    return job.raster if crs is None else replace(job.raster, crs=crs)
+
+
 def png_headers(values: list[Any]) -> dict[str, str]:
     """The PNG answer's headers from each component's numbers (a mapping with the keys of
     :data:`PNG_HEADERS`): the values up to :data:`PNG_HEADER_COMPONENTS` components,
@@ -238,7 +300,6 @@ def png_headers(values: list[Any]) -> dict[str, str]:
 
 
 def dumps(doc: Any) -> bytes:
-    """The answer as compact JSON (what every job serialises with)."""
-    # A number that is not finite is null (the one rule of skelprune.output.finite);
-    # allow_nan=False then only guards that rule.
-    return json.dumps(finite_tree(doc), separators=(",", ":"), allow_nan=False).encode()
+    """The answer as compact JSON (what every job serialises with): a number that is not
+    finite is null, the one rule of :mod:`skelprune.output.finite`."""
+    return finite_json(doc)

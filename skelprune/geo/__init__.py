@@ -32,9 +32,19 @@ from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 from ..errors import SkelpruneError
 from ..io.crs import PLANAR, crs_name
 from ..output.document import PruneResult
+from ..output.finite import finite
+from .answer import geojson_frame, geojson_lines, lines_geojson
 from .carto import END_FACTOR, SHARE, cartographic_lines
 
-__all__ = ["centerlines", "feature_lines", "read_frame", "write_frame"]
+__all__ = [
+    "centerlines",
+    "feature_lines",
+    "geojson_frame",
+    "geojson_lines",
+    "lines_geojson",
+    "read_frame",
+    "write_frame",
+]
 
 log = logging.getLogger("skelprune.geo")
 
@@ -129,7 +139,13 @@ def feature_lines(
             rows += [{"geometry": g, "part": i, "kind": "line", **_numbers(ln)} for g, ln in found]
             continue
         rows.append(
-            {"geometry": centre, "part": i, "kind": "point", "length": 0.0, "width": 2 * radius}
+            {
+                "geometry": centre,
+                "part": i,
+                "kind": "point",
+                "length": 0.0,
+                "width": finite(2 * radius),
+            }
         )
         if len(parts) > 1 or not found:
             warnings.append(
@@ -143,8 +159,9 @@ def feature_lines(
     return rows, warnings
 
 
-def _numbers(ln: Any) -> dict[str, float]:
-    return {"length": ln.length, "width": ln.width}
+def _numbers(ln: Any) -> dict[str, float | None]:
+    # the one rule of every answer: a number that is not finite is null
+    return {"length": finite(ln.length), "width": finite(ln.width)}
 
 
 def _centre(part: Polygon) -> tuple[Point, float]:
@@ -326,6 +343,8 @@ def write_frame(frame: Any, path: str | os.PathLike[str]) -> None:
         )
     if driver == "parquet":
         frame.to_parquet(path)
+    elif driver == "GeoJSON":  # the bytes the service answers with lines=map
+        path.write_bytes(lines_geojson(frame, path.stem))
     else:
         if path.exists():
             path.unlink()

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from .._version import ALGORITHM_VERSION, __version__
+from ..errors import InvalidOptionError
 from ..io.foreground import Foreground
 from ..io.frame import PixelFrame
 from ..options import OutputOptions, PruneOptions
@@ -201,7 +202,9 @@ class PruneResult:
         the medial point across the line (sub-pixel, from the exact polygon). ``cut_ends``
         ends a reach cut straight across at the middle of the cut instead of in a fork to
         its corners (both None: as the result's :attr:`output` options say). The
-        document's points stay exact: only this map output changes.
+        document's points stay exact: only this map output changes. The map lines
+        (output option ``lines="map"``) are :func:`skelprune.geo.centerlines`'s, from
+        the polygon: refused here.
 
         Every feature's properties carry its component's ``rer`` and ``ss``; the
         collection's ``properties`` (a foreign member) the document's options and the
@@ -209,6 +212,13 @@ class PruneResult:
         component's ``area``, ``alpha``, ``rer``, ``ss`` and ``objective``, and for a
         polygon the raster's ``warnings``.
         """
+        if self.output.lines != "branches":
+            raise InvalidOptionError(
+                f"lines={self.output.lines!r}: the map lines prune each polygon Feature on "
+                "its own, from the polygon: skelprune.geo.centerlines(frame) or "
+                "skelprune.geo.geojson_lines(geojson) (docs/gis.md); a result's "
+                "to_geojson() gives its branches"
+            )
         # imported here: the map lines pull shapely, OpenCV and scipy.spatial, which
         # a prune() that never draws a map should not pay for at startup
         from .geojson import skeleton_geojson

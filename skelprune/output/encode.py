@@ -7,12 +7,11 @@ are null (:mod:`skelprune.output.finite`): every answer is valid JSON, CSV or XM
 
 from __future__ import annotations
 
-import json
 from typing import TYPE_CHECKING, Any
 
 from ..errors import InvalidOptionError
 from ..options_where import ANSWERS, ANSWERS_OF
-from .finite import finite_tree
+from .finite import finite_json
 
 if TYPE_CHECKING:
     from .document import PruneResult
@@ -27,17 +26,18 @@ MEDIA_TYPES = {
     "csv": "text/csv; charset=utf-8",
     "graphml": "application/graphml+xml",
     "png": "image/png",
-    "swc": "text/plain; charset=utf-8",
+    "swc": "text/x-swc",
 }
 
 
 def json_bytes(doc: Any) -> bytes:
-    """A document as compact JSON (no spaces), UTF-8; non-finite numbers null.
+    """A document as compact JSON (no spaces), UTF-8; non-finite numbers null
+    (:func:`skelprune.output.finite.finite_json`, the one rule).
 
     >>> json_bytes({"a": [1, 2.5, float("nan")], "b": "é"})
     b'{"a":[1,2.5,null],"b":"\\\\u00e9"}'
     """
-    return json.dumps(finite_tree(doc), separators=(",", ":"), allow_nan=False).encode()
+    return finite_json(doc)
 
 
 def encode(result: PruneResult | VolumeResult, answer: str = "json") -> bytes:

@@ -2,18 +2,40 @@
 
 An answer's number that came out NaN or infinite (an undefined junction angle, a
 length past the float range) is written as null in every encoding: ``None`` in a
-document (JSON and GeoJSON ``null``), an empty CSV cell, a GraphML value left out, the
-word ``null`` in a PNG answer's header list. Options that would make every number
-overflow are refused up front instead (their ranges, in :mod:`skelprune.options`).
-Every encoder reads its numbers through :func:`finite` or :func:`finite_tree`.
+document (JSON and GeoJSON ``null``: :func:`finite_tree`, :func:`finite_json`), an
+empty CSV cell (:func:`finite_cell`), a GraphML value left out, the word ``null`` in a
+PNG answer's header list (:func:`finite_text`), a map line's property null. Options
+that would make every number overflow are refused up front instead (their ranges, in
+:mod:`skelprune.options`); a format with no null (SWC, whose numbers are voxel
+positions times a bounded spacing) refuses a number that is not finite as an overflow
+(:func:`finite_number`). Every encoder reads its numbers through this module.
 """
 
 from __future__ import annotations
 
+import json
 import math
 from typing import Any
 
-__all__ = ["finite", "finite_text", "finite_tree"]
+import numpy as np
+
+from ..errors import SkelpruneError
+
+__all__ = [
+    "OVERFLOW",
+    "finite",
+    "finite_cell",
+    "finite_json",
+    "finite_number",
+    "finite_text",
+    "finite_tree",
+]
+
+#: Why an answer in a format without null cannot be written: a number overflowed.
+OVERFLOW = (
+    "the answer would hold a number JSON cannot write (an overflow); scale the input "
+    "coordinates down"
+)
 
 
 def finite(value: Any) -> Any:
@@ -21,10 +43,48 @@ def finite(value: Any) -> Any:
 
     >>> finite(1.5), finite(float("nan")), finite(float("-inf")), finite("x"), finite(3)
     (1.5, None, None, 'x', 3)
+    >>> finite(np.float32("nan")) is None
+    True
     """
-    if isinstance(value, float) and not math.isfinite(value):
+    if isinstance(value, float | np.floating) and not math.isfinite(value):
         return None
     return value
+
+
+def finite_cell(value: Any) -> Any:
+    """A CSV cell: ``value``, or the empty string for null and a number not finite.
+
+    >>> finite_cell(2.5), finite_cell(float("nan")), finite_cell(None), finite_cell("end")
+    (2.5, '', '', 'end')
+    """
+    number = finite(value)
+    return "" if number is None else number
+
+
+def finite_json(doc: Any) -> bytes:
+    """A document as compact JSON bytes (no spaces), every number not finite null.
+
+    >>> finite_json({"a": [1.0, float("nan")], "b": "x"})
+    b'{"a":[1.0,null],"b":"x"}'
+    """
+    # allow_nan=False only guards the rule: finite_tree has made every such number null
+    return json.dumps(finite_tree(doc), separators=(",", ":"), allow_nan=False).encode()
+
+
+def finite_number(value: Any) -> str:
+    """A number as a format without null writes it (``%g``); one that is not finite can
+    only be an overflow, refused.
+
+    >>> finite_number(2.0), finite_number(np.float64(0.125))
+    ('2', '0.125')
+    >>> finite_number(float("inf"))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    skelprune.errors.SkelpruneError: the answer would hold a number JSON cannot write ...
+    """
+    if finite(float(value)) is None:
+        raise SkelpruneError(OVERFLOW)
+    return f"{float(value):g}"
 
 
 def finite_tree(doc: Any) -> Any:
@@ -54,7 +114,7 @@ def _is_finite(doc: Any) -> bool:
     stack = [doc]
     while stack:
         item = stack.pop()
-        if isinstance(item, float):
+        if isinstance(item, float | np.floating):
             if not math.isfinite(item):
                 return False
         elif isinstance(item, dict):
@@ -65,7 +125,7 @@ def _is_finite(doc: Any) -> bool:
 
 
 def _replaced(doc: Any) -> Any:
-    if isinstance(doc, float):
+    if isinstance(doc, float | np.floating):
         return finite(doc)
     if isinstance(doc, dict):
         return {k: _replaced(v) for k, v in doc.items()}

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from ..io.frame import IDENTITY, PixelFrame
-from .finite import finite
+from .finite import finite, finite_cell
 from .table import ENDPOINT, JUNCTION, LOOP, BranchTable
 
 #: A :class:`~skelprune.output.document.PruneResult` (which imports this module).
@@ -391,7 +391,7 @@ def table_csv(result: PruneResult, level: str = "branch") -> str:
     writer = csv.DictWriter(buf, fieldnames=list(columns), lineterminator="\n")
     writer.writeheader()
     for row in rows:
-        writer.writerow({k: ("" if finite(v) is None else v) for k, v in row.items()})
+        writer.writerow({k: finite_cell(v) for k, v in row.items()})
     return buf.getvalue()
 
 

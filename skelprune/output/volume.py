@@ -22,7 +22,7 @@ from ..grid3d.tips import VolumeTrim
 from ..options import OutputOptions, PruneOptions
 from ..pruning.bayesian import PruningSequence, target
 from ..pruning.margin import Margins
-from .finite import finite, finite_tree
+from .finite import finite, finite_cell, finite_number, finite_tree
 
 __all__ = ["VolumeComponent", "VolumeResult"]
 
@@ -289,7 +289,7 @@ class VolumeResult:
                         "removed_at": br["removed_at"],
                     }
                 )
-        return rows
+        return [{k: finite(v) for k, v in row.items()} for row in rows]
 
     @property
     def warnings(self) -> list[dict[str, Any]]:
@@ -303,7 +303,7 @@ class VolumeResult:
         writer = csv.DictWriter(buf, fieldnames=list(VOLUME_BRANCH_COLUMNS), lineterminator="\n")
         writer.writeheader()
         for row in self._branch_rows():
-            writer.writerow({k: ("" if finite(v) is None else v) for k, v in row.items()})
+            writer.writerow({k: finite_cell(v) for k, v in row.items()})
         return buf.getvalue()
 
     def to_networkx(self) -> Any:
@@ -361,11 +361,14 @@ class VolumeResult:
                     next_id += 1
                     p = pts[q]
                     up = -1 if parent[q] < 0 else ids[int(parent[q])]
-                    lines.append(
-                        f"{ids[q]} 0 {(s.x[p] + s.origin[2]) * dx:g} "
-                        f"{(s.y[p] + s.origin[1]) * dy:g} {(s.z[p] + s.origin[0]) * dz:g} "
-                        f"{float(np.sqrt(s.r2[p])):g} {up}"
+                    # SWC has no null: every number is finite (finite_number)
+                    x, y, z = (
+                        (s.x[p] + s.origin[2]) * dx,
+                        (s.y[p] + s.origin[1]) * dy,
+                        (s.z[p] + s.origin[0]) * dz,
                     )
+                    numbers = " ".join(map(finite_number, (x, y, z, np.sqrt(s.r2[p]))))
+                    lines.append(f"{ids[q]} 0 {numbers} {up}")
         return "\n".join(lines) + "\n"
 
     def to_geojson(self, *args: Any, **kwargs: Any) -> Any:

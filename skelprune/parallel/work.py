@@ -16,7 +16,7 @@ from ..errors import JobTooLargeError, SkelpruneError, problem_kind
 from ..limits import DATASET_LIMITS, Limits
 from ..options import OutputOptions, PruneOptions, RasterOptions, ReadOptions, VolumeOptions
 from ..output.encode import json_bytes
-from ..output.finite import finite_tree
+from ..output.finite import OVERFLOW, finite_tree
 from ..volume import is_volume
 from .items import Feature, Item, LabelObject
 
@@ -40,11 +40,6 @@ WORKER_CRASHED = "worker-crashed"
 INTERNAL_ERROR = "internal-error"
 #: A file that cannot be read at all (missing, no permission): the input's problem.
 UNREADABLE = SkelpruneError.kind
-#: An answer with a number JSON cannot write (an infinity from an overflow).
-OVERFLOW = (
-    "the answer would hold a number JSON cannot write (an overflow); scale the input "
-    "coordinates down"
-)
 
 T = TypeVar("T")
 

@@ -148,6 +148,14 @@ def _doc(res: skelprune.PruneResult) -> dict[str, Any]:
     return res.to_dict()
 
 
+def _lines(res: skelprune.PruneResult) -> str:
+    """The GeoJSON's first feature's kind, or why the map lines are not a result's."""
+    try:
+        return str(res.to_geojson()["features"][0]["properties"]["kind"])
+    except InvalidOptionError as exc:  # lines=map: skelprune.geo.geojson_lines
+        return str(exc)
+
+
 CHANGES: dict[str, tuple[dict[str, Any], Any]] = {
     # PruneOptions: in the document's top level
     "beta": ({"beta": 4.0}, lambda r: _doc(r)["beta"]),
@@ -189,6 +197,7 @@ CHANGES: dict[str, tuple[dict[str, Any], Any]] = {
     ),
     "simplify": ({"simplify": 0.0}, lambda r: r.to_geojson()["properties"]["simplify"]),
     "cut_ends": ({"cut_ends": True}, lambda r: r.to_geojson()["properties"]["cut_ends"]),
+    "lines": ({"lines": "map"}, _lines),
     "table": ({"table": "component"}, lambda r: r.to_csv().splitlines()[0]),
 }
 

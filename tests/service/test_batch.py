@@ -71,7 +71,11 @@ def test_json_list_of_polygons(client: TestClient) -> None:
         ({"json": []}, 422, "empty"),
         ({"json": {"type": "Polygon"}}, 422, "JSON list"),
         ({"json": [rect(4, 2)], "params": {"beta": "-1"}}, 422, "beta"),
-        ({"json": [rect(4, 2)], "params": {"foreground": "zero"}}, 422, "only apply to image input"),
+        (
+            {"json": [rect(4, 2)], "params": {"foreground": "zero"}},
+            422,
+            "only apply to image input",
+        ),
         ({"content": b"x", "headers": {"content-type": "text/plain"}}, 415, "not supported"),
         (
             {

@@ -29,7 +29,7 @@ ACCEPT = {
     "csv": "text/csv",
     "graphml": "application/graphml+xml",
     "png": "image/png",
-    "swc": "text/plain",
+    "swc": "text/x-swc",
 }
 #: Where the command line writes each answer but the one it prints.
 CLI_FILES = {"csv": "--csv", "graphml": "--graphml", "png": "--overlay", "swc": "--swc"}

@@ -33,7 +33,7 @@ medial axis, and the errors. The graph, the kernels, the frame and the other rea
 reached through their modules (``skelprune.grid.graph.BranchGraph``,
 ``skelprune.io.frame.PixelFrame``, ``skelprune.io.png.read_mask``, ...).
 
->>> skelprune.encode(skelprune.prune(m), "geojson")[:29]
+>>> skelprune.encode(skelprune.prune(m), "geojson")[:28]
 b'{"type":"FeatureCollection",'
 >>> len(skelprune.__all__) <= 25
 True

@@ -105,12 +105,15 @@ def refuse_misplaced(
     >>> refused(["foreground", "fill_holes"], "polygon")
     'option(s) foreground, fill_holes only apply to image input (PNG or TIFF)'
     >>> refused(["simplify"], "image", "csv")  # doctest: +NORMALIZE_WHITESPACE
-    'option(s) simplify only apply to the GeoJSON answer (application/geo+json) of image or
-     polygon input, not to the CSV tables (text/csv)'
+    'option(s) simplify only apply to the GeoJSON answer (application/geo+json) of image
+     input (PNG or TIFF), not to the CSV tables (text/csv)'
     >>> refused(["pixel_size"], "image", "json")  # doctest: +NORMALIZE_WHITESPACE
+    'option(s) pixel_size only apply to the CSV tables (text/csv) or the GraphML graph
+     (application/graphml+xml) of image input (PNG or TIFF), not to the JSON document
+     (application/json)'
+    >>> refused(["pixel_size"], "volume", "json")  # doctest: +NORMALIZE_WHITESPACE
     'option(s) pixel_size only apply to polygon input (GeoJSON), or image input (PNG or
-     TIFF) with the CSV tables (text/csv) or the GraphML graph (application/graphml+xml),
-     not to the JSON document (application/json)'
+     TIFF) with the CSV tables (text/csv) or the GraphML graph (application/graphml+xml)'
     >>> refused([], "volume", "geojson")  # doctest: +NORMALIZE_WHITESPACE
     'volume input (a .npy file or a TIFF stack) has no GeoJSON answer
      (application/geo+json); its answers: the JSON document (application/json), the
@@ -134,7 +137,7 @@ def refuse_misplaced(
             continue
         applies = where[kind]
         if asked is not None and applies is not None and not asked & set(applies):
-            wrong_answer.setdefault(_places(where), []).append(name)
+            wrong_answer.setdefault(f"{_answers(applies)} of {_INPUTS[kind]}", []).append(name)
     for place, names in wrong_input.items():
         raise InvalidOptionError(f"option(s) {', '.join(names)} only apply to {place}")
     for place, names in wrong_answer.items():

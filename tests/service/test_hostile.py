@@ -21,6 +21,7 @@ from PIL import Image
 import skelprune
 from service.http.schemas import Problem
 from service.worker.jobs import Job, run_job
+from skelprune.limits import Limits
 from skelprune.budget import (
     Estimate,
     JobTooLargeError,
@@ -115,7 +116,7 @@ def test_memory_error_in_a_job_is_the_budget_problem(monkeypatch: pytest.MonkeyP
         raise MemoryError
 
     monkeypatch.setattr(skelprune.api, "prune_input", exhausted)
-    job = Job(media="json", kind="image", data=png(dots(20)), memory_budget=2**31)
+    job = Job(media="json", kind="image", data=png(dots(20)), limits=Limits(memory_mb=2048))
     with pytest.raises(JobTooLargeError, match="more than the memory budget of 2,048 MiB"):
         run_job(job)
 

@@ -65,6 +65,7 @@ def test_the_memory_estimate_follows_the_scope() -> None:
     from service.worker.jobs import Job, run_job
     from skelprune.budget import BYTES_PER_PIXEL, BYTES_PER_PIXEL_LOCAL, estimate, resident_bytes
     from skelprune.errors import JobTooLargeError
+    from skelprune.limits import Limits
     from skelprune.options import PruneOptions
 
     mask = np.zeros((4096, 4096), np.uint8)
@@ -75,7 +76,8 @@ def test_the_memory_estimate_follows_the_scope() -> None:
     local, whole = estimate(mask > 0, scope="local"), estimate(mask > 0)
     assert whole.bytes - local.bytes == (BYTES_PER_PIXEL - BYTES_PER_PIXEL_LOCAL) * mask.size
     budget = resident_bytes() + (local.bytes + whole.bytes) // 2
-    job = Job(media="json", kind="image", data=buf.getvalue(), memory_budget=budget)
+    limits = Limits(memory_mb=budget // 2**20)
+    job = Job(media="json", kind="image", data=buf.getvalue(), limits=limits)
     with pytest.raises(JobTooLargeError, match="memory budget"):
         run_job(job)
     answer = run_job(dataclasses.replace(job, options=PruneOptions(scope="local")))

@@ -21,7 +21,6 @@ from PIL import Image
 import skelprune
 from service.http.schemas import Problem
 from service.worker.jobs import Job, run_job
-from skelprune.limits import Limits
 from skelprune.budget import (
     Estimate,
     JobTooLargeError,
@@ -29,6 +28,7 @@ from skelprune.budget import (
     estimate,
     shape_counts,
 )
+from skelprune.limits import Limits
 from testkit.adversarial import CORPUS, checkerboard, dots, noise
 from testkit.pngfile import chunk
 

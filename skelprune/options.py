@@ -302,7 +302,9 @@ class OutputOptions:
         _check_fields(self)
 
 
-GROUPS: tuple[type, ...] = (PruneOptions, OutputOptions, ReadOptions, RasterOptions)
+#: Every options class: how to prune, what the answers hold, and the input's (an
+#: image's pixels, a polygon's raster, a volume's voxels).
+GROUPS: tuple[type, ...] = (PruneOptions, OutputOptions, ReadOptions, RasterOptions, VolumeOptions)
 
 
 def check_option(name: str, value: Any) -> Any:

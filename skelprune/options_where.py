@@ -13,7 +13,7 @@ from collections.abc import Collection, Iterable
 from dataclasses import fields
 
 from .errors import InvalidOptionError
-from .options import GROUPS, VolumeOptions
+from .options import GROUPS
 from .options_checks import INPUT_KINDS
 
 __all__ = ["ANSWERS", "ANSWERS_OF", "INPUT_KINDS", "option_where", "refuse_misplaced"]
@@ -39,7 +39,7 @@ _INPUTS = {
     "polygon": "polygon input (GeoJSON)",
     "volume": "volume input (a .npy file or a TIFF stack)",
 }
-_WHERE = {f.name: f.metadata["where"] for group in (*GROUPS, VolumeOptions) for f in fields(group)}
+_WHERE = {f.name: f.metadata["where"] for group in GROUPS for f in fields(group)}
 
 
 def option_where(name: str) -> dict[str, tuple[str, ...] | None]:

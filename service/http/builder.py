@@ -37,7 +37,7 @@ __all__ = ["JobBuilder", "job_builder"]
 #: Options of the skeleton's branches as GeoJSON: the map lines (lines=map) have none.
 BRANCHES_ONLY = ("simplify", "cut_ends")
 #: The option groups a request's options are sorted into, each checked by its class.
-OPTION_GROUPS = (*GROUPS, VolumeOptions)
+OPTION_GROUPS = GROUPS
 
 
 def _gather(

@@ -74,6 +74,8 @@ def _option_models() -> tuple[type[BaseModel], dict[str, Any]]:
     """
     fields: dict[str, Any] = {}
     for group in GROUPS:
+        if group is VolumeOptions:  # spacing: three numbers written DZ,DY,DX, below
+            continue
         hints = get_type_hints(group)
         for f in dataclass_fields(group):
             choices = f.metadata["choices"]
@@ -145,9 +147,7 @@ def query_parameters(model: type[BaseModel]) -> list[dict[str, Any]]:
 GEOJSON = ConfigDict(strict=True, extra="allow")
 #: Option names, refused as foreign members: an option there would be ignored silently
 #: (but ``crs``, which is the GeoJSON's own member too).
-_OPTION_NAMES = frozenset(
-    f.name for group in (*GROUPS, VolumeOptions) for f in dataclass_fields(group)
-) - {"crs"}
+_OPTION_NAMES = frozenset(f.name for group in GROUPS for f in dataclass_fields(group)) - {"crs"}
 
 
 class _GeoJSONObject(BaseModel):

@@ -199,6 +199,8 @@ CHANGES: dict[str, tuple[dict[str, Any], Any]] = {
     "cut_ends": ({"cut_ends": True}, lambda r: r.to_geojson()["properties"]["cut_ends"]),
     "lines": ({"lines": "map"}, _lines),
     "table": ({"table": "component"}, lambda r: r.to_csv().splitlines()[0]),
+    # VolumeOptions: in a volume's document
+    "spacing": ({"spacing": (2.0, 1.0, 1.0)}, lambda r: _doc(r)["spacing"]),
 }
 
 
@@ -209,8 +211,12 @@ def test_the_table_covers_every_option() -> None:
 @pytest.mark.parametrize("name", sorted(CHANGES))
 def test_every_option_shows_in_the_outputs(name: str) -> None:
     given, shown = CHANGES[name]
-    polygon = name in {f.name for f in fields(RasterOptions)}
+    # each option on an input it applies to (its definition's ``where``)
+    polygon = name in {f.name for f in fields(RasterOptions)} | {"lines"}
     source: Any = L_SHAPE if polygon else rectangle().astype(np.uint8)
+    if name == "spacing":
+        source = np.zeros((8, 10, 30), bool)
+        source[2:6, 3:7, 2:28] = True
     default, changed = skelprune.prune(source), skelprune.prune(source, **given)
     assert shown(default) != shown(changed)
     if name in {f.name for f in fields(PruneOptions)}:  # recorded as applied

@@ -118,7 +118,7 @@ def test_a_bare_polygon_is_one_feature_without_attributes(
         ({"lines": "map"}, {}, "lines only apply to the GeoJSON answer"),
         ({"lines": "map"}, {"accept": "text/csv"}, "lines only apply to the GeoJSON answer"),
         ({"lines": "maps"}, GEOJSON, "query.lines: Input should be 'branches', 'map' or"),
-        ({}, {"accept": "text/x-swc"}, "SWC holds a volume's curve skeleton"),
+        ({}, {"accept": "text/x-swc"}, "has no SWC answer"),
     ],
 )
 def test_map_lines_and_swc_are_refused_where_they_do_not_apply(
@@ -142,7 +142,7 @@ def test_map_lines_of_an_image_are_refused(client: TestClient) -> None:
         headers={"content-type": "image/png", **GEOJSON},
     )
     assert resp.status_code == 422, resp.text
-    assert "only applies to polygon (GeoJSON) input" in resp.json()["detail"]
+    assert "of polygon input (GeoJSON)" in resp.json()["detail"]
     # the skeleton's branches of an image, as before
     resp = client.post(
         "/v1/prune",

@@ -196,13 +196,12 @@ def pruning_sequence(
 
     for b in graph.ends:
         mark_end(b)
+    total_steps = seq.steps[0]  # the graph's, kept up to date with each removal
     while graph.ends:
-        ends = np.flatnonzero(is_end)
-        seq.end_areas.append((ends, cov.exclusive[ends + 1]))
         if order is None:
             assert alpha is not None
             # The best end branch that is not a limb; a limb found is kept for good.
-            total = np.asarray(graph.total_steps(), np.int64)
+            total = np.asarray(total_steps, np.int64)
             while True:
                 pick = _pick(
                     is_end, cov.exclusive, bsteps, ep, cov.lost, area, total, weights, alpha, lbar
@@ -215,13 +214,15 @@ def pruning_sequence(
                     break
                 is_end[pick] = False
             if pick < 0:  # only limbs are left
-                seq.end_areas.pop()
                 break
+            # (the limbs found are no longer end branches here; the areas did not move)
             ends = np.flatnonzero(is_end)
-            seq.end_areas[-1] = (ends, cov.exclusive[ends + 1])
+            seq.end_areas.append((ends, cov.exclusive[ends + 1]))
             if guard is not None:
                 guard.removed(pick)
         elif len(seq.removed) < len(order):
+            ends = np.flatnonzero(is_end)
+            seq.end_areas.append((ends, cov.exclusive[ends + 1]))
             pick = order[len(seq.removed)]
         else:
             break
@@ -242,7 +243,8 @@ def pruning_sequence(
             bsteps[kept] = graph.branch_steps(kept)
             mark_end(kept)
         seq.lost.append(cov.lost)
-        seq.steps.append(graph.total_steps())
+        total_steps = graph.total_steps()
+        seq.steps.append(total_steps)
     return seq
 
 

@@ -359,11 +359,28 @@ def _by_radius(fg, r2):
     """The pixels of ``fg``, smallest ``r2`` first, ties in raster order (a stable sort
     of the raster order by radius, as ``np.lexsort((cols, rows, r2[rows, cols]))``)."""
     rows, cols = _raster_pixels(fg)
-    vals = np.empty(rows.size, dtype=np.int64)
-    for k in range(rows.size):
+    n = rows.size
+    vals = np.empty(n, dtype=np.int64)
+    top = 0
+    for k in range(n):
         vals[k] = r2[rows[k], cols[k]]
-    order = np.argsort(vals, kind="mergesort")  # stable
-    return rows[order], cols[order]
+        top = max(top, vals[k])
+    if top > 4 * n + 1024:  # radii far apart (few pixels of a large blob): a merge sort
+        order = np.argsort(vals, kind="mergesort")  # stable
+        return rows[order], cols[order]
+    # a stable counting sort by radius: the same order, without the n·log n
+    start = np.zeros(top + 2, dtype=np.int64)
+    for k in range(n):
+        start[vals[k] + 1] += 1
+    for v in range(top + 1):
+        start[v + 1] += start[v]
+    out_rows = np.empty(n, dtype=np.int64)
+    out_cols = np.empty(n, dtype=np.int64)
+    for k in range(n):
+        slot = start[vals[k]]
+        start[vals[k]] = slot + 1
+        out_rows[slot], out_cols[slot] = rows[k], cols[k]
+    return out_rows, out_cols
 
 
 @njit(cache=True, inline="always")

@@ -189,10 +189,12 @@ def pruning_sequence(
     guard = start.limb_test(graph) if order is None else None
 
     def mark_end(b: int) -> None:
-        is_end[b] = graph.is_end_branch(b) and not (guard is not None and guard.limb[b])
-        if is_end[b]:
+        end = graph.is_end_branch(b) and not (guard is not None and guard.limb[b])
+        is_end[b] = end
+        if end:
             p = graph.endpoint(b)
-            ep[b] = [c[p] for c in coords]
+            for k, c in enumerate(coords):  # (element by element: a row from a list costs more)
+                ep[b, k] = c[p]
 
     for b in graph.ends:
         mark_end(b)

@@ -218,12 +218,12 @@ def pruning_sequence(
             if pick < 0:  # only limbs are left
                 break
             # (the limbs found are no longer end branches here; the areas did not move)
-            ends = np.flatnonzero(is_end)
+            ends = is_end.nonzero()[0]
             seq.end_areas.append((ends, cov.exclusive[ends + 1]))
             if guard is not None:
                 guard.removed(pick)
         elif len(seq.removed) < len(order):
-            ends = np.flatnonzero(is_end)
+            ends = is_end.nonzero()[0]
             seq.end_areas.append((ends, cov.exclusive[ends + 1]))
             pick = order[len(seq.removed)]
         else:

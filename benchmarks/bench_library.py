@@ -12,7 +12,9 @@ each tree timed in a fresh process of its own (the trees alternated, ``N`` round
 default; CPU time by default): the code of this tree, and with ``--before`` that of
 another checkout (the code before a change), in the same run. ``--stages`` adds where the
 time goes in this tree: each stage of ``prune()`` timed in CPU time inside the pipeline
-(wrappers in its namespace), best of 5 passes over the shapes, ms a shape.
+(wrappers in its namespace; the indented rows one level down, inside the stages), best of 5
+passes over the shapes, ms a shape. ``--axis`` adds the compiled medial axis's stages,
+called one by one.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import os
 import subprocess
 import sys
 import time
+from itertools import pairwise
 from pathlib import Path
 
 import numpy as np
@@ -210,8 +213,13 @@ def _kimia_main(argv: list[str]) -> None:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--clock", choices=("cpu", "wall"), default="cpu")
     parser.add_argument("--stages", action="store_true", help="this tree's stage profile")
+    parser.add_argument("--axis", action="store_true", help="the compiled axis's stages")
     args = parser.parse_args(argv)
     from testkit import DATA, REPO
+
+    if args.axis:
+        print(_axis_stages(dataset("kimia216")))
+        print()
 
     data = DATA / "kimia216"
     trees = [("after (this tree)", REPO)]
@@ -289,6 +297,19 @@ def _stages(masks: list[np.ndarray], passes: int = 5) -> str:
     wrapped(pipeline, "branch_margins", "margins")
     wrapped(pipeline, "prune_component", "prune_component (all of the above and more)")
     wrapped(PruneResult, "to_dict", "to_dict()")
+    # one level down (inside the stages above)
+    import skelprune.grid.coverage as coverage
+    import skelprune.grid.graph as graph
+    import skelprune.pruning.limbs as limbs
+
+    wrapped(coverage.Coverage, "__init__", "  sequence: coverage set-up")
+    wrapped(coverage.Coverage, "remove_label", "  sequence: coverage removals")
+    wrapped(coverage.Coverage, "merge_label", "  sequence: coverage merges")
+    wrapped(limbs.LimbGuard, "__init__", "  sequence: limb guard set-up")
+    wrapped(limbs.LimbGuard, "is_limb", "  sequence: limb tests")
+    wrapped(graph.BranchGraph, "remove_end_branch", "  graph removals (every stage)")
+    wrapped(graph.BranchGraph, "copy", "  graph copies (every stage)")
+    wrapped(skeleton.Skeleton, "lost_along", "  choice: grown disks' losses (lost_along)")
     skelprune.prune(masks[0]).to_dict()
     gc.freeze()  # (no collection of the warm-up's garbage inside a stage)
     best: dict[str, float] = {}
@@ -302,3 +323,52 @@ def _stages(masks: list[np.ndarray], passes: int = 5) -> str:
             best[k] = min(best.get(k, np.inf), v)
     rows = [[k, 1000 * v / len(masks)] for k, v in best.items()]
     return table(["stage (CPU time)", "ms a shape, best of passes"], rows)
+
+
+def _axis_stages(masks: list[np.ndarray], passes: int = 7) -> str:
+    """The compiled medial axis's stages called one by one on every component, in its
+    canonical orientation, CPU time, ms a shape (best of ``passes``), and the fused call."""
+    import skelprune.grid.medial_axis as ma
+    from skelprune.grid import oriented
+    from skelprune.grid._last_cover import drop_redundant_anchors
+    from skelprune.grid._maximal_disks import VECTOR_KIND, VECTORS, _anchors, _domination_table
+
+    crops = []
+    for m in masks:
+        for crop, _ in components(m):
+            shape = np.ascontiguousarray(oriented(crop)[0])
+            crops.append((shape, ma.squared_distance(shape)))
+    best: dict[str, float] = {}
+    for _ in range(passes):
+        spent: dict[str, float] = {}
+        for shape, r2 in crops:
+            stamps: list[tuple[str, float]] = [("", time.process_time())]
+            need = _domination_table(r2)
+            stamps.append(("domination table", time.process_time()))
+            anchor = _anchors(r2, need, VECTORS, VECTOR_KIND)
+            stamps.append(("anchors (centres of maximal disks)", time.process_time()))
+            ar, ac = ma._by_radius(anchor, r2)
+            stamps.append(("anchors by radius", time.process_time()))
+            drop_redundant_anchors(anchor, r2, ar, ac)
+            stamps.append(("redundant anchors", time.process_time()))
+            fg = shape.copy()
+            ma._ordered_thinning(fg, r2, anchor, ma.SIMPLE)
+            stamps.append(("distance-ordered thinning", time.process_time()))
+            rows, cols = ma._by_radius(fg, r2)
+            stamps.append(("pixels by radius", time.process_time()))
+            heights = float(np.sum(2.0 * np.sqrt(r2[rows, cols].astype(float)) + 1.0))
+            cap = ma._FIRST_CAP if heights > ma._CAPPED_HEIGHTS * r2.size else 0
+            stamps.append(("", time.process_time()))  # (numpy here, not the kernel's loop)
+            ma._thin(fg, r2, rows, cols, ma.SIMPLE, ma.DEGREE, cap)
+            stamps.append(("thinning pass", time.process_time()))
+            ma._extend_ends(fg, r2, ma.DEGREE)
+            stamps.append(("ends extended", time.process_time()))
+            ma._axis_pixels(shape, r2, need, VECTORS, VECTOR_KIND, ma.SIMPLE, ma.DEGREE)
+            stamps.append(("all of it, one compiled call", time.process_time()))
+            for (_, before), (label, after) in pairwise(stamps):
+                if label:
+                    spent[label] = spent.get(label, 0.0) + after - before
+        for k, v in spent.items():
+            best[k] = min(best.get(k, np.inf), v)
+    rows_out = [[k, 1000 * v / len(crops)] for k, v in best.items()]
+    return table(["compiled medial axis, stage (CPU time)", "ms a shape, best of passes"], rows_out)

@@ -357,7 +357,8 @@ def _axis_stages(masks: list[np.ndarray], passes: int = 7) -> str:
             rows, cols = ma._by_radius(fg, r2)
             stamps.append(("pixels by radius", time.process_time()))
             heights = float(np.sum(2.0 * np.sqrt(r2[rows, cols].astype(float)) + 1.0))
-            cap = ma._FIRST_CAP if heights > ma._CAPPED_HEIGHTS * r2.size else 0
+            # (the rule of the code measured: older code capped from heights of 1× the pixels)
+            cap = ma._FIRST_CAP if heights > getattr(ma, "_CAPPED_HEIGHTS", 1.0) * r2.size else 0
             stamps.append(("", time.process_time()))  # (numpy here, not the kernel's loop)
             ma._thin(fg, r2, rows, cols, ma.SIMPLE, ma.DEGREE, cap)
             stamps.append(("thinning pass", time.process_time()))

@@ -189,20 +189,21 @@ def pruning_sequence(
     guard = start.limb_test(graph) if order is None else None
 
     def mark_end(b: int) -> None:
-        is_end[b] = graph.is_end_branch(b) and not (guard is not None and guard.limb[b])
-        if is_end[b]:
+        end = graph.is_end_branch(b) and not (guard is not None and guard.limb[b])
+        is_end[b] = end
+        if end:
             p = graph.endpoint(b)
-            ep[b] = [c[p] for c in coords]
+            for k, c in enumerate(coords):  # (element by element: a row from a list costs more)
+                ep[b, k] = c[p]
 
     for b in graph.ends:
         mark_end(b)
+    total_steps = seq.steps[0]  # the graph's, kept up to date with each removal
     while graph.ends:
-        ends = np.flatnonzero(is_end)
-        seq.end_areas.append((ends, cov.exclusive[ends + 1]))
         if order is None:
             assert alpha is not None
             # The best end branch that is not a limb; a limb found is kept for good.
-            total = np.asarray(graph.total_steps(), np.int64)
+            total = np.asarray(total_steps, np.int64)
             while True:
                 pick = _pick(
                     is_end, cov.exclusive, bsteps, ep, cov.lost, area, total, weights, alpha, lbar
@@ -215,13 +216,15 @@ def pruning_sequence(
                     break
                 is_end[pick] = False
             if pick < 0:  # only limbs are left
-                seq.end_areas.pop()
                 break
-            ends = np.flatnonzero(is_end)
-            seq.end_areas[-1] = (ends, cov.exclusive[ends + 1])
+            # (the limbs found are no longer end branches here; the areas did not move)
+            ends = is_end.nonzero()[0]
+            seq.end_areas.append((ends, cov.exclusive[ends + 1]))
             if guard is not None:
                 guard.removed(pick)
         elif len(seq.removed) < len(order):
+            ends = is_end.nonzero()[0]
+            seq.end_areas.append((ends, cov.exclusive[ends + 1]))
             pick = order[len(seq.removed)]
         else:
             break
@@ -242,7 +245,8 @@ def pruning_sequence(
             bsteps[kept] = graph.branch_steps(kept)
             mark_end(kept)
         seq.lost.append(cov.lost)
-        seq.steps.append(graph.total_steps())
+        total_steps = graph.total_steps()
+        seq.steps.append(total_steps)
     return seq
 
 

@@ -288,7 +288,7 @@ class OutputOptions:
         "(map), or one line per network, its longest path (main-path; docs/gis.md).",
         _choice(LINES),
         LINES,
-        where={"polygon": ("geojson",)},
+        where=_PLANAR_GEOJSON,  # and the map lines for a polygon only (their value's rule)
     )
     table: str = _option(
         "branch",

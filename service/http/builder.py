@@ -74,6 +74,11 @@ def _gather(
             refuse_misplaced(opts, "volume", media, overlay)
         except InvalidOptionError:
             refuse_misplaced(opts, "image", media, overlay)
+    if opts.get("lines", "branches") != "branches":
+        raise InvalidOptionError(
+            f"lines={opts['lines']} only applies to the GeoJSON answer of polygon input "
+            "(GeoJSON): the map lines are drawn inside the polygon"
+        )
     return opts
 
 

@@ -60,7 +60,7 @@ def cut_end_branches(graph: BranchGraph, min_length: float) -> list[int]:
     graph : BranchGraph
         Modified in place.
     min_length : float
-        Cut threshold ``L`` in pixels (branch length as :attr:`Branch.length`).
+        Cut threshold ``L`` in pixels (a branch's length: :func:`step_length` of its steps).
 
     Returns
     -------
@@ -79,8 +79,8 @@ def cut_end_branches(graph: BranchGraph, min_length: float) -> list[int]:
         ends = graph.end_branches()
         if not ends:
             return removed
-        b = min(ends, key=lambda k: (graph.branches[k].length, k))
-        if graph.branches[b].length >= min_length:
+        b = min(ends, key=lambda k: (step_length(*graph.branches[k].steps), k))
+        if step_length(*graph.branches[b].steps) >= min_length:
             return removed
         graph.remove_end_branch(b)
         removed.append(b)
@@ -109,7 +109,7 @@ def skeletonize_cut(mask: np.ndarray, min_length: float) -> BaselineSkeleton:
     cut_end_branches(graph, min_length)
     keep = graph.alive_points()
     rr, cc = graph.rows[keep], graph.cols[keep]
-    na, nd = graph.length_counts()
+    na, nd = graph.total_steps()
     return BaselineSkeleton(
         rows=rr - 1,
         cols=cc - 1,

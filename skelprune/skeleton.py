@@ -65,7 +65,7 @@ def normalisation(graph: BranchGraph, r2: np.ndarray, beta: float) -> Normalisat
         return Normalisation(seed, 0.0, None)
     dist = _path_lengths(graph.nbr, seed)
     lbar = float(np.mean(dist[ends]))
-    length = step_length(graph.na, graph.nd)
+    length = step_length(*graph.total_steps())
     if not lbar > 0 or not length > 0:
         return Normalisation(seed, lbar, None)
     return Normalisation(seed, lbar, beta * math.log(length / lbar))
@@ -272,7 +272,7 @@ class Skeleton:
     @property
     def length(self) -> float:
         """Total length of the branches (steps of 1 and √2)."""
-        return step_length(self.graph.na, self.graph.nd)
+        return step_length(*self.graph.total_steps())
 
     @property
     def n_endpoints(self) -> int:

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from skelprune.grid.graph import step_length
 from skelprune.grid.reconstruction import reconstruction
 from skelprune.io.frame import IDENTITY, PixelFrame
 from skelprune.output.component import ComponentResult
@@ -70,7 +71,7 @@ def _graph_table(
                 "id": len(branches),
                 "source": src,
                 "target": dst,
-                "length": float(br.length),
+                "length": float(step_length(*br.steps)),
                 "points": [xyr(p) for p in path],
                 "off_path": [xyr(p) for p in sorted(br.side)],
                 "margin": None if margins is None else margins.margin.get(b),

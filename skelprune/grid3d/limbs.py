@@ -16,8 +16,8 @@ import math
 import numpy as np
 
 from .balls import _paint, ball_counts
-from .branches import VolumeBranchGraph
 from .distance import squared_distance
+from .graph import VolumeBranchGraph
 
 __all__ = ["VolumeLimbs", "limb_rule"]
 

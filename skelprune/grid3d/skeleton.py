@@ -21,8 +21,8 @@ from ..grid._roughness import volume_roughness
 from ..skeleton import Normalisation
 from ._topology import OFFSETS, step_lengths
 from .balls import reconstruction
-from .branches import VolumeBranchGraph
 from .coverage import VolumeCoverage
+from .graph import VolumeBranchGraph
 from .limbs import VolumeLimbs
 from .medial_axis import curve_skeleton
 

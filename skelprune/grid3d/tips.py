@@ -25,8 +25,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..pruning.branch_graph import Steps, add_steps
+from ..pruning.grid import path_length
 from .balls import _paint, ball_counts
-from .branches import Steps, VolumeBranchGraph, _add
+from .graph import VolumeBranchGraph
 
 if TYPE_CHECKING:
     from .skeleton import VolumeSkeleton
@@ -44,13 +46,6 @@ class VolumeTrim:
     steps: Steps
     cuts: list[tuple[int, int, int]]
     exclusive: dict[int, int]
-
-
-def _length(steps: Steps, weights: list[float]) -> float:
-    total = 0.0
-    for c, w in zip(steps, weights, strict=True):
-        total += c * w
-    return total
 
 
 class _Tips:
@@ -111,7 +106,7 @@ class _Tips:
             lost.append(int(np.count_nonzero(inside & (t == c))))
             step = [0] * 7
             step[kinds[k - 1]] = 1
-            steps.append(_add(steps[-1], tuple(step)))  # type: ignore[arg-type]
+            steps.append(add_steps(steps[-1], tuple(step)))  # type: ignore[arg-type]
         for k in range(1, m):
             s = points[k]
             reach = math.sqrt(float(sk.r2[s])) + self.h
@@ -139,13 +134,13 @@ def _best(
     area: int,
     alpha: float,
     lbar: float,
-    weights: list[float],
+    weights: np.ndarray,
 ) -> int:
     best, best_lam = 0, math.inf
     for k, (lo, st) in enumerate(zip(lost, steps, strict=True)):
         if lo < 0:
             continue
-        length = _length(_add(total, st, -1), weights)
+        length = path_length(add_steps(total, st, -1), weights)
         lam = alpha * (lost0 + lo) / area + math.log(length / lbar + 1.0)
         if lam <= best_lam:
             best, best_lam = k, lam
@@ -165,14 +160,14 @@ def trim_volume_tips(answer: VolumeSkeleton, lost: int, alpha: float, lbar: floa
         ``α`` and ``ℓ̄`` of the sequence it was chosen from.
     """
     graph = answer.working_graph()
-    weights = answer.step_weights.tolist()
+    weights = answer.step_weights
     tips = _Tips(answer, graph)
     keyed = []
     for b, e in graph.free_ends():
         _, _, cl, cs = tips.candidates(b, e)
         k = _best(lost, graph.total_steps(), cl, cs, answer.area, alpha, lbar, weights)
         p = graph.free_end_point(b, e)
-        key = (-_length(cs[k], weights), int(answer.z[p]), int(answer.y[p]), int(answer.x[p]))
+        key = (-path_length(cs[k], weights), int(answer.z[p]), int(answer.y[p]), int(answer.x[p]))
         keyed.append((*key, b, e))
     keyed.sort()
     cuts = []

@@ -293,8 +293,9 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
     # The order: longest cut on Ŝ alone first, then endpoint (row, col).
     keyed = []
     first = {}
+    na, nd = graph.total_steps()
     for (b, e), tip in zip(
-        ends, tips.candidates(ends, lost, graph.na, graph.nd, area, alpha, lbar), strict=True
+        ends, tips.candidates(ends, lost, na, nd, area, alpha, lbar), strict=True
     ):
         p = graph.free_end_point(b, e)
         first[b, e] = tip
@@ -319,10 +320,12 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
         tip = first[b, e]
         if b in cut_branches or any(_meet(tip.box, c) for c in changed):
             # an earlier cut changed what this tip's disks share: count again
-            (tip,) = tips.candidates([(b, e)], lost, graph.na, graph.nd, area, alpha, lbar)
+            na, nd = graph.total_steps()
+            (tip,) = tips.candidates([(b, e)], lost, na, nd, area, alpha, lbar)
             k = tip.best
         elif changed:  # counted before a cut changed the length and the lost pixels
-            k = _best(lost, graph.na, graph.nd, tip.lost, tip.cut, tip.allowed, area, alpha, lbar)
+            na, nd = graph.total_steps()
+            k = _best(lost, na, nd, tip.lost, tip.cut, tip.allowed, area, alpha, lbar)
         else:
             k = tip.best
         points, drop, cl, cs = tip.points, tip.drop, tip.lost, tip.cut
@@ -338,11 +341,12 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
         changed.append(dropped_box)
         cut_branches.add(b)
         lost += int(cl[k])
-        graph.cut_tip(b, e, gone, int(cs[k, 0]), int(cs[k, 1]))
+        graph.cut_tip(b, e, gone, (int(cs[k, 0]), int(cs[k, 1])))
     exclusive = {}
     for b in graph.end_branches():
         if b in kept and not any(_meet(kept[b][1], c) for c in changed[kept[b][2] :]):
             exclusive[b] = kept[b][0]  # no later cut reached its disks
         else:
             exclusive[b] = tips.exclusive(b)
-    return Trim(answer.with_graph(graph), lost, graph.na, graph.nd, cuts, exclusive)
+    na, nd = graph.total_steps()
+    return Trim(answer.with_graph(graph), lost, na, nd, cuts, exclusive)

@@ -26,7 +26,7 @@ from numba import njit
 from scipy import ndimage
 
 if TYPE_CHECKING:
-    from .pruning.limbs import LimbGuard
+    from .grid.limbs import LimbGuard
 
 from .grid import IDENTITY_ORIENTATION, Orientation, oriented
 from .grid._open_edge import open_edge, open_extension
@@ -225,7 +225,7 @@ class Skeleton:
 
     def limb_test(self, graph: BranchGraph) -> LimbGuard:
         """The limbs of ``graph`` (docs/algorithm.md, "Limbs")."""
-        from .pruning.limbs import LimbGuard
+        from .grid.limbs import LimbGuard
 
         guard = LimbGuard(graph, self.mask, self.r2)
         if self.open_near is not None:  # where the shape runs off the image, its end stays

@@ -3,8 +3,12 @@
 What the pruning needs from pixels: the exact distance transform and medial axis, disks
 and their row runs, reconstruction and coverage counts, boundary tracing, component
 labelling, the eight orientations of the grid, and the branch graph traced from a
-one-pixel-wide skeleton. Modules with a leading underscore are used only inside this
-package; the names below are its public face, each imported on first use.
+one-pixel-wide skeleton. The stages that hold in the plane only live here too: the
+coarse DCE stage (:mod:`.coarse`), Discrete Curve Evolution and ``method="dce"``
+(:mod:`.dce`), the tips' cut (:mod:`.tips`), the limbs' test (:mod:`.limbs`) and the
+sequence replayed for a viewer (:mod:`.replay`). Modules with a leading underscore are
+used only inside this package; the names below are its public face, each imported on
+first use.
 """
 
 from __future__ import annotations

@@ -17,11 +17,10 @@ import numpy as np
 
 from ..grid import Orientation
 from ..grid.graph import BranchGraph, step_length
+from ..grid.tips import Trim
 from ..io.frame import IDENTITY, PixelFrame
-from ..pruning.bayesian import PruningSequence
-from ..pruning.bayesian import objective as target
+from ..pruning.bayesian import PruningSequence, target
 from ..pruning.margin import Margins
-from ..pruning.tips import Trim
 from ..skeleton import Skeleton
 from .schema import BranchDoc, ComponentDoc, NodeDoc, SequenceDoc
 from .table import BranchTable, branch_table, frame_distances
@@ -110,7 +109,7 @@ class ComponentResult:
             length,
             t.lost / seq.area,
             float(np.log(length / seq.lbar + 1.0)),
-            target(t.lost, seq.area, t.na, t.nd, seq.alpha, seq.lbar),
+            target(t.lost, seq.area, length, seq.alpha, seq.lbar),
         )
 
     @property

@@ -36,9 +36,9 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..grid._rowcover import cover_counts, cut_counts, exclusive_losses, uncover
-from ..grid.graph import BranchGraph, step_length
 from ..skeleton import Skeleton
+from ._rowcover import cover_counts, cut_counts, exclusive_losses, uncover
+from .graph import BranchGraph, step_length
 
 __all__ = ["RULES", "Trim", "trim_tips"]
 
@@ -191,7 +191,7 @@ def remnant_cuts(rows, cols, r2, pts, drop, lost, rule):
 @njit(cache=True)
 def _best(lost0, na0, nd0, cand_lost, cand_steps, allowed, area, alpha, lbar):
     """``argmin λ`` over the allowed cuts, ties to the larger ``k``; λ with exactly the
-    operations of :func:`~skelprune.pruning.bayesian.objective`, so that the choice is
+    operations of :func:`~skelprune.pruning.bayesian.target`, so that the choice is
     bit-identical to the oracle's."""
     best, best_lam = 0, math.inf
     for k in range(cand_lost.size):

@@ -30,9 +30,9 @@ import math
 import numpy as np
 from numba import njit
 
-from ..grid._edt import _squared_edt
-from ..grid._rowcover import cover_counts, uncover
-from ..grid.graph import BranchGraph
+from ._edt import _squared_edt
+from ._rowcover import cover_counts, uncover
+from .graph import BranchGraph
 
 __all__ = ["MIN_LIMB_AREA", "RIM", "LimbGuard"]
 

@@ -53,7 +53,8 @@ from .output.document import PruneResult
 from .pipeline import prune_component, prune_components
 from .pruning.bayesian import PruningSequence
 from .pruning.log import RemovalLog
-from .skeleton import Normalisation, Skeleton, normalisation
+from .pruning.normalisation import Normalisation
+from .skeleton import Skeleton, normalisation
 
 __all__ = ["default_window", "mean_width", "prune_local", "prune_window", "windows"]
 

@@ -36,39 +36,18 @@ from .grid.coverage import Coverage
 from .grid.graph import SQRT2, BranchGraph, step_length
 from .grid.medial_axis import MedialAxis, oriented_medial_axis, squared_distance
 from .grid.reconstruction import reconstruction
+from .pruning.normalisation import Normalisation
+from .pruning.normalisation import normalisation as shared_normalisation
 
-__all__ = ["Normalisation", "Skeleton", "normalisation"]
-
-
-@dataclass(frozen=True)
-class Normalisation:
-    """Seed point, mean end-path length ``ℓ̄`` and ``α`` of a medial axis."""
-
-    seed: int
-    lbar: float
-    alpha: float | None
+__all__ = ["Skeleton", "normalisation"]
 
 
 def normalisation(graph: BranchGraph, r2: np.ndarray, beta: float) -> Normalisation:
-    """Seed ``o`` (largest radius; ties: smallest (row, col)), ``ℓ̄`` and ``α``.
-
-    The end paths run to the endpoints of the end branches; a single path has none, and
-    its end paths run to its two ends (so that its tips can be cut by the trade-off).
-    ``α`` is ``None`` where it is undefined: a single point, a cycle, or ``ℓ̄ = 0``.
-    """
-    rows, cols = graph.rows, graph.cols
-    seed = int(np.lexsort((cols, rows, -r2))[0])
-    ends = sorted({graph.endpoint(b) for b in range(len(graph.branches)) if graph.is_end_branch(b)})
-    if not ends:
-        ends = sorted({graph.free_end_point(b, e) for b, e in graph.free_ends()})
-    if not ends:
-        return Normalisation(seed, 0.0, None)
-    dist = _path_lengths(graph.nbr, seed)
-    lbar = float(np.mean(dist[ends]))
-    length = step_length(*graph.total_steps())
-    if not lbar > 0 or not length > 0:
-        return Normalisation(seed, lbar, None)
-    return Normalisation(seed, lbar, beta * math.log(length / lbar))
+    """Seed ``o`` (largest radius; ties: smallest (row, col)), ``ℓ̄`` and ``α`` of a pixel
+    skeleton (:func:`skelprune.pruning.normalisation.normalisation`)."""
+    return shared_normalisation(
+        graph, (graph.rows, graph.cols), r2, lambda seed: _path_lengths(graph.nbr, seed), beta
+    )
 
 
 @njit(cache=True)

@@ -10,7 +10,6 @@ skeleton they are given: they take :meth:`VolumeSkeleton.working_graph` and answ
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
@@ -18,7 +17,8 @@ from functools import cached_property
 import numpy as np
 
 from ..grid._roughness import volume_roughness
-from ..skeleton import Normalisation
+from ..pruning.grid import path_length
+from ..pruning.normalisation import Normalisation, normalisation
 from ._topology import OFFSETS, step_lengths
 from .balls import reconstruction
 from .coverage import VolumeCoverage
@@ -150,10 +150,7 @@ class VolumeSkeleton:
     @property
     def length(self) -> float:
         """Total physical length of the branches."""
-        total = 0.0
-        for c, w in zip(self.graph.total_steps(), self.step_weights.tolist(), strict=True):
-            total += c * w
-        return total
+        return path_length(self.graph.total_steps(), self.step_weights)
 
     @property
     def n_endpoints(self) -> int:
@@ -180,23 +177,8 @@ class VolumeSkeleton:
     def normalisation(self, beta: float) -> Normalisation:
         """Seed voxel (largest radius; ties: smallest ``(z, y, x)``), mean end-path length
         ``ℓ̄`` and ``α = β·log(L/ℓ̄)``, as on the image grid (docs/algorithm.md)."""
-        g = self.graph
-        seed = int(np.lexsort((self.x, self.y, self.z, -self.r2))[0])
-        ends = sorted({g.endpoint(b) for b in g.end_branches()})
-        if not ends:
-            for b, br in enumerate(g.branches):
-                path = g.path(b) if br.alive and not br.loop else []
-                if len(path) > 1 and br.node == [None, None]:
-                    ends += [path[0], path[-1]]
-            ends = sorted(set(ends))
-        if not ends:
-            return Normalisation(seed, 0.0, None)
-        dist = self._path_lengths(seed)
-        lbar = float(np.mean(dist[ends]))
-        length = self.length
-        if not lbar > 0 or not length > 0:
-            return Normalisation(seed, lbar, None)
-        return Normalisation(seed, lbar, beta * math.log(length / lbar))
+        coords = (self.z, self.y, self.x)
+        return normalisation(self.graph, coords, self.r2, self._path_lengths, beta)
 
     def _path_lengths(self, seed: int) -> np.ndarray:
         """Shortest physical path lengths along the skeleton from ``seed``."""

@@ -11,7 +11,6 @@ from typing import Any
 
 import numpy as np
 
-from skelprune.grid.graph import step_length
 from skelprune.grid.reconstruction import reconstruction
 from skelprune.io.frame import IDENTITY, PixelFrame
 from skelprune.output.component import ComponentResult
@@ -71,7 +70,7 @@ def _graph_table(
                 "id": len(branches),
                 "source": src,
                 "target": dst,
-                "length": float(step_length(*br.steps)),
+                "length": g.branch_length(b),
                 "points": [xyr(p) for p in path],
                 "off_path": [xyr(p) for p in sorted(br.side)],
                 "margin": None if margins is None else margins.margin.get(b),

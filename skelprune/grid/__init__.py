@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from ._label import components8, label8
     from ._orientation import IDENTITY_ORIENTATION, Orientation, oriented
     from .coverage import Coverage
-    from .graph import BranchGraph, step_length
+    from .graph import BranchGraph
     from .medial_axis import MedialAxis, medial_axis, oriented_medial_axis, squared_distance
     from .reconstruction import count_covered, reconstruction, reconstruction_error
 
@@ -39,7 +39,6 @@ _LAZY = {
     "Orientation": "_orientation",
     "oriented": "_orientation",
     "BranchGraph": "graph",
-    "step_length": "graph",
     "MedialAxis": "medial_axis",
     "medial_axis": "medial_axis",
     "oriented_medial_axis": "medial_axis",
@@ -70,6 +69,5 @@ __all__ = [
     "reconstruction",
     "reconstruction_error",
     "squared_distance",
-    "step_length",
     "trace_boundaries",
 ]

@@ -14,32 +14,17 @@ import math
 
 import numpy as np
 from numba import njit
-from numba.extending import register_jitable
 
 from ..pruning.branch_graph import GridSteps, PointGraph
 from ._digital import NEIGHBOURS
 
-__all__ = ["PIXEL_STEPS", "SQRT2", "BranchGraph", "step_length"]
+__all__ = ["PIXEL_STEPS", "SQRT2", "BranchGraph"]
 
 SQRT2 = math.sqrt(2.0)
 
 #: The pixel grid's steps: slot ``i`` of the 8-neighbour table (:data:`._digital.NEIGHBOURS`)
 #: is axial (kind 0, length 1) or diagonal (kind 1, length √2).
 PIXEL_STEPS = GridSteps(np.abs(NEIGHBOURS).sum(axis=1) - 1, np.array([1.0, SQRT2]))
-
-
-@register_jitable
-def step_length(na, nd):
-    """Length of a digital path of ``na`` axial and ``nd`` diagonal steps (1 and √2).
-
-    The one definition of skeleton length, for Python (scalars or arrays) and compiled
-    code alike; keeping lengths as integer step counts until here makes two
-    implementations that do the same removals agree bit for bit.
-
-    >>> step_length(3, 2)
-    5.82842712474619
-    """
-    return na + nd * SQRT2
 
 
 @njit(cache=True)

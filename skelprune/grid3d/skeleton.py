@@ -11,13 +11,13 @@ skeleton they are given: they take :meth:`VolumeSkeleton.working_graph` and answ
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 
 from ..grid._roughness import volume_roughness
-from ..pruning.grid import path_length
+from ..pruning.branch_graph import AxisOnGraph
 from ..pruning.normalisation import Normalisation, normalisation
 from ._topology import OFFSETS, step_lengths
 from .balls import reconstruction
@@ -30,7 +30,7 @@ __all__ = ["VolumeSkeleton"]
 
 
 @dataclass(frozen=True, eq=False)
-class VolumeSkeleton:
+class VolumeSkeleton(AxisOnGraph[VolumeBranchGraph]):
     """A curve skeleton of one component, in the frame of its padded crop.
 
     Attributes
@@ -89,12 +89,6 @@ class VolumeSkeleton:
         """The seven step kinds' physical lengths."""
         return step_lengths(self.spacing)
 
-    def working_graph(self) -> VolumeBranchGraph:
-        return self.graph.copy()
-
-    def with_graph(self, graph: VolumeBranchGraph) -> VolumeSkeleton:  # type: ignore[override]
-        return replace(self, graph=graph)
-
     def coverage(
         self, graph: VolumeBranchGraph, labels: np.ndarray, n_labels: int
     ) -> VolumeCoverage:
@@ -147,26 +141,6 @@ class VolumeSkeleton:
         return np.asarray(lost, np.int64)
 
     # -- what the pipeline and the outputs ask ------------------------------------------
-    @property
-    def length(self) -> float:
-        """Total physical length of the branches."""
-        return path_length(self.graph.total_steps(), self.step_weights)
-
-    @property
-    def n_endpoints(self) -> int:
-        return self.graph.n_endpoints()
-
-    @property
-    def n_points(self) -> int:
-        return int(self.graph.alive_points().size)
-
-    def points(self) -> np.ndarray:
-        """Indices of the voxels in this skeleton."""
-        return self.graph.alive_points()
-
-    def end_branches(self) -> list[int]:
-        return self.graph.end_branches()
-
     def reconstruction(self) -> np.ndarray:
         """``R(S)``: the union of the skeleton's balls, in the crop's frame."""
         idx = self.points()

@@ -16,10 +16,11 @@ from typing import cast
 import numpy as np
 
 from ..grid import Orientation
-from ..grid.graph import BranchGraph, step_length
+from ..grid.graph import BranchGraph
 from ..grid.tips import Trim
 from ..io.frame import IDENTITY, PixelFrame
 from ..pruning.bayesian import PruningSequence, target
+from ..pruning.grid import path_length
 from ..pruning.margin import Margins
 from ..skeleton import Skeleton
 from .schema import BranchDoc, ComponentDoc, NodeDoc, SequenceDoc
@@ -104,7 +105,7 @@ class ComponentResult:
                 float(seq.ss[k]),
                 float(seq.objective[k]),
             )
-        length = float(step_length(t.na, t.nd))
+        length = path_length(t.steps, t.skeleton.step_weights)
         return (
             length,
             t.lost / seq.area,

@@ -29,7 +29,6 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from ..grid.graph import step_length
 from ..io.frame import IDENTITY, PixelFrame
 
 if TYPE_CHECKING:
@@ -293,7 +292,7 @@ def branch_table(sk: Skeleton, margins: Margins | None) -> BranchTable:
             src, dst = ends
         source.append(src)
         target.append(dst)
-        length.append(float(step_length(*br.steps)))
+        length.append(g.branch_length(b))
         m = got_margin.get(b)
         margin.append(np.nan if m is None else float(m))
         k = got_removed.get(b)

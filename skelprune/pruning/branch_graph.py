@@ -20,14 +20,15 @@ from __future__ import annotations
 
 import heapq
 import math
-from dataclasses import dataclass, field
-from typing import NamedTuple, Self
+from dataclasses import dataclass, field, replace
+from typing import Generic, NamedTuple, Self, TypeVar
 
 import numpy as np
 
 from ._trace import junction_clusters, path_kinds, trace_branches
+from .grid import path_length
 
-__all__ = ["Branch", "GridSteps", "Junction", "PointGraph", "Steps", "add_steps"]
+__all__ = ["AxisOnGraph", "Branch", "GridSteps", "Junction", "PointGraph", "Steps", "add_steps"]
 
 #: Step counts, one per step kind of the grid.
 Steps = tuple[int, ...]
@@ -203,6 +204,14 @@ class PointGraph:
                 free = (br.node[0] is None) + (br.node[1] is None)
                 n += 1 if free == 2 and len(br.points) == 1 else free
         return n
+
+    def branch_length(self, b: int) -> float:
+        """Branch ``b``'s length (:func:`~.grid.path_length` of its steps)."""
+        return path_length(self.branches[b].steps, self.weights)
+
+    def total_length(self) -> float:
+        """The skeleton's length."""
+        return path_length(self.steps, self.weights)
 
     def branch_steps(self, b: int) -> Steps:
         """Branch ``b``'s steps of each kind."""
@@ -437,3 +446,44 @@ class PointGraph:
             fj = self.junctions[far]
             fj.ends[fj.ends.index((b2, 1 - e2))] = (b1, 1)
         return b1, b2, jid
+
+
+#: The graph type of one grid's axis.
+G = TypeVar("G", bound=PointGraph)
+
+
+class AxisOnGraph(Generic[G]):
+    """What a grid's axis (a frozen dataclass with a ``graph`` field) answers from its
+    graph alone, the same on every grid."""
+
+    graph: G
+
+    def working_graph(self) -> G:
+        """A copy of the graph that a stage may change."""
+        return self.graph.copy()
+
+    def with_graph(self, graph: G) -> Self:
+        """The same shape and points with another graph over them (a stage's answer)."""
+        return replace(self, graph=graph)  # type: ignore[type-var]
+
+    @property
+    def length(self) -> float:
+        """Total length of the branches (:func:`~.grid.path_length` of their steps)."""
+        return self.graph.total_length()
+
+    @property
+    def n_endpoints(self) -> int:
+        return self.graph.n_endpoints()
+
+    @property
+    def n_points(self) -> int:
+        """Points in this skeleton."""
+        return int(self.graph.alive_points().size)
+
+    def end_branches(self) -> list[int]:
+        """Ids of the end branches (docs/algorithm.md), sorted."""
+        return self.graph.end_branches()
+
+    def points(self) -> np.ndarray:
+        """Indices of the points in this skeleton, sorted."""
+        return self.graph.alive_points()

@@ -14,7 +14,7 @@ from evaluation.__main__ import main as evaluation_main
 from evaluation.baseline import cut_end_branches, skeletonize_cut
 from evaluation.perturb import PERTURBATIONS, Perturbation
 from evaluation.stability import VARIANTS, load_dataset, measure, run_stability
-from skelprune.grid.graph import BranchGraph, step_length
+from skelprune.grid.graph import BranchGraph
 from testkit import DATA
 
 
@@ -48,10 +48,10 @@ def test_cut_end_branches_on_a_graph() -> None:
     rows = [10] * 30 + [9, 8] + list(range(11, 23))
     cols = list(range(2, 32)) + [8, 8] + [20] * 12
     g = BranchGraph(np.array(rows), np.array(cols), (30, 40))
-    lengths = {b: step_length(*g.branches[b].steps) for b in g.end_branches()}
+    lengths = {b: g.branch_length(b) for b in g.end_branches()}
     removed = cut_end_branches(g, 5.0)
     assert removed and all(lengths[b] < 5.0 for b in removed)
-    assert all(step_length(*g.branches[b].steps) >= 5.0 for b in g.end_branches())
+    assert all(g.branch_length(b) >= 5.0 for b in g.end_branches())
     kept = g.alive_points()
     assert 22 in g.rows[kept]  # the arm's tip
     assert 8 not in g.rows[kept]  # the spur's tip

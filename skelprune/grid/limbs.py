@@ -30,7 +30,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..pruning.limbs import LimbMemory
+from ..pruning.limb_memory import LimbMemory
 from ._edt import _squared_edt
 from ._rowcover import cover_counts, uncover
 from .graph import BranchGraph

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..pruning.tips import Box, Tip, trim_ends
+from ..pruning.tip_cuts import Box, Tip, trim_ends
 from ..skeleton import Skeleton
 from ._rowcover import cover_counts, cut_counts, exclusive_losses, uncover
 from .graph import BranchGraph
@@ -78,7 +78,7 @@ class Trim:
 
 class _Tips:
     """The disk counts the cuts share (``c``: per pixel, how many disks of the skeleton
-    left so far cover it): the pixel grid's :class:`~skelprune.pruning.tips.TipCounts`."""
+    left so far cover it): the pixel grid's :class:`~skelprune.pruning.tip_cuts.TipCounts`."""
 
     def __init__(self, sk: Skeleton, graph: BranchGraph) -> None:
         self.sk, self.graph = sk, graph

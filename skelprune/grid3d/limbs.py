@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from ..pruning.limbs import LimbMemory
+from ..pruning.limb_memory import LimbMemory
 from .balls import _paint, ball_counts
 from .distance import squared_distance
 from .graph import VolumeBranchGraph

@@ -13,7 +13,7 @@ drop a *remnant* only:
 - the smallest ``λ`` wins, ties to the shorter tip; ends are cut one after another, each
   on what the earlier cuts left, the longest cut on ``Ŝ`` alone first, then by the free
   end's ``(z, y, x)`` (the rule and the order of every grid:
-  :func:`skelprune.pruning.tips.trim_ends`; here, the counts).
+  :func:`skelprune.pruning.tip_cuts.trim_ends`; here, the counts).
 
 The naive oracle (``testkit/volume_oracle.py``) repaints every candidate from scratch.
 """
@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..pruning.branch_graph import Steps
-from ..pruning.tips import Box, Tip, trim_ends
+from ..pruning.tip_cuts import Box, Tip, trim_ends
 from .balls import _paint, ball_counts
 from .graph import VolumeBranchGraph
 
@@ -51,7 +51,7 @@ class VolumeTrim:
 
 class _Tips:
     """The ball counts of the skeleton left so far (``c``), and each tip's candidate
-    cuts: the volume grid's :class:`~skelprune.pruning.tips.TipCounts`."""
+    cuts: the volume grid's :class:`~skelprune.pruning.tip_cuts.TipCounts`."""
 
     def __init__(self, sk: VolumeSkeleton, graph: VolumeBranchGraph) -> None:
         self.sk, self.graph = sk, graph

@@ -9,7 +9,9 @@ that none imports :mod:`skelprune.grid`, :mod:`skelprune.grid3d` or
   grid, over points with a neighbour table and step kinds;
 - :mod:`.bayesian`: the greedy Bayesian sequence and its ``argmin λ`` (docs/algorithm.md);
 - :mod:`.choice`: the choice of step; :mod:`.margin`: the answer's branch margins;
-  :mod:`.log`: what each step of a sequence removed and merged.
+  :mod:`.log`: what each step of a sequence removed and merged;
+- :mod:`.normalisation` (seed, ``ℓ̄``, ``α``), :mod:`.tip_cuts` (the tips' rule and
+  order), :mod:`.limb_memory` (what the limb tests keep): each grid gives its counts.
 
 The stages that hold in the plane only (the coarse DCE stage, DCE pruning, the tips' cut
 and the limbs' test on disks) live with the pixel grid, in :mod:`skelprune.grid`.

@@ -27,8 +27,8 @@ from evaluation.stability import PERTURBATIONS, _rng, load_dataset
 from skelprune import prune
 from skelprune.api import components
 from skelprune.grid._orientation import oriented
+from skelprune.grid.coarse import coarse_removals
 from skelprune.grid.graph import BranchGraph
-from skelprune.pruning.coarse import coarse_removals
 
 from .common import DATA, table
 

@@ -300,7 +300,7 @@ def _stages(masks: list[np.ndarray], passes: int = 5) -> str:
     # one level down (inside the stages above)
     import skelprune.grid.coverage as coverage
     import skelprune.grid.graph as graph
-    import skelprune.pruning.limbs as limbs
+    import skelprune.grid.limbs as limbs
 
     wrapped(coverage.Coverage, "__init__", "  sequence: coverage set-up")
     wrapped(coverage.Coverage, "remove_label", "  sequence: coverage removals")

@@ -1,7 +1,7 @@
 """Limbs on blobs, round ends and ground truth at once: which tip rule to trim with.
 
 For the default (tips trimmed under the ``reach`` rule), ``trim=false``, and the other
-rules of :data:`skelprune.pruning.tips.RULES` (``area``; ``none``: the trade-off alone,
+rules of :data:`skelprune.grid.tips.RULES` (``area``; ``none``: the trade-off alone,
 which cuts whole limbs), side by side:
 
 * **limbs**: 300 seeded blobs of :mod:`testkit.limbs` (ellipse, circle, wavy cell,
@@ -40,7 +40,7 @@ import numpy as np
 import skelprune
 from evaluation.groundtruth import TOLERANCES, pixel_scores
 from evaluation.stability import load_dataset
-from skelprune.pruning import tips
+from skelprune.grid import tips
 from testkit.limbs import BODIES, limb_reach, limb_shapes, round_ended
 from testkit.shapes import DRAWN
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from skimage.morphology import skeletonize
 
-from skelprune.grid.graph import BranchGraph, step_length
+from skelprune.grid.graph import BranchGraph
 from skelprune.grid.medial_axis import squared_distance
 
 __all__ = ["BaselineSkeleton", "cut_end_branches", "skeletonize_cut"]
@@ -60,7 +60,7 @@ def cut_end_branches(graph: BranchGraph, min_length: float) -> list[int]:
     graph : BranchGraph
         Modified in place.
     min_length : float
-        Cut threshold ``L`` in pixels (branch length as :attr:`Branch.length`).
+        Cut threshold ``L`` in pixels (a branch's length: ``graph.branch_length``).
 
     Returns
     -------
@@ -79,8 +79,8 @@ def cut_end_branches(graph: BranchGraph, min_length: float) -> list[int]:
         ends = graph.end_branches()
         if not ends:
             return removed
-        b = min(ends, key=lambda k: (graph.branches[k].length, k))
-        if graph.branches[b].length >= min_length:
+        b = min(ends, key=lambda k: (graph.branch_length(k), k))
+        if graph.branch_length(b) >= min_length:
             return removed
         graph.remove_end_branch(b)
         removed.append(b)
@@ -109,11 +109,10 @@ def skeletonize_cut(mask: np.ndarray, min_length: float) -> BaselineSkeleton:
     cut_end_branches(graph, min_length)
     keep = graph.alive_points()
     rr, cc = graph.rows[keep], graph.cols[keep]
-    na, nd = graph.length_counts()
     return BaselineSkeleton(
         rows=rr - 1,
         cols=cc - 1,
         r2=r2img[rr, cc].astype(np.int64),
         endpoints=graph.n_endpoints(),
-        length=step_length(na, nd),
+        length=graph.total_length(),
     )

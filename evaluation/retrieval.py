@@ -98,7 +98,7 @@ def baseline_descriptor(mask: np.ndarray, min_length: float = BASELINE_CUT) -> S
         chosen_step=0,
         ma_rer=0.0,
     )
-    na, nd = graph.length_counts()
+    na, nd = graph.total_steps()
     return describe_table(comp.table, float(na + np.sqrt(2.0) * nd), own)
 
 

@@ -39,6 +39,7 @@ import numpy as np
 
 from .grid.graph import BranchGraph
 from .grid.thinning import thin
+from .grid.tips import trim_tips
 from .io.input import Input
 from .options import (
     LOCAL_HALO_FRACTION,
@@ -52,8 +53,8 @@ from .output.document import PruneResult
 from .pipeline import prune_component, prune_components
 from .pruning.bayesian import PruningSequence
 from .pruning.log import RemovalLog
-from .pruning.tips import trim_tips
-from .skeleton import Normalisation, Skeleton, normalisation
+from .pruning.normalisation import Normalisation
+from .skeleton import Skeleton, normalisation
 
 __all__ = ["default_window", "mean_width", "prune_local", "prune_window", "windows"]
 

@@ -12,21 +12,22 @@ from collections.abc import Callable
 import numpy as np
 
 from .errors import EmptyMaskError
+from .grid.coarse import coarse_dce
+from .grid.dce import (
+    DCE_VERTICES,
+    boundary_partition,
+    generated_in_several_segments,
+    remove_unsupported,
+)
 from .grid.reconstruction import count_covered
+from .grid.tips import trim_tips
 from .io.input import Input
 from .options import OutputOptions, PruneOptions
 from .output.component import ComponentResult, GraphSummary
 from .output.document import PruneResult
-from .pruning.bayesian import pruning_sequence, remove_unsupported
+from .pruning.bayesian import pruning_sequence
 from .pruning.choice import chosen_step
-from .pruning.coarse import coarse_dce
-from .pruning.dce import (
-    DCE_VERTICES,
-    boundary_partition,
-    generated_in_several_segments,
-)
 from .pruning.margin import Margins, branch_margins
-from .pruning.tips import trim_tips
 from .skeleton import Skeleton
 
 __all__ = ["dce_support", "prune_component", "prune_components"]

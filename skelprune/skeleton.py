@@ -17,7 +17,7 @@ from __future__ import annotations
 import heapq
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING, ClassVar
 
@@ -26,49 +26,29 @@ from numba import njit
 from scipy import ndimage
 
 if TYPE_CHECKING:
-    from .pruning.limbs import LimbGuard
+    from .grid.limbs import LimbGuard
 
 from .grid import IDENTITY_ORIENTATION, Orientation, oriented
 from .grid._open_edge import open_edge, open_extension
 from .grid._roughness import boundary_roughness
 from .grid._rowcover import cover_counts, uncover_count
 from .grid.coverage import Coverage
-from .grid.graph import SQRT2, BranchGraph, step_length
+from .grid.graph import SQRT2, BranchGraph
 from .grid.medial_axis import MedialAxis, oriented_medial_axis, squared_distance
 from .grid.reconstruction import reconstruction
+from .pruning.branch_graph import AxisOnGraph
+from .pruning.normalisation import Normalisation
+from .pruning.normalisation import normalisation as shared_normalisation
 
-__all__ = ["Normalisation", "Skeleton", "normalisation"]
-
-
-@dataclass(frozen=True)
-class Normalisation:
-    """Seed point, mean end-path length ``ℓ̄`` and ``α`` of a medial axis."""
-
-    seed: int
-    lbar: float
-    alpha: float | None
+__all__ = ["Skeleton", "normalisation"]
 
 
 def normalisation(graph: BranchGraph, r2: np.ndarray, beta: float) -> Normalisation:
-    """Seed ``o`` (largest radius; ties: smallest (row, col)), ``ℓ̄`` and ``α``.
-
-    The end paths run to the endpoints of the end branches; a single path has none, and
-    its end paths run to its two ends (so that its tips can be cut by the trade-off).
-    ``α`` is ``None`` where it is undefined: a single point, a cycle, or ``ℓ̄ = 0``.
-    """
-    rows, cols = graph.rows, graph.cols
-    seed = int(np.lexsort((cols, rows, -r2))[0])
-    ends = sorted({graph.endpoint(b) for b in range(len(graph.branches)) if graph.is_end_branch(b)})
-    if not ends:
-        ends = sorted({graph.free_end_point(b, e) for b, e in graph.free_ends()})
-    if not ends:
-        return Normalisation(seed, 0.0, None)
-    dist = _path_lengths(graph.nbr, seed)
-    lbar = float(np.mean(dist[ends]))
-    length = step_length(graph.na, graph.nd)
-    if not lbar > 0 or not length > 0:
-        return Normalisation(seed, lbar, None)
-    return Normalisation(seed, lbar, beta * math.log(length / lbar))
+    """Seed ``o`` (largest radius; ties: smallest (row, col)), ``ℓ̄`` and ``α`` of a pixel
+    skeleton (:func:`skelprune.pruning.normalisation.normalisation`)."""
+    return shared_normalisation(
+        graph, (graph.rows, graph.cols), r2, lambda seed: _path_lengths(graph.nbr, seed), beta
+    )
 
 
 @njit(cache=True)
@@ -118,7 +98,7 @@ def grown_r2(r2: np.ndarray, reach: float) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class Skeleton:
+class Skeleton(AxisOnGraph[BranchGraph]):
     """A skeleton of one component, in the canonical frame of its padded crop.
 
     Attributes
@@ -225,7 +205,7 @@ class Skeleton:
 
     def limb_test(self, graph: BranchGraph) -> LimbGuard:
         """The limbs of ``graph`` (docs/algorithm.md, "Limbs")."""
-        from .pruning.limbs import LimbGuard
+        from .grid.limbs import LimbGuard
 
         guard = LimbGuard(graph, self.mask, self.r2)
         if self.open_near is not None:  # where the shape runs off the image, its end stays
@@ -234,10 +214,6 @@ class Skeleton:
             for b in ends:
                 guard.limb[b] |= graph.endpoint(b) in kept
         return guard
-
-    def with_graph(self, graph: BranchGraph) -> Skeleton:
-        """The same shape and pixels with another graph over them (a stage's answer)."""
-        return replace(self, graph=graph)
 
     #: A pixel.
     grid_step: ClassVar[float] = 1.0
@@ -259,10 +235,6 @@ class Skeleton:
             lost.append(lost[-1] + uncover_count(c, shape, rows[pts], cols[pts], r2[pts]))
         return np.asarray(lost, np.int64)
 
-    def working_graph(self) -> BranchGraph:
-        """A copy of the graph that a stage may change."""
-        return self.graph.copy()
-
     # -- what the stages ask --------------------------------------------------------
     @cached_property
     def area(self) -> int:
@@ -270,33 +242,8 @@ class Skeleton:
         return int(self.mask.sum())
 
     @property
-    def length(self) -> float:
-        """Total length of the branches (steps of 1 and √2)."""
-        return step_length(self.graph.na, self.graph.nd)
-
-    @property
-    def n_endpoints(self) -> int:
-        return self.graph.n_endpoints()
-
-    @property
-    def n_points(self) -> int:
-        """Pixels in this skeleton."""
-        graph = self.graph
-        return sum(len(b.points) for b in graph.branches if b.alive) + sum(
-            len(j.points) for j in graph.junctions if j.alive
-        )
-
-    @property
     def n_branches(self) -> int:
         return sum(1 for b in self.graph.branches if b.alive)
-
-    def end_branches(self) -> list[int]:
-        """Ids of the end branches (docs/algorithm.md), sorted."""
-        return self.graph.end_branches()
-
-    def points(self) -> np.ndarray:
-        """Indices (into ``rows``, ``cols``, ``r2``) of the pixels in this skeleton."""
-        return self.graph.alive_points()
 
     def normalisation(self, beta: float) -> Normalisation:
         """Seed point, mean end-path length ``ℓ̄`` and ``α = β·log(L/ℓ̄)`` (docs/algorithm.md)."""

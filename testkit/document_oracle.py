@@ -70,7 +70,7 @@ def _graph_table(
                 "id": len(branches),
                 "source": src,
                 "target": dst,
-                "length": float(br.length),
+                "length": g.branch_length(b),
                 "points": [xyr(p) for p in path],
                 "off_path": [xyr(p) for p in sorted(br.side)],
                 "margin": None if margins is None else margins.margin.get(b),

@@ -31,7 +31,13 @@ def candidate_key(graph: BranchGraph, b: int, lam: float, d_area: int) -> tuple:
     then smaller endpoint (row, col)."""
     br = graph.branches[b]
     p = graph.endpoint(b)
-    return (lam, d_area, br.na + br.nd * math.sqrt(2.0), int(graph.rows[p]), int(graph.cols[p]))
+    return (
+        lam,
+        d_area,
+        br.steps[0] + br.steps[1] * math.sqrt(2.0),
+        int(graph.rows[p]),
+        int(graph.cols[p]),
+    )
 
 
 def disk_pixels(rows, cols, r2, shape) -> list[np.ndarray]:
@@ -72,8 +78,8 @@ def naive_sequence(
         return pts
 
     def total_length(skip=None):
-        na = sum(br.na for b, br in enumerate(graph.branches) if br.alive and b != skip)
-        nd = sum(br.nd for b, br in enumerate(graph.branches) if br.alive and b != skip)
+        na = sum(br.steps[0] for b, br in enumerate(graph.branches) if br.alive and b != skip)
+        nd = sum(br.steps[1] for b, br in enumerate(graph.branches) if br.alive and b != skip)
         return na, nd
 
     def is_limb(b: int) -> bool:
@@ -166,8 +172,8 @@ def naive_trim(
     area = int(flat.sum())
     disks = disk_pixels(graph.rows, graph.cols, r2, mask.shape)
     sqrt2 = math.sqrt(2.0)
-    na0 = sum(br.na for br in graph.branches if br.alive)
-    nd0 = sum(br.nd for br in graph.branches if br.alive)
+    na0 = sum(br.steps[0] for br in graph.branches if br.alive)
+    nd0 = sum(br.steps[1] for br in graph.branches if br.alive)
 
     def points_now() -> set[int]:
         pts = {p for br in graph.branches if br.alive for p in br.points}
@@ -220,6 +226,6 @@ def naive_trim(
         k, lam_k, ka, kd, gone = best_cut(b, e, na, nd)
         cuts.append((b, e, k))
         if k:
-            graph.cut_tip(b, e, gone, ka, kd)
+            graph.cut_tip(b, e, gone, (ka, kd))
             na, nd, lam = na - ka, nd - kd, lam_k
     return cuts, lam

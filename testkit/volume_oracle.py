@@ -49,7 +49,7 @@ def naive_sequence(graph, volume, z, y, x, r2, spacing, alpha: float, lbar: floa
     """The greedy pruning on a volume, every candidate's lost volume repainted from
     scratch at every step: the removal order and ``λ`` of every skeleton ``S(0..n)``.
 
-    Topology comes from the same :class:`~skelprune.grid3d.branches.VolumeBranchGraph` as
+    Topology comes from the same :class:`~skelprune.grid3d.graph.VolumeBranchGraph` as
     the fast code (its rules are the model); ``λ``, the length (steps of each kind times
     their physical length, summed in the kinds' order) and the tie order (``λ``, lost
     volume, length, free end's ``(z, y, x)``) are written here again from

@@ -3,8 +3,12 @@
 What the pruning needs from pixels: the exact distance transform and medial axis, disks
 and their row runs, reconstruction and coverage counts, boundary tracing, component
 labelling, the eight orientations of the grid, and the branch graph traced from a
-one-pixel-wide skeleton. Modules with a leading underscore are used only inside this
-package; the names below are its public face, each imported on first use.
+one-pixel-wide skeleton. The stages that hold in the plane only live here too: the
+coarse DCE stage (:mod:`.coarse`), Discrete Curve Evolution and ``method="dce"``
+(:mod:`.dce`), the tips' cut (:mod:`.tips`), the limbs' test (:mod:`.limbs`) and the
+sequence replayed for a viewer (:mod:`.replay`). Modules with a leading underscore are
+used only inside this package; the names below are its public face, each imported on
+first use.
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ if TYPE_CHECKING:
     from ._label import components8, label8
     from ._orientation import IDENTITY_ORIENTATION, Orientation, oriented
     from .coverage import Coverage
-    from .graph import BranchGraph, step_length
+    from .graph import BranchGraph
     from .medial_axis import MedialAxis, medial_axis, oriented_medial_axis, squared_distance
     from .reconstruction import count_covered, reconstruction, reconstruction_error
 
@@ -35,7 +39,6 @@ _LAZY = {
     "Orientation": "_orientation",
     "oriented": "_orientation",
     "BranchGraph": "graph",
-    "step_length": "graph",
     "MedialAxis": "medial_axis",
     "medial_axis": "medial_axis",
     "oriented_medial_axis": "medial_axis",
@@ -66,6 +69,5 @@ __all__ = [
     "reconstruction",
     "reconstruction_error",
     "squared_distance",
-    "step_length",
     "trace_boundaries",
 ]

@@ -1,6 +1,6 @@
 """Boundary polygons of a binary shape: crack curves traced by marching squares.
 
-The DCE partition (:mod:`skelprune.pruning.dce`) works on these polygons. Kept apart because the
+The DCE partition (:mod:`skelprune.grid.dce`) works on these polygons. Kept apart because the
 tracer is long and has one job: give exactly the curves of skimage's ``find_contours``
 on the padded mask, without skimage's Python-level assembly.
 """

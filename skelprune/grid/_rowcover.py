@@ -8,7 +8,7 @@ columns the runs span, once: on a blob, where
 hundreds of disks of hundreds of pixels' radius overlap, that is the difference between
 the sum of the disks' areas and the area they cover.
 
-Used by the tips' cut (:mod:`skelprune.pruning.tips`) and the noise-floor choice
+Used by the tips' cut (:mod:`skelprune.grid.tips`) and the noise-floor choice
 (:mod:`skelprune.pruning.choice`), which both keep ``c``: per pixel, how many disks of the
 current skeleton cover it.
 """

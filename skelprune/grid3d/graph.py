@@ -15,20 +15,23 @@ turned into physical lengths in one place (:func:`~._topology.step_lengths`).
 
 from __future__ import annotations
 
-import itertools
 from collections import deque
 
 import numpy as np
-from numba import njit
 
+from ..pruning._trace import junction_clusters, path_kinds, trace_branches
+from ..pruning.branch_graph import GridSteps, PointGraph
 from ._topology import OFFSETS, step_lengths
 from .distance import check_spacing
 
-__all__ = ["VolumeGraph", "euler_characteristic"]
+__all__ = ["SLOT_KINDS", "VolumeBranchGraph", "VolumeGraph", "euler_characteristic"]
 
 
 def neighbour_table(z: np.ndarray, y: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """(n, 26) index of each point's 26-neighbours among the points (-1: none)."""
+    """(n, 26) index of each point's 26-neighbours among the points, in the slot order
+    of ``OFFSETS`` (-1: none)."""
+    if z.size == 0:
+        return np.zeros((0, 26), np.int64)
     ny, nx = int(y.max()) + 3, int(x.max()) + 3  # room for the offsets
     key = ((z + 1) * ny + (y + 1)) * nx + (x + 1)
     order = np.argsort(key, kind="stable")
@@ -38,135 +41,9 @@ def neighbour_table(z: np.ndarray, y: np.ndarray, x: np.ndarray) -> np.ndarray:
     return np.where(sorted_key[pos] == cand, order[pos], -1)
 
 
-@njit(cache=True)
-def _clusters(nbr, deg):
-    """The 26-connected cluster of each junction voxel (-1 for the others), numbered in
-    the order of their first voxel, and the number of clusters."""
-    n = deg.size
-    out = np.full(n, -1, dtype=np.int64)
-    stack = np.empty(n, dtype=np.int64)
-    count = 0
-    for k in range(n):
-        if deg[k] < 3 or out[k] >= 0:
-            continue
-        out[k] = count
-        stack[0] = k
-        top = 1
-        while top:
-            top -= 1
-            u = stack[top]
-            for i in range(26):
-                q = nbr[u, i]
-                if q >= 0 and deg[q] >= 3 and out[q] < 0:
-                    out[q] = count
-                    stack[top] = q
-                    top += 1
-        count += 1
-    return out, count
-
-
-@njit(cache=True)
-def _walk(nbr, deg, junction, visited, pts, used, prev, cur):
-    """Follow degree-2 voxels from ``cur`` (coming from ``prev``): the junction voxel
-    it ended on (-1: a free end, -2: back on itself) and the next free slot."""
-    while True:
-        visited[cur] = True
-        pts[used] = cur
-        used += 1
-        if deg[cur] != 2:
-            return -1, used
-        nxt = -1
-        for i in range(26):
-            q = nbr[cur, i]
-            if q >= 0 and q != prev:
-                nxt = q
-                break
-        if junction[nxt]:
-            return nxt, used
-        if visited[nxt]:
-            return -2, used
-        prev, cur = cur, nxt
-
-
-@njit(cache=True)
-def _trace(nbr, deg, z, y, x):
-    """All branches: point lists (``pts`` split at ``starts``), the junction voxel of
-    each end (-1 free, -2 for both ends of a loop) and the step counts by kind."""
-    n = deg.size
-    junction = deg >= 3
-    visited = np.zeros(n, dtype=np.bool_)
-    pts = np.empty(n, dtype=np.int64)
-    starts = np.zeros(n + 1, dtype=np.int64)
-    att = np.empty((n, 2), dtype=np.int64)
-    used = 0
-    nb = 0
-    for j in range(n):
-        if not junction[j]:
-            continue
-        for i in range(26):
-            q = nbr[j, i]
-            if q < 0 or junction[q] or visited[q]:
-                continue
-            end, used = _walk(nbr, deg, junction, visited, pts, used, j, q)
-            att[nb, 0] = j
-            att[nb, 1] = max(end, -1)
-            nb += 1
-            starts[nb] = used
-    for k in range(n):
-        if visited[k] or junction[k] or deg[k] > 1:
-            continue
-        visited[k] = True
-        pts[used] = k
-        used += 1
-        end = -1
-        if deg[k] == 1:
-            first = -1
-            for i in range(26):
-                if nbr[k, i] >= 0:
-                    first = nbr[k, i]
-            if junction[first]:
-                end = first
-            elif not visited[first]:
-                end, used = _walk(nbr, deg, junction, visited, pts, used, k, first)
-        att[nb, 0] = -1
-        att[nb, 1] = max(end, -1)
-        nb += 1
-        starts[nb] = used
-    for k in range(n):
-        if visited[k] or junction[k]:
-            continue
-        prev = -1  # a cycle of degree-2 voxels: walk it from its first voxel
-        for i in range(26):
-            if nbr[k, i] >= 0:
-                prev = nbr[k, i]
-        _, used = _walk(nbr, deg, junction, visited, pts, used, prev, k)
-        att[nb, 0] = -2
-        att[nb, 1] = -2
-        nb += 1
-        starts[nb] = used
-    counts = np.zeros((nb, 7), dtype=np.int64)
-    for b in range(nb):
-        s0, s1 = starts[b], starts[b + 1]
-        prev = att[b, 0] if att[b, 0] >= 0 else (pts[s1 - 1] if att[b, 0] == -2 else -1)
-        if att[b, 0] == -2 and s1 - s0 < 3:
-            prev = -1  # not a real cycle: no closing step
-        for i in range(s0, s1 + 1):
-            if i < s1:
-                cur = pts[i]
-            elif att[b, 1] >= 0:
-                cur = att[b, 1]
-            else:
-                break
-            if prev >= 0:
-                kind = (
-                    4 * abs(z[cur] - z[prev])
-                    + 2 * abs(y[cur] - y[prev])
-                    + abs(x[cur] - x[prev])
-                    - 1
-                )
-                counts[b, kind] += 1
-            prev = cur
-    return pts[:used], starts[: nb + 1], att[:nb], counts
+#: The volume grid's steps: slot ``i`` of the 26-neighbour table (:data:`~._topology.OFFSETS`)
+#: is a step of kind ``4·|dz| + 2·|dy| + |dx| − 1`` (:data:`~._topology.STEP_KINDS`).
+SLOT_KINDS = (np.abs(OFFSETS) @ np.array([4, 2, 1]) - 1).astype(np.int64)
 
 
 class VolumeGraph:
@@ -219,11 +96,10 @@ class VolumeGraph:
         self.y = np.asarray(y, dtype=np.int64)
         self.x = np.asarray(x, dtype=np.int64)
         self.spacing = check_spacing(spacing)
-        n = self.z.size
-        self.nbr = neighbour_table(self.z, self.y, self.x) if n else np.zeros((0, 26), np.int64)
+        self.nbr = neighbour_table(self.z, self.y, self.x)
         self.degree = (self.nbr >= 0).sum(axis=1)
-        cluster, n_clusters = _clusters(self.nbr, self.degree)
-        pts, starts, att, counts = _trace(self.nbr, self.degree, self.z, self.y, self.x)
+        cluster, n_clusters = junction_clusters(self.nbr, self.degree)
+        pts, starts, att, counts = trace_branches(self.nbr, self.degree, SLOT_KINDS, 7)
         self._build(cluster, int(n_clusters), pts, starts, att, counts)
 
     # -- construction --------------------------------------------------------------
@@ -241,7 +117,6 @@ class VolumeGraph:
             for e, a in ((0, a0), (1, a1)):
                 if a >= 0:
                     at[int(cluster[a])].append((b, e))
-        kind_of = {tuple(k): i for i, k in enumerate(_KIND_VECTORS)}
 
         def cluster_path(cid: int, a: int, b: int) -> tuple[list[int], np.ndarray]:
             """Shortest path of cluster points from ``a`` to ``b`` and its steps."""
@@ -260,15 +135,8 @@ class VolumeGraph:
             while back[path[-1]] != -1:
                 path.append(back[path[-1]])
             path.reverse()
-            st = np.zeros(7, dtype=np.int64)
-            for u, v in itertools.pairwise(path):
-                d = (
-                    abs(self.z[u] - self.z[v]),
-                    abs(self.y[u] - self.y[v]),
-                    abs(self.x[u] - self.x[v]),
-                )
-                st[kind_of[d]] += 1
-            return path, st
+            kinds = path_kinds(self.nbr, SLOT_KINDS, np.asarray(path, np.int64))
+            return path, np.bincount(kinds, minlength=7).astype(np.int64)
 
         for cid in range(n_clusters):
             here = [(b, e) for b, e in at[cid] if alive[b]]
@@ -418,5 +286,53 @@ def euler_characteristic(z: np.ndarray, y: np.ndarray, x: np.ndarray) -> int:
     return n_vertices - n_edges + n_faces - int(z.size)
 
 
-#: (|dz|, |dy|, |dx|) of each step kind, as :data:`~._topology.STEP_KINDS` orders them.
-_KIND_VECTORS = [(k + 1 >> 2 & 1, k + 1 >> 1 & 1, k + 1 & 1) for k in range(7)]
+class VolumeBranchGraph(PointGraph):
+    """The mutable branch graph the pruning removes branches from: the one branch graph
+    of every grid (:class:`~skelprune.pruning.branch_graph.PointGraph`) over the voxels'
+    26-neighbour table, with the seven step kinds of :data:`~._topology.STEP_KINDS`.
+
+    Junction clusters are 26-connected voxels with three or more neighbours; a cluster
+    left with two branch ends is dissolved and its two branches become one through the
+    cluster's shortest path (physical length), the cluster's other voxels going with it
+    beside the path; a cluster with one branch end becomes that branch's tip. Every
+    skeleton voxel belongs to exactly one live branch or junction, so the balls the
+    pruning weighs are all the skeleton's.
+
+    Parameters
+    ----------
+    z, y, x : (n,) int arrays
+        Skeleton voxels.
+    spacing : (dz, dy, dx)
+        Physical size of a voxel (for the shortest paths through junction clusters).
+
+    Examples
+    --------
+    >>> y = np.array([5, 5, 5, 5, 5, 4, 3, 6, 7])
+    >>> x = np.array([1, 2, 3, 4, 5, 6, 7, 6, 7])
+    >>> g = VolumeBranchGraph(np.zeros(9, int), y, x)                 # a Y
+    >>> g.end_branches(), g.total_steps()
+    ([0, 1, 2], (4, 0, 4, 0, 0, 0, 0))
+    >>> g.remove_end_branch(1)   # the other two merge through the junction voxel
+    (0, 2, 0)
+    >>> g.end_branches(), g.n_endpoints()
+    ([], 2)
+    """
+
+    def __init__(
+        self,
+        z: np.ndarray,
+        y: np.ndarray,
+        x: np.ndarray,
+        spacing: tuple[float, float, float] = (1.0, 1.0, 1.0),
+    ) -> None:
+        self.z = np.asarray(z, np.int64)
+        self.y = np.asarray(y, np.int64)
+        self.x = np.asarray(x, np.int64)
+        self.spacing = check_spacing(spacing)
+        nbr = neighbour_table(self.z, self.y, self.x)
+        super().__init__(nbr, GridSteps(SLOT_KINDS, step_lengths(self.spacing)))
+
+    @property
+    def coords(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(z, y, x)``: the tie order of end branches."""
+        return self.z, self.y, self.x

@@ -15,9 +15,10 @@ import math
 
 import numpy as np
 
+from ..pruning.limb_memory import LimbMemory
 from .balls import _paint, ball_counts
-from .branches import VolumeBranchGraph
 from .distance import squared_distance
+from .graph import VolumeBranchGraph
 
 __all__ = ["VolumeLimbs", "limb_rule"]
 
@@ -34,7 +35,7 @@ def rim(spacing: tuple[float, float, float]) -> float:
     return dz * dz + dy * dy + dx * dx
 
 
-class VolumeLimbs:
+class VolumeLimbs(LimbMemory):
     """The ball counts of the sequence's current skeleton and the limbs found so far
     (the volume grid's :class:`~skelprune.pruning.grid.LimbTest`).
 
@@ -58,14 +59,10 @@ class VolumeLimbs:
         r2: np.ndarray,
         spacing: tuple[float, float, float],
     ) -> None:
-        self.graph, self.volume = graph, volume
+        super().__init__(graph)
+        self.volume = volume
         self.z, self.y, self.x, self.r2 = z, y, x, r2
         self.spacing = spacing
-        self.counts: np.ndarray | None = None  # made when first needed
-        self.limb = np.zeros(len(graph.branches), np.bool_)
-
-    def _points(self, b: int) -> np.ndarray:
-        return np.asarray(self.graph.branches[b].points, np.int64)
 
     def is_limb(self, b: int, exclusive: int) -> bool:
         """Whether end branch ``b`` (alone covering ``exclusive`` voxels) is a limb on the
@@ -107,21 +104,7 @@ class VolumeLimbs:
         self.limb[b] = found
         return found
 
-    def removed(self, b: int) -> None:
-        """Branch ``b`` leaves the skeleton (call before the graph removes it)."""
-        if self.counts is None:
-            return
-        pts = self._points(b)
-        _paint(
-            self.counts,
-            self.z[pts],
-            self.y[pts],
-            self.x[pts],
-            self.r2[pts],
-            np.array(self.spacing),
-            -1,
-        )
-
-    def merged(self, kept: int, absorbed: int) -> None:
-        """``absorbed`` became part of ``kept``: a limb in it keeps ``kept`` a limb."""
-        self.limb[kept] |= self.limb[absorbed]
+    def _uncover(self, points: np.ndarray) -> None:
+        z, y, x, r2 = self.z[points], self.y[points], self.x[points], self.r2[points]
+        assert self.counts is not None
+        _paint(self.counts, z, y, x, r2, np.array(self.spacing), -1)

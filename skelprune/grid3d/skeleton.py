@@ -10,19 +10,19 @@ skeleton they are given: they take :meth:`VolumeSkeleton.working_graph` and answ
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 
 from ..grid._roughness import volume_roughness
-from ..skeleton import Normalisation
+from ..pruning.branch_graph import AxisOnGraph
+from ..pruning.normalisation import Normalisation, normalisation
 from ._topology import OFFSETS, step_lengths
 from .balls import reconstruction
-from .branches import VolumeBranchGraph
 from .coverage import VolumeCoverage
+from .graph import VolumeBranchGraph
 from .limbs import VolumeLimbs
 from .medial_axis import curve_skeleton
 
@@ -30,7 +30,7 @@ __all__ = ["VolumeSkeleton"]
 
 
 @dataclass(frozen=True, eq=False)
-class VolumeSkeleton:
+class VolumeSkeleton(AxisOnGraph[VolumeBranchGraph]):
     """A curve skeleton of one component, in the frame of its padded crop.
 
     Attributes
@@ -89,12 +89,6 @@ class VolumeSkeleton:
         """The seven step kinds' physical lengths."""
         return step_lengths(self.spacing)
 
-    def working_graph(self) -> VolumeBranchGraph:
-        return self.graph.copy()
-
-    def with_graph(self, graph: VolumeBranchGraph) -> VolumeSkeleton:  # type: ignore[override]
-        return replace(self, graph=graph)
-
     def coverage(
         self, graph: VolumeBranchGraph, labels: np.ndarray, n_labels: int
     ) -> VolumeCoverage:
@@ -147,29 +141,6 @@ class VolumeSkeleton:
         return np.asarray(lost, np.int64)
 
     # -- what the pipeline and the outputs ask ------------------------------------------
-    @property
-    def length(self) -> float:
-        """Total physical length of the branches."""
-        total = 0.0
-        for c, w in zip(self.graph.total_steps(), self.step_weights.tolist(), strict=True):
-            total += c * w
-        return total
-
-    @property
-    def n_endpoints(self) -> int:
-        return self.graph.n_endpoints()
-
-    @property
-    def n_points(self) -> int:
-        return int(self.graph.alive_points().size)
-
-    def points(self) -> np.ndarray:
-        """Indices of the voxels in this skeleton."""
-        return self.graph.alive_points()
-
-    def end_branches(self) -> list[int]:
-        return self.graph.end_branches()
-
     def reconstruction(self) -> np.ndarray:
         """``R(S)``: the union of the skeleton's balls, in the crop's frame."""
         idx = self.points()
@@ -180,23 +151,8 @@ class VolumeSkeleton:
     def normalisation(self, beta: float) -> Normalisation:
         """Seed voxel (largest radius; ties: smallest ``(z, y, x)``), mean end-path length
         ``ℓ̄`` and ``α = β·log(L/ℓ̄)``, as on the image grid (docs/algorithm.md)."""
-        g = self.graph
-        seed = int(np.lexsort((self.x, self.y, self.z, -self.r2))[0])
-        ends = sorted({g.endpoint(b) for b in g.end_branches()})
-        if not ends:
-            for b, br in enumerate(g.branches):
-                path = g.path(b) if br.alive and not br.loop else []
-                if len(path) > 1 and br.node == [None, None]:
-                    ends += [path[0], path[-1]]
-            ends = sorted(set(ends))
-        if not ends:
-            return Normalisation(seed, 0.0, None)
-        dist = self._path_lengths(seed)
-        lbar = float(np.mean(dist[ends]))
-        length = self.length
-        if not lbar > 0 or not length > 0:
-            return Normalisation(seed, lbar, None)
-        return Normalisation(seed, lbar, beta * math.log(length / lbar))
+        coords = (self.z, self.y, self.x)
+        return normalisation(self.graph, coords, self.r2, self._path_lengths, beta)
 
     def _path_lengths(self, seed: int) -> np.ndarray:
         """Shortest physical path lengths along the skeleton from ``seed``."""

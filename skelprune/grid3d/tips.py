@@ -12,7 +12,8 @@ drop a *remnant* only:
   side) of the new end's ball, ``|p − s| < r(s) + h``, and ``lost(k) ≤ k``;
 - the smallest ``λ`` wins, ties to the shorter tip; ends are cut one after another, each
   on what the earlier cuts left, the longest cut on ``Ŝ`` alone first, then by the free
-  end's ``(z, y, x)``.
+  end's ``(z, y, x)`` (the rule and the order of every grid:
+  :func:`skelprune.pruning.tip_cuts.trim_ends`; here, the counts).
 
 The naive oracle (``testkit/volume_oracle.py``) repaints every candidate from scratch.
 """
@@ -25,8 +26,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..pruning.branch_graph import Steps
+from ..pruning.tip_cuts import Box, Tip, trim_ends
 from .balls import _paint, ball_counts
-from .branches import Steps, VolumeBranchGraph, _add
+from .graph import VolumeBranchGraph
 
 if TYPE_CHECKING:
     from .skeleton import VolumeSkeleton
@@ -46,15 +49,9 @@ class VolumeTrim:
     exclusive: dict[int, int]
 
 
-def _length(steps: Steps, weights: list[float]) -> float:
-    total = 0.0
-    for c, w in zip(steps, weights, strict=True):
-        total += c * w
-    return total
-
-
 class _Tips:
-    """The ball counts of the skeleton left so far, and each tip's candidate cuts."""
+    """The ball counts of the skeleton left so far (``c``), and each tip's candidate
+    cuts: the volume grid's :class:`~skelprune.pruning.tip_cuts.TipCounts`."""
 
     def __init__(self, sk: VolumeSkeleton, graph: VolumeBranchGraph) -> None:
         self.sk, self.graph = sk, graph
@@ -71,33 +68,49 @@ class _Tips:
         c = float(sk.x[p] - sk.x[s]) * sk.spacing[2]
         return a * a + b * b + c * c
 
-    def candidates(self, b: int, e: int) -> tuple[list[int], list[int], list[int], list[Steps]]:
-        """The tip's points and their drop indices; per cut ``k`` its lost voxels and
-        dropped steps, for the cuts that drop a remnant only (others: ``lost = -1``)."""
+    def _reach(self, pts: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Per axis, the lowest and highest voxel the balls of ``pts`` reach (unclipped)."""
+        sk = self.sk
+        root = np.sqrt(sk.r2[pts])
+        out = []
+        for coord, s in zip((sk.z, sk.y, sk.x), sk.spacing, strict=True):
+            reach = (root / s).astype(np.int64) + 1
+            out.append((coord[pts] - reach, coord[pts] + reach))
+        return out
+
+    def candidates(self, ends: list[tuple[int, int]]) -> list[Tip]:
+        """Each tip's points and their drop indices; per cut ``k`` its lost voxels, its
+        dropped steps and whether it drops a remnant only; the box its balls reach and
+        the voxels only they cover."""
+        return [self._candidate(b, e) for b, e in ends]
+
+    def _candidate(self, b: int, e: int) -> Tip:
         sk, g = self.sk, self.graph
         points, drop, kinds = g.tip(b, e)
         m = len(kinds) + (0 if g.branches[b].node[1 - e] is None else 1)
         pts = np.asarray(points, np.int64)
         # the box the tip's balls reach
         lo, hi = [], []
-        root = np.sqrt(sk.r2[pts])
-        for coord, s, n in zip((sk.z, sk.y, sk.x), sk.spacing, self.c.shape, strict=True):
-            reach = (root / s).astype(np.int64) + 1
-            lo.append(max(int((coord[pts] - reach).min()), 0))
-            hi.append(min(int((coord[pts] + reach).max()) + 1, n))
+        for (low, high), n in zip(self._reach(pts), self.c.shape, strict=True):
+            lo.append(max(int(low.min()), 0))
+            hi.append(min(int(high.max()) + 1, n))
         box = tuple(slice(a, z) for a, z in zip(lo, hi, strict=True))
         c = self.c[box]
         inside = sk.volume[box] & (c > 0)
-        t = np.zeros(c.shape, np.int32)
         spacing = np.array(sk.spacing)
+        mine = np.zeros(c.shape, np.int32)
+        _paint(
+            mine, sk.z[pts] - lo[0], sk.y[pts] - lo[1], sk.x[pts] - lo[2], sk.r2[pts], spacing, 1
+        )
+        only = int(np.count_nonzero(inside & (mine == c)))
+        t = np.zeros(c.shape, np.int32)
         order = np.argsort(np.asarray(drop), kind="stable")
-        lost = [0]
-        steps: list[Steps] = [(0, 0, 0, 0, 0, 0, 0)]
+        lost = np.zeros(m, np.int64)
+        steps = np.zeros((m, 7), np.int64)
         j = 0
         for k in range(1, m):
             while j < len(order) and drop[order[j]] < k:
-                p = int(pts[order[j]])
-                one = np.array([p])
+                one = pts[order[j] : order[j] + 1]
                 _paint(
                     t,
                     sk.z[one] - lo[0],
@@ -108,20 +121,31 @@ class _Tips:
                     1,
                 )
                 j += 1
-            lost.append(int(np.count_nonzero(inside & (t == c))))
-            step = [0] * 7
-            step[kinds[k - 1]] = 1
-            steps.append(_add(steps[-1], tuple(step)))  # type: ignore[arg-type]
+            lost[k] = np.count_nonzero(inside & (t == c))
+            steps[k] = steps[k - 1]
+            steps[k, kinds[k - 1]] += 1
+        allowed = np.ones(m, np.bool_)
         for k in range(1, m):
             s = points[k]
             reach = math.sqrt(float(sk.r2[s])) + self.h
-            if lost[k] > k or any(
+            allowed[k] = lost[k] <= k and not any(
                 math.sqrt(self._d2(p, s)) >= reach
                 for p, d in zip(points, drop, strict=True)
                 if d < k
-            ):
-                lost[k] = -1
-        return points, drop, lost, steps
+            )
+        # the box as the driver compares boxes: closed, lowest then highest voxel
+        closed = (*lo, *(z - 1 for z in hi))
+        return Tip(pts, np.asarray(drop, np.int64), lost, steps, allowed, closed, only)
+
+    def cut(self, points: np.ndarray, drop: np.ndarray, k: int) -> tuple[list[int], Box]:
+        """Cut ``k`` of a tip: its dropped points' balls taken off the counts; returns
+        those points and the box their balls reach."""
+        sk = self.sk
+        gone = points[drop < k]
+        _paint(self.c, sk.z[gone], sk.y[gone], sk.x[gone], sk.r2[gone], np.array(sk.spacing), -1)
+        reach = self._reach(gone)
+        box = (*(int(low.min()) for low, _ in reach), *(int(high.max()) for _, high in reach))
+        return gone.tolist(), box
 
     def exclusive(self, b: int) -> int:
         """Voxels only branch ``b``'s balls cover."""
@@ -129,27 +153,6 @@ class _Tips:
         pts = np.asarray(self.graph.branches[b].points, np.int64)
         own = ball_counts(sk.volume.shape, sk.z[pts], sk.y[pts], sk.x[pts], sk.r2[pts], sk.spacing)
         return int(np.count_nonzero(sk.volume & (own > 0) & (own == self.c)))
-
-
-def _best(
-    lost0: int,
-    total: Steps,
-    lost: list[int],
-    steps: list[Steps],
-    area: int,
-    alpha: float,
-    lbar: float,
-    weights: list[float],
-) -> int:
-    best, best_lam = 0, math.inf
-    for k, (lo, st) in enumerate(zip(lost, steps, strict=True)):
-        if lo < 0:
-            continue
-        length = _length(_add(total, st, -1), weights)
-        lam = alpha * (lost0 + lo) / area + math.log(length / lbar + 1.0)
-        if lam <= best_lam:
-            best, best_lam = k, lam
-    return best
 
 
 def trim_volume_tips(answer: VolumeSkeleton, lost: int, alpha: float, lbar: float) -> VolumeTrim:
@@ -165,34 +168,8 @@ def trim_volume_tips(answer: VolumeSkeleton, lost: int, alpha: float, lbar: floa
         ``α`` and ``ℓ̄`` of the sequence it was chosen from.
     """
     graph = answer.working_graph()
-    weights = answer.step_weights.tolist()
     tips = _Tips(answer, graph)
-    keyed = []
-    for b, e in graph.free_ends():
-        _, _, cl, cs = tips.candidates(b, e)
-        k = _best(lost, graph.total_steps(), cl, cs, answer.area, alpha, lbar, weights)
-        p = graph.free_end_point(b, e)
-        key = (-_length(cs[k], weights), int(answer.z[p]), int(answer.y[p]), int(answer.x[p]))
-        keyed.append((*key, b, e))
-    keyed.sort()
-    cuts = []
-    for *_, b, e in keyed:
-        points, drop, cl, cs = tips.candidates(b, e)
-        k = _best(lost, graph.total_steps(), cl, cs, answer.area, alpha, lbar, weights)
-        cuts.append((b, e, k))
-        if k == 0:
-            continue
-        gone = np.asarray([p for p, d in zip(points, drop, strict=True) if d < k], np.int64)
-        _paint(
-            tips.c,
-            answer.z[gone],
-            answer.y[gone],
-            answer.x[gone],
-            answer.r2[gone],
-            np.array(answer.spacing),
-            -1,
-        )
-        lost += cl[k]
-        graph.cut_tip(b, e, gone.tolist(), cs[k])
-    exclusive = {b: tips.exclusive(b) for b in graph.end_branches()}
+    lost, cuts, exclusive = trim_ends(
+        graph, graph.coords, tips, graph.free_ends(), lost, answer.area, alpha, lbar
+    )
     return VolumeTrim(answer.with_graph(graph), lost, graph.total_steps(), cuts, exclusive)

@@ -16,12 +16,12 @@ from typing import cast
 import numpy as np
 
 from ..grid import Orientation
-from ..grid.graph import BranchGraph, step_length
+from ..grid.graph import BranchGraph
+from ..grid.tips import Trim
 from ..io.frame import IDENTITY, PixelFrame
-from ..pruning.bayesian import PruningSequence
-from ..pruning.bayesian import objective as target
+from ..pruning.bayesian import PruningSequence, target
+from ..pruning.grid import path_length
 from ..pruning.margin import Margins
-from ..pruning.tips import Trim
 from ..skeleton import Skeleton
 from .schema import BranchDoc, ComponentDoc, NodeDoc, SequenceDoc
 from .table import BranchTable, branch_table, frame_distances
@@ -105,12 +105,12 @@ class ComponentResult:
                 float(seq.ss[k]),
                 float(seq.objective[k]),
             )
-        length = float(step_length(t.na, t.nd))
+        length = path_length(t.steps, t.skeleton.step_weights)
         return (
             length,
             t.lost / seq.area,
             float(np.log(length / seq.lbar + 1.0)),
-            target(t.lost, seq.area, t.na, t.nd, seq.alpha, seq.lbar),
+            target(t.lost, seq.area, length, seq.alpha, seq.lbar),
         )
 
     @property

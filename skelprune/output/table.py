@@ -292,7 +292,7 @@ def branch_table(sk: Skeleton, margins: Margins | None) -> BranchTable:
             src, dst = ends
         source.append(src)
         target.append(dst)
-        length.append(float(br.length))
+        length.append(g.branch_length(b))
         m = got_margin.get(b)
         margin.append(np.nan if m is None else float(m))
         k = got_removed.get(b)

@@ -12,8 +12,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..grid.replay import replay, start_repaint
 from ..io.frame import PixelFrame
-from ..pruning.replay import replay, start_repaint
 from .table import BranchTable, branch_table, frame_points, nullable
 
 if TYPE_CHECKING:
@@ -66,7 +66,7 @@ def sequence_dict(
     removal takes its pixels (``removed_at``) and, where a junction dissolved into a
     merge, the step and the branch it became part of (``absorbed_at``,
     ``absorbed_into``); each junction node with the step that dissolved it and the branch
-    its pixels joined (:func:`skelprune.pruning.replay.replay`). ``uncovered`` lists the
+    its pixels joined (:func:`skelprune.grid.replay.replay`). ``uncovered`` lists the
     shape's pixels ``S(0)`` misses, so that ``D \\ R(S(k))`` follows from the disks alone,
     and ``coarse_removed`` the medial axis's pixels the coarse stage took before step 0.
     ``answer`` gives the way back to image coordinates (the start's own, as both share

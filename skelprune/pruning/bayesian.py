@@ -13,9 +13,7 @@ scratch and must agree exactly.
 
 from __future__ import annotations
 
-import heapq
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any, Generic, TypeVar
@@ -23,15 +21,12 @@ from typing import Any, Generic, TypeVar
 import numpy as np
 from numba import njit
 
-from ..grid.graph import BranchGraph, step_length
 from .grid import GridAxis, GridGraph, compiled_length, path_lengths
 from .log import RemovalLog
 
 __all__ = [
     "PruningSequence",
-    "objective",
     "pruning_sequence",
-    "remove_unsupported",
     "target",
 ]
 
@@ -39,11 +34,6 @@ __all__ = [
 def target(lost: int, area: int, length: float, alpha: float, lbar: float) -> float:
     """``λ(S) = α·AR(S) + log(Γ(S) + 1)`` with ``Γ = length / ℓ̄`` (eq. 7), on any grid."""
     return alpha * lost / area + math.log(length / lbar + 1.0)
-
-
-def objective(lost: int, area: int, na: int, nd: int, alpha: float, lbar: float) -> float:
-    """``λ(S)`` on the pixel grid, the length given as ``na`` axial and ``nd`` diagonal steps."""
-    return target(lost, area, step_length(na, nd), alpha, lbar)
 
 
 #: The axis type of one grid: a sequence gives back skeletons of its start's type.
@@ -139,7 +129,8 @@ def pruning_sequence(
         ``alpha=None`` (degenerate shapes) nothing is removed.
     order : list of int, optional
         Instead of choosing by λ, remove exactly these end branches in this order
-        (e.g. :func:`remove_unsupported` run on a twin graph, for ``method="dce"``),
+        (e.g. :func:`skelprune.grid.dce.remove_unsupported` run on a twin graph, for
+        ``method="dce"``),
         recording every step the same way.
     uncovered : bool
         Also record which elements ``S(0)`` misses (``PruningSequence.uncovered``).
@@ -248,50 +239,6 @@ def pruning_sequence(
         total_steps = graph.total_steps()
         seq.steps.append(total_steps)
     return seq
-
-
-def remove_unsupported(
-    graph: BranchGraph,
-    supported: np.ndarray | Callable[[int], bool],
-    candidates: list[int] | None = None,
-) -> list[int]:
-    """DCE pruning on the graph alone: remove, smallest endpoint (row, col) first,
-    every end branch none of whose points is supported, until each has one.
-
-    Used as the coarse stage, whose steps are not part of the Bayesian curve, so no
-    reconstruction is kept up to date. A branch's support only changes when it
-    absorbs another, so candidates wait in a heap and only merged branches are
-    looked at again. ``supported`` is a per-point bool array, or a function that tells
-    whether branch ``b`` (as it is now) is supported, for a caller that works the
-    answer out lazily. ``candidates`` restricts the first look to those branches (when
-    the caller knows no other end branch can be unsupported).
-    """
-    if callable(supported):
-        is_supported = supported
-    else:
-
-        def is_supported(b: int) -> bool:
-            return bool(supported[graph.branches[b].points].any())
-
-    def push(b: int) -> None:
-        if graph.is_end_branch(b) and not is_supported(b):
-            p = graph.endpoint(b)
-            heapq.heappush(heap, (int(graph.rows[p]), int(graph.cols[p]), b, p))
-
-    heap: list[tuple[int, int, int, int]] = []
-    for b in graph.end_branches() if candidates is None else candidates:
-        push(b)
-    removed: list[int] = []
-    while heap:
-        _, _, b, p = heapq.heappop(heap)
-        # stale: removed, absorbed, or grown by a merge since it was pushed
-        if not graph.is_end_branch(b) or graph.endpoint(b) != p or is_supported(b):
-            continue
-        merged = graph.remove_end_branch(b)
-        removed.append(b)
-        if merged is not None:
-            push(merged[0])
-    return removed
 
 
 @njit(cache=True)

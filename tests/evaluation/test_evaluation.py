@@ -48,10 +48,10 @@ def test_cut_end_branches_on_a_graph() -> None:
     rows = [10] * 30 + [9, 8] + list(range(11, 23))
     cols = list(range(2, 32)) + [8, 8] + [20] * 12
     g = BranchGraph(np.array(rows), np.array(cols), (30, 40))
-    lengths = {b: g.branches[b].length for b in g.end_branches()}
+    lengths = {b: g.branch_length(b) for b in g.end_branches()}
     removed = cut_end_branches(g, 5.0)
     assert removed and all(lengths[b] < 5.0 for b in removed)
-    assert all(g.branches[b].length >= 5.0 for b in g.end_branches())
+    assert all(g.branch_length(b) >= 5.0 for b in g.end_branches())
     kept = g.alive_points()
     assert 22 in g.rows[kept]  # the arm's tip
     assert 8 not in g.rows[kept]  # the spur's tip

@@ -1,5 +1,5 @@
 """The coarse stage of ``prune(coarse="dce")``: roughness-raised DCE stop, one branch per
-convex vertex (``skelprune/pruning/coarse.py``)."""
+convex vertex (``skelprune/grid/coarse.py``)."""
 
 from __future__ import annotations
 
@@ -9,11 +9,8 @@ import pytest
 
 from evaluation.perturb import boundary_noise, noisy_rectangle
 from skelprune.api import components
-from skelprune.grid.graph import BranchGraph
-from skelprune.grid.medial_axis import medial_axis, squared_distance
-from skelprune.pruning._generating import SegmentRaster, rim_label_set
-from skelprune.pruning.bayesian import remove_unsupported
-from skelprune.pruning.coarse import (
+from skelprune.grid._generating import SegmentRaster, rim_label_set
+from skelprune.grid.coarse import (
     COARSE_VERTICES,
     ROUGHNESS_FLOOR,
     boundary_roughness,
@@ -21,12 +18,15 @@ from skelprune.pruning.coarse import (
     coarse_removals,
     coarse_threshold,
 )
-from skelprune.pruning.dce import (
+from skelprune.grid.dce import (
     COARSE_PIXEL_THRESHOLD,
     boundary_partition,
     generated_in_several_segments,
     generating_segments,
+    remove_unsupported,
 )
+from skelprune.grid.graph import BranchGraph
+from skelprune.grid.medial_axis import medial_axis, squared_distance
 from testkit.shapes import dataset, load
 
 SHAPES = dataset("kimia216")[::6] + dataset("kimia99")[::6]
@@ -198,7 +198,7 @@ def reference_coarse(graph: BranchGraph, crop: np.ndarray, r2: np.ndarray) -> li
     reads the generating segments of every point of ``M`` and applies the two rules
     branch by branch.
     """
-    from skelprune.pruning.coarse import _convex_vertices
+    from skelprune.grid.coarse import _convex_vertices
 
     part = coarse_partition(crop)
     labels = generating_segments(np.stack([graph.rows, graph.cols], axis=1), r2, part)
@@ -278,7 +278,7 @@ def test_lazy_coarse_stage_equals_the_eager_reference(name, mask):
 def test_where_segments_meet_is_the_pair_table_without_the_table():
     """``_meeting_vertex`` answers what an m × m table of (before, after) pairs would,
     on a boundary with hundreds of segments (pixel noise inside a square)."""
-    from skelprune.pruning.coarse import _convex_vertices, _meeting_vertex
+    from skelprune.grid.coarse import _convex_vertices, _meeting_vertex
 
     rng = np.random.default_rng(3)
     mask = np.zeros((60, 60), bool)
@@ -300,7 +300,7 @@ def test_where_segments_meet_is_the_pair_table_without_the_table():
 def test_the_coarse_stage_holds_no_table_quadratic_in_the_segments():
     """Pixel noise makes about as many boundary segments as boundary pixels: every
     array the stage keeps is linear in the skeleton points plus the segments."""
-    from skelprune.pruning.coarse import _convex_vertices, _EndBranches
+    from skelprune.grid.coarse import _convex_vertices, _EndBranches
     from testkit.adversarial import noise
 
     crop, ma = _axis(noise(48, 0.8, seed=1))

@@ -1,4 +1,4 @@
-"""Discrete Curve Evolution and the contour partition (skelprune.pruning.dce, docs/algorithm.md)."""
+"""Discrete Curve Evolution and the contour partition (skelprune.grid.dce, docs/algorithm.md)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from scipy import ndimage as ndi
 from skimage.draw import polygon as fill_polygon
 
 from evaluation.perturb import boundary_noise, rescale
-from skelprune.pruning.dce import (
+from skelprune.grid.dce import (
     BoundaryPartition,
     boundary_partition,
     evolve_polygon,

@@ -14,7 +14,7 @@ from skimage.measure import find_contours
 
 from evaluation.perturb import boundary_noise, rotate
 from skelprune.grid._contours import boundary_polygons as _boundary_polygons
-from skelprune.pruning.dce import boundary_partition, generated_in_several_segments
+from skelprune.grid.dce import boundary_partition, generated_in_several_segments
 from testkit.shapes import (
     blobs,
     dataset,
@@ -144,7 +144,7 @@ def reference_evolution(xy: np.ndarray, n_keep: int, threshold: float) -> list[i
     Relevances come from the library's own kernel, so that this checks the evolution
     (deletion order, stop rules, the straight-run shortcut), not the float formula.
     """
-    from skelprune.pruning.dce import _relevance
+    from skelprune.grid.dce import _relevance
 
     d = np.diff(xy, axis=0, append=xy[:1])
     perimeter = float(np.hypot(d[:, 0], d[:, 1]).sum()) or 1.0
@@ -175,7 +175,7 @@ EVOLUTION_CASES = [
 
 @pytest.mark.parametrize(("n_vertices", "threshold"), EVOLUTION_CASES)
 def test_evolution_equals_plain_dce(n_vertices, threshold):
-    from skelprune.pruning.dce import evolve_polygon
+    from skelprune.grid.dce import evolve_polygon
 
     masks = [
         load(K216[7]),

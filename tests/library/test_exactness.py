@@ -94,7 +94,7 @@ def test_fast_equals_naive_from_the_coarse_dce_skeleton(case):
     The noisy shapes make the coarse stage's roughness-raised threshold and its
     one-branch-per-convex-vertex rule act.
     """
-    from skelprune.pruning.coarse import coarse_dce
+    from skelprune.grid.coarse import coarse_dce
 
     mask = make_noisy(case) if len(case) == 3 else make(case)
     steps = 0

@@ -7,9 +7,9 @@ import pytest
 
 import skelprune
 from skelprune.api import components
+from skelprune.grid.coarse import coarse_dce
+from skelprune.grid.limbs import LimbGuard
 from skelprune.pruning.bayesian import pruning_sequence
-from skelprune.pruning.coarse import coarse_dce
-from skelprune.pruning.limbs import LimbGuard
 from skelprune.skeleton import Skeleton
 from testkit.limbs import limb_reach, limb_shape, limb_shapes
 from testkit.oracle import naive_sequence

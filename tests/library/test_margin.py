@@ -38,7 +38,7 @@ def naive_lambda(comp, crop: np.ndarray, graph) -> float:
     rec = reconstruction(crop.shape, graph.rows[pts], graph.cols[pts], comp.r2[pts])
     lost = int((crop & ~rec).sum())
     seq = comp.sequence
-    return objective(lost, seq.area, graph.na, graph.nd, seq.alpha, seq.lbar)
+    return objective(lost, seq.area, *graph.total_steps(), seq.alpha, seq.lbar)
 
 
 @pytest.mark.parametrize("trim", [True, False])

@@ -9,11 +9,11 @@ from hypothesis import strategies as st
 
 import skelprune
 from skelprune.api import components
-from skelprune.pruning import tips
+from skelprune.grid import tips
+from skelprune.grid.coarse import coarse_dce
+from skelprune.grid.tips import trim_tips
 from skelprune.pruning.bayesian import pruning_sequence
 from skelprune.pruning.choice import choose_step
-from skelprune.pruning.coarse import coarse_dce
-from skelprune.pruning.tips import trim_tips
 from skelprune.skeleton import Skeleton
 from testkit.limbs import limb_reach, limb_shape, limb_shapes
 from testkit.oracle import disk_pixels, naive_trim, objective
@@ -194,7 +194,7 @@ def test_trim_must_be_a_flag(value):
 
 @pytest.fixture
 def tip_rule():
-    """Set :data:`skelprune.pruning.tips.RULE` for one test, and put it back."""
+    """Set :data:`skelprune.grid.tips.RULE` for one test, and put it back."""
     before = tips.RULE
 
     def use(rule: str) -> None:

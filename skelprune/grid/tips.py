@@ -31,14 +31,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-from ..grid._rowcover import cover_counts, cut_counts, exclusive_losses, uncover
-from ..grid.graph import BranchGraph, step_length
+from ..pruning.tip_cuts import Box, Tip, trim_ends
 from ..skeleton import Skeleton
+from ._rowcover import cover_counts, cut_counts, exclusive_losses, uncover
+from .graph import BranchGraph
 
 __all__ = ["RULES", "Trim", "trim_tips"]
 
@@ -76,22 +76,9 @@ class Trim:
         return self.na, self.nd
 
 
-class _Tip(NamedTuple):
-    """One tip's candidate cuts (:meth:`_Tips.candidates`)."""
-
-    points: np.ndarray
-    drop: np.ndarray
-    lost: np.ndarray
-    cut: np.ndarray
-    allowed: np.ndarray
-    box: tuple[int, int, int, int]
-    only: int
-    best: int
-
-
 class _Tips:
     """The disk counts the cuts share (``c``: per pixel, how many disks of the skeleton
-    left so far cover it)."""
+    left so far cover it): the pixel grid's :class:`~skelprune.pruning.tip_cuts.TipCounts`."""
 
     def __init__(self, sk: Skeleton, graph: BranchGraph) -> None:
         self.sk, self.graph = sk, graph
@@ -99,21 +86,11 @@ class _Tips:
         h, w = sk.mask.shape
         self.c = cover_counts(h, w, sk.rows[idx], sk.cols[idx], sk.r2[idx])
 
-    def candidates(
-        self,
-        ends: list[tuple[int, int]],
-        lost: int,
-        na: int,
-        nd: int,
-        area: int,
-        alpha: float,
-        lbar: float,
-    ) -> list[_Tip]:
+    def candidates(self, ends: list[tuple[int, int]]) -> list[Tip]:
         """Each tip's points, their drop indices, per cut ``k = 0 … len − 1`` of the path
         (``len − 2`` on a single path) the pixels lost and the (axial, diagonal) steps
         dropped, whether it cuts a remnant only (:data:`RULE`), the box the tip's disks
-        can reach, the pixels only they cover, and the best cut on a skeleton with
-        ``lost``, ``na`` and ``nd``."""
+        can reach and the pixels only they cover."""
         sk, graph = self.sk, self.graph
         rule = RULES.index(RULE)
         out = []
@@ -127,10 +104,18 @@ class _Tips:
                 sk.mask, self.c, sk.rows, sk.cols, sk.r2, pts, dr, np.asarray(steps, np.int64), m
             )
             allowed = remnant_cuts(sk.rows, sk.cols, sk.r2, pts, dr, cl, rule)
-            best = _best(lost, na, nd, cl, cs, allowed, area, alpha, lbar)
             b0, b1, b2, b3 = box.tolist()
-            out.append(_Tip(pts, dr, cl, cs, allowed, (b0, b1, b2, b3), int(only), int(best)))
+            out.append(Tip(pts, dr, cl, cs, allowed, (b0, b1, b2, b3), int(only)))
         return out
+
+    def cut(self, points: np.ndarray, drop: np.ndarray, k: int) -> tuple[list[int], Box]:
+        """Cut ``k`` of a tip: its dropped points' disks taken off the counts ``c``;
+        returns those points and the box (top, left, bottom, right) their disks can
+        reach, as :func:`~skelprune.grid._rowcover.cut_counts` bounds a tip's."""
+        sk = self.sk
+        gone, box = _cut_kernel(self.c, sk.rows, sk.cols, sk.r2, points, drop, k)
+        b = box.tolist()
+        return gone.tolist(), (b[0], b[1], b[2], b[3])
 
     def exclusive(self, b: int) -> int:
         """Pixels only branch ``b``'s disks cover."""
@@ -189,42 +174,8 @@ def remnant_cuts(rows, cols, r2, pts, drop, lost, rule):
 
 
 @njit(cache=True)
-def _best(lost0, na0, nd0, cand_lost, cand_steps, allowed, area, alpha, lbar):
-    """``argmin λ`` over the allowed cuts, ties to the larger ``k``; λ with exactly the
-    operations of :func:`~skelprune.pruning.bayesian.objective`, so that the choice is
-    bit-identical to the oracle's."""
-    best, best_lam = 0, math.inf
-    for k in range(cand_lost.size):
-        if not allowed[k]:
-            continue
-        lam = alpha * (lost0 + cand_lost[k]) / area + math.log(
-            step_length(na0 - cand_steps[k, 0], nd0 - cand_steps[k, 1]) / lbar + 1.0
-        )
-        if lam <= best_lam:
-            best, best_lam = k, lam
-    return best
-
-
-def _cut(
-    c: np.ndarray,
-    rows: np.ndarray,
-    cols: np.ndarray,
-    r2: np.ndarray,
-    points: np.ndarray,
-    drop: np.ndarray,
-    k: int,
-) -> tuple[list[int], tuple[int, int, int, int]]:
-    """Cut ``k`` of a tip: its dropped points' disks taken off the counts ``c``; returns
-    those points and the box (top, left, bottom, right) their disks can reach, as
-    :func:`~skelprune.grid._rowcover.cut_counts` bounds a tip's."""
-    gone, box = _cut_kernel(c, rows, cols, r2, points, drop, k)
-    b = box.tolist()
-    return gone.tolist(), (b[0], b[1], b[2], b[3])
-
-
-@njit(cache=True)
 def _cut_kernel(c, rows, cols, r2, points, drop, k):
-    """:func:`_cut` in one compiled call."""
+    """:meth:`_Tips.cut` in one compiled call."""
     n = 0
     for j in range(points.size):
         if drop[j] < k:
@@ -247,10 +198,6 @@ def _cut_kernel(c, rows, cols, r2, points, drop, k):
         box[2] = max(box[2], gr[j] + rad)
         box[3] = max(box[3], gc[j] + rad)
     return gone, box
-
-
-def _meet(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> bool:
-    return a[0] <= b[2] and b[0] <= a[2] and a[1] <= b[3] and b[1] <= a[3]
 
 
 def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
@@ -284,65 +231,14 @@ def trim_tips(answer: Skeleton, lost: int, alpha: float, lbar: float) -> Trim:
     (True, True)
     """
     graph = answer.working_graph()
-    area = answer.area
     tips = _Tips(answer, graph)
     # an end where the shape runs off the image is no tip: never cut
     free = graph.free_ends()
     off = answer.open_ends([graph.free_end_point(b, e) for b, e in free])
     ends = [(b, e) for b, e in free if graph.free_end_point(b, e) not in off]
-    # The order: longest cut on Ŝ alone first, then endpoint (row, col).
-    keyed = []
-    first = {}
-    for (b, e), tip in zip(
-        ends, tips.candidates(ends, lost, graph.na, graph.nd, area, alpha, lbar), strict=True
-    ):
-        p = graph.free_end_point(b, e)
-        first[b, e] = tip
-        cs = tip.cut
-        keyed.append(
-            (
-                -step_length(int(cs[tip.best, 0]), int(cs[tip.best, 1])),
-                int(graph.rows[p]),
-                int(graph.cols[p]),
-                b,
-                e,
-            )
-        )
-    keyed.sort()
-    cuts: list[tuple[int, int, int]] = []
-    changed: list[tuple[int, int, int, int]] = []  # where earlier cuts changed the counts
-    cut_branches: set[int] = set()
-    # per branch, from its last count: what only its kept points cover, the box, and
-    # how many changes that count has seen
-    kept: dict[int, tuple[int, tuple[int, int, int, int], int]] = {}
-    for *_, b, e in keyed:
-        tip = first[b, e]
-        if b in cut_branches or any(_meet(tip.box, c) for c in changed):
-            # an earlier cut changed what this tip's disks share: count again
-            (tip,) = tips.candidates([(b, e)], lost, graph.na, graph.nd, area, alpha, lbar)
-            k = tip.best
-        elif changed:  # counted before a cut changed the length and the lost pixels
-            k = _best(lost, graph.na, graph.nd, tip.lost, tip.cut, tip.allowed, area, alpha, lbar)
-        else:
-            k = tip.best
-        points, drop, cl, cs = tip.points, tip.drop, tip.lost, tip.cut
-        cuts.append((b, e, k))
-        # a pixel only the kept points cover had all its disks in the tip, one kept
-        kept[b] = (tip.only - int(cl[k]), tip.box, len(changed) + (k > 0))
-        if k == 0:
-            continue
-        # Only the dropped points' disks changed the counts: their box, not the whole
-        # tip's (whose large disks near the junction reach most of a small shape), so
-        # that fewer later tips are counted again.
-        gone, dropped_box = _cut(tips.c, answer.rows, answer.cols, answer.r2, points, drop, k)
-        changed.append(dropped_box)
-        cut_branches.add(b)
-        lost += int(cl[k])
-        graph.cut_tip(b, e, gone, int(cs[k, 0]), int(cs[k, 1]))
-    exclusive = {}
-    for b in graph.end_branches():
-        if b in kept and not any(_meet(kept[b][1], c) for c in changed[kept[b][2] :]):
-            exclusive[b] = kept[b][0]  # no later cut reached its disks
-        else:
-            exclusive[b] = tips.exclusive(b)
-    return Trim(answer.with_graph(graph), lost, graph.na, graph.nd, cuts, exclusive)
+    # the order: longest cut on Ŝ alone first, then endpoint (row, col)
+    lost, cuts, exclusive = trim_ends(
+        graph, graph.coords, tips, ends, lost, answer.area, alpha, lbar
+    )
+    na, nd = graph.total_steps()
+    return Trim(answer.with_graph(graph), lost, na, nd, cuts, exclusive)

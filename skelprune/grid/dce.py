@@ -27,15 +27,18 @@ Conventions (see ``docs/dce.md``):
 
 from __future__ import annotations
 
+import heapq
+from collections.abc import Callable
 from itertools import pairwise
 
 import numba
 import numpy as np
 
-from ..grid import trace_boundaries
 from ..options import DEFAULT_DCE_THRESHOLD
+from ._contours import trace_boundaries
 from ._generating import TOUCH_TOLERANCE, generated_in_several_segments, generating_segments
 from ._partition import BoundaryPartition
+from .graph import BranchGraph
 
 __all__ = [
     "COARSE_PIXEL_THRESHOLD",
@@ -47,6 +50,7 @@ __all__ = [
     "evolve_polygon",
     "generated_in_several_segments",
     "generating_segments",
+    "remove_unsupported",
 ]
 
 #: Default stop of DCE for ``method="dce"`` (and when no rule is given): delete every
@@ -58,7 +62,7 @@ DCE_THRESHOLD: float = DEFAULT_DCE_THRESHOLD  # defined with the option it defau
 DCE_VERTICES: int = 16
 #: The coarse stage of ``prune(coarse="dce")`` on a clean boundary: DCE stops when the
 #: least relevance, measured in pixels (``β·l1·l2/(l1 + l2)``, lengths in pixels), exceeds
-#: this; :func:`skelprune.pruning.coarse.coarse_threshold` raises it with the boundary's roughness.
+#: this; :func:`skelprune.grid.coarse.coarse_threshold` raises it with the boundary's roughness.
 #: The largest stop, in steps of 0.25 px, that keeps the median RER within 1 % on
 #: kimia216 (2.5 px: 0.99 %; 3 px: 1.03 %); a higher stop is steadier under noise. See
 #: docs/stability-findings.md.
@@ -342,3 +346,47 @@ def _cut_at_convex(
             nxt += 1
         labels[j] = first_id + rank
     return is_convex, n_cuts
+
+
+def remove_unsupported(
+    graph: BranchGraph,
+    supported: np.ndarray | Callable[[int], bool],
+    candidates: list[int] | None = None,
+) -> list[int]:
+    """DCE pruning on the graph alone: remove, smallest endpoint (row, col) first,
+    every end branch none of whose points is supported, until each has one.
+
+    Used as the coarse stage, whose steps are not part of the Bayesian curve, so no
+    reconstruction is kept up to date. A branch's support only changes when it
+    absorbs another, so candidates wait in a heap and only merged branches are
+    looked at again. ``supported`` is a per-point bool array, or a function that tells
+    whether branch ``b`` (as it is now) is supported, for a caller that works the
+    answer out lazily. ``candidates`` restricts the first look to those branches (when
+    the caller knows no other end branch can be unsupported).
+    """
+    if callable(supported):
+        is_supported = supported
+    else:
+
+        def is_supported(b: int) -> bool:
+            return bool(supported[graph.branches[b].points].any())
+
+    def push(b: int) -> None:
+        if graph.is_end_branch(b) and not is_supported(b):
+            p = graph.endpoint(b)
+            heapq.heappush(heap, (int(graph.rows[p]), int(graph.cols[p]), b, p))
+
+    heap: list[tuple[int, int, int, int]] = []
+    for b in graph.end_branches() if candidates is None else candidates:
+        push(b)
+    removed: list[int] = []
+    while heap:
+        _, _, b, p = heapq.heappop(heap)
+        # stale: removed, absorbed, or grown by a merge since it was pushed
+        if not graph.is_end_branch(b) or graph.endpoint(b) != p or is_supported(b):
+            continue
+        merged = graph.remove_end_branch(b)
+        removed.append(b)
+        if merged is not None:
+            push(merged[0])
+    return removed

@@ -30,9 +30,10 @@ import math
 import numpy as np
 from numba import njit
 
-from ..grid._edt import _squared_edt
-from ..grid._rowcover import cover_counts, uncover
-from ..grid.graph import BranchGraph
+from ..pruning.limb_memory import LimbMemory
+from ._edt import _squared_edt
+from ._rowcover import cover_counts, uncover
+from .graph import BranchGraph
 
 __all__ = ["MIN_LIMB_AREA", "RIM", "LimbGuard"]
 
@@ -45,7 +46,7 @@ RIM = 2
 MIN_LIMB_AREA = 16
 
 
-class LimbGuard:
+class LimbGuard(LimbMemory):
     """The disk counts of the sequence's current skeleton and the limbs found so far.
 
     Parameters
@@ -73,13 +74,9 @@ class LimbGuard:
     """
 
     def __init__(self, graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> None:
-        self.graph, self.mask, self.r2 = graph, mask, r2
-        # The disk counts of the current skeleton, made when first needed.
-        self.counts: np.ndarray | None = None
-        self.limb = np.zeros(len(graph.branches), np.bool_)
-
-    def _points(self, b: int) -> np.ndarray:
-        return np.asarray(self.graph.branches[b].points, np.int64)
+        super().__init__(graph)
+        self.graph: BranchGraph = graph
+        self.mask, self.r2 = mask, r2
 
     def is_limb(self, b: int, exclusive: int) -> bool:
         """Whether end branch ``b``, which alone covers ``exclusive`` pixels, is a limb,
@@ -99,16 +96,10 @@ class LimbGuard:
         self.limb[b] = found
         return found
 
-    def removed(self, b: int) -> None:
-        """Branch ``b`` leaves the skeleton (call before the graph removes it)."""
-        if self.counts is None:
-            return
-        pts = self._points(b)
-        uncover(self.counts, self.graph.rows[pts], self.graph.cols[pts], self.r2[pts])
-
-    def merged(self, kept: int, absorbed: int) -> None:
-        """``absorbed`` became part of ``kept``: a limb in it keeps ``kept`` a limb."""
-        self.limb[kept] |= self.limb[absorbed]
+    def _uncover(self, points: np.ndarray) -> None:
+        g = self.graph
+        assert self.counts is not None
+        uncover(self.counts, g.rows[points], g.cols[points], self.r2[points])
 
 
 @njit(cache=True)

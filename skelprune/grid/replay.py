@@ -13,12 +13,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..grid.reconstruction import reconstruction
+from ..pruning.log import SequenceEvents
 from ..skeleton import Skeleton
-from .log import SequenceEvents
+from .reconstruction import reconstruction
 
 if TYPE_CHECKING:
-    from .bayesian import PruningSequence
+    from ..pruning.bayesian import PruningSequence
 
 __all__ = ["SequenceEvents", "replay", "start_repaint"]
 

@@ -32,16 +32,16 @@ from itertools import chain
 import numba
 import numpy as np
 
-from ..grid._roughness import boundary_roughness
-from ..grid.graph import BranchGraph
 from ..skeleton import Skeleton
 from ._generating import SegmentRaster, rim_label_set, rim_labels
-from .bayesian import remove_unsupported
+from ._roughness import boundary_roughness
 from .dce import (
     COARSE_PIXEL_THRESHOLD,
     BoundaryPartition,
     boundary_partition,
+    remove_unsupported,
 )
+from .graph import BranchGraph
 
 __all__ = [
     "COARSE_VERTICES",
@@ -369,7 +369,7 @@ def coarse_removals(graph: BranchGraph, mask: np.ndarray, r2: np.ndarray) -> lis
     """Prune ``graph`` (the medial axis of ``mask``) to the coarse level, in place.
 
     End branches none of whose points two DCE segments generate are removed
-    (:func:`~skelprune.pruning.bayesian.remove_unsupported`), then surplus branches at one
+    (:func:`~.dce.remove_unsupported`), then surplus branches at one
     convex vertex (see the module docstring), repeating until neither rule applies.
     Whole end branches only: the topology of the skeleton never changes.
 

@@ -133,7 +133,7 @@ def prune(
     if volume is not None or is_volume(source):
         if read is not None or raster is not None:
             raise TypeError("read and raster options apply to images and polygons, not volumes")
-        return prune_volume(source, options, volume or VolumeOptions(), output)
+        return prune_volume(source, options, volume or VolumeOptions(), output, progress)
     if isinstance(source, Input):
         if read is not None or raster is not None:
             raise TypeError("read and raster options apply to reading; this input is read")

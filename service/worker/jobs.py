@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -208,24 +209,25 @@ def answer_pixels(job: Job, shape: tuple[int, int]) -> int:
     return width * height
 
 
-def run_job(job: Job) -> JobResult:
+def run_job(job: Job, progress: Callable[[int, int], None] | None = None) -> JobResult:
     """Decode the input, check its memory estimate, prune it and serialise the answer.
 
     A ``MemoryError`` anywhere is the input's size: the same 413 as an estimate over
     the budget (:class:`~skelprune.errors.JobTooLargeError`), not an internal error.
+    ``progress(done, total)`` is called as components (windows) are pruned.
     """
     try:
-        return _run_job(job)
+        return _run_job(job, progress)
     except MemoryError:
         raise out_of_memory(job.memory_budget) from None
 
 
-def _run_job(job: Job) -> JobResult:
+def _run_job(job: Job, progress: Callable[[int, int], None] | None = None) -> JobResult:
     from skelprune.api import prune_input
     from skelprune.volume import is_volume
 
     if job.kind == "image" and isinstance(job.data, bytes) and is_volume(job.data):
-        return _run_volume_job(job)
+        return _run_volume_job(job, progress)
     if job.volume != VolumeOptions():
         raise InvalidOptionError(
             "option(s) spacing only apply to volume input (a .npy or a TIFF stack body)"
@@ -236,7 +238,7 @@ def _run_job(job: Job) -> JobResult:
     )
     check_budget(cost, job.memory_budget, job.time_budget)
     t0 = time.perf_counter()
-    res = prune_input(shape, job.options, job.output)
+    res = prune_input(shape, job.options, job.output, progress)
     elapsed = time.perf_counter() - t0
     headers: dict[str, str] = {}
     if job.media == "png":
@@ -261,7 +263,9 @@ def _run_job(job: Job) -> JobResult:
     )
 
 
-def _run_volume_job(job: Job) -> JobResult:
+def _run_volume_job(
+    job: Job, progress: Callable[[int, int], None] | None = None
+) -> JobResult:
     """A volume's job: its voxels count against the pixel limit and the budgets."""
     from skelprune.volume import prune_volume, read_volume, refuse_image_options
 
@@ -278,7 +282,7 @@ def _run_volume_job(job: Job) -> JobResult:
     cost = volume_estimate(volume, answer)
     check_budget(cost, job.memory_budget, job.time_budget, VOLUME_BASIS)
     t0 = time.perf_counter()
-    res = prune_volume(volume, job.options, job.volume, job.output)
+    res = prune_volume(volume, job.options, job.volume, job.output, progress=progress)
     elapsed = time.perf_counter() - t0
     headers: dict[str, str] = {}
     if job.media == "png":

@@ -17,7 +17,6 @@ refuses the same volume on its time estimate or times out (504) within its limit
 from __future__ import annotations
 
 import argparse
-import io
 import os
 import tempfile
 import time
@@ -26,6 +25,7 @@ from pathlib import Path
 import httpx
 import numpy as np
 
+from testkit.label_volumes import npy_bytes, touching_tubes
 from testkit.realserver import running_server
 
 from .common import table
@@ -33,44 +33,6 @@ from .common import table
 SIDE = 512
 TUBES = 20  # per side: 400 tubes
 POLL_SECONDS = 1.0
-
-
-def touching_tubes(side: int = SIDE, n: int = TUBES, seed: int = 0) -> np.ndarray:
-    """``n × n`` wavy tubes along x filling a ``side³`` volume, 16-bit labels.
-
-    Tube ``(i, j)``'s centre line wanders a sixth of the pitch around its grid place;
-    each voxel within ``0.52 × pitch`` of a centre takes the nearest tube's label, so
-    that neighbours touch along their length (a label volume, not a binary one).
-    """
-    rng = np.random.default_rng(seed)
-    pitch = side / n
-    radius = 0.52 * pitch
-    wander = 0.15 * pitch
-    x = np.arange(side)
-    nearest = np.full((side, side, side), np.inf, np.float32)
-    out = np.zeros((side, side, side), np.uint16)
-    values = rng.choice(np.arange(1, 65536), n * n, replace=False).astype(np.uint16)
-    for i in range(n):
-        for j in range(n):
-            phase = rng.uniform(0, 2 * np.pi, 2)
-            cz = (i + 0.5) * pitch + wander * np.sin(x / 60 + phase[0])
-            cy = (j + 0.5) * pitch + wander * np.sin(x / 45 + phase[1])
-            z0, z1 = max(0, int(cz.min() - radius)), min(side, int(cz.max() + radius) + 2)
-            y0, y1 = max(0, int(cy.min() - radius)), min(side, int(cy.max() + radius) + 2)
-            zz = np.arange(z0, z1)[:, None, None]
-            yy = np.arange(y0, y1)[None, :, None]
-            d2 = ((zz - cz) ** 2 + (yy - cy) ** 2).astype(np.float32)
-            window = nearest[z0:z1, y0:y1]
-            take = (d2 < window) & (d2 < radius * radius)
-            window[take] = d2[take]
-            out[z0:z1, y0:y1][take] = values[i * n + j]
-    return out
-
-
-def npy_bytes(volume: np.ndarray) -> bytes:
-    buf = io.BytesIO()
-    np.save(buf, volume, allow_pickle=False)
-    return buf.getvalue()
 
 
 def _descendants(pid: int) -> list[int]:
@@ -103,7 +65,7 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m benchmarks longjobs")
     parser.add_argument("--side", type=int, default=SIDE)
     parser.add_argument("--tubes", type=int, default=TUBES, help="tubes per side")
-    args = parser.parse_args(argv)
+    args = parser.parse_args(argv or [])
     t0 = time.perf_counter()
     volume = touching_tubes(args.side, args.tubes)
     body = npy_bytes(volume)
@@ -188,4 +150,6 @@ def main(argv: list[str] | None = None) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    main(sys.argv[1:])

@@ -26,6 +26,7 @@ import httpx
 import numpy as np
 
 from testkit.label_volumes import npy_bytes, touching_tubes
+from testkit.procs import descendants, rss_mib
 from testkit.realserver import running_server
 
 from .common import table
@@ -33,32 +34,6 @@ from .common import table
 SIDE = 512
 TUBES = 20  # per side: 400 tubes
 POLL_SECONDS = 1.0
-
-
-def _descendants(pid: int) -> list[int]:
-    """The process's children and theirs, from every thread's ``children`` (Linux
-    ``/proc``: the pool starts its workers from threads)."""
-    found, todo = [], [pid]
-    while todo:
-        p = todo.pop()
-        for children in Path(f"/proc/{p}/task").glob("*/children"):
-            try:
-                kids = [int(k) for k in children.read_text().split()]
-            except OSError:
-                continue
-            found += kids
-            todo += kids
-    return found
-
-
-def _rss_mib(pid: int) -> float:
-    try:
-        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024
-    except OSError:
-        pass
-    return 0.0
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -105,8 +80,8 @@ def main(argv: list[str] | None = None) -> None:
                 seen.append((now, status["state"], done, total))
             if first_progress is None and total:
                 first_progress = now
-            workers = _descendants(proc.pid)
-            peak = max([peak, *(_rss_mib(p) for p in workers)])
+            workers = descendants(proc.pid)
+            peak = max([peak, *(rss_mib(p) for p in workers)])
             if status["state"] not in ("queued", "running"):
                 break
             time.sleep(POLL_SECONDS)

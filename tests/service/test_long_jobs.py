@@ -15,7 +15,6 @@ import pytest
 from fastapi.testclient import TestClient
 from starlette.requests import Request
 
-from service.app import create_app
 from service.http.long_job import prefers_async
 from service.http.routes.prune import job_function
 from service.settings import Settings
@@ -71,9 +70,7 @@ def slow_job(job: Job, progress: Callable[[int, int], None] | None = None) -> An
     return run_job(job)
 
 
-def with_pool(
-    body: Callable[[WorkerPool], Awaitable[Any]], size: int = 1, **kwargs: Any
-) -> Any:
+def with_pool(body: Callable[[WorkerPool], Awaitable[Any]], size: int = 1, **kwargs: Any) -> Any:
     async def go() -> Any:
         pool = WorkerPool(size, queue_size=kwargs.pop("queue_size", 2), **kwargs)
         await pool.start()
@@ -149,7 +146,7 @@ def test_a_job_cancelled_before_it_starts_keeps_the_worker() -> None:
 def test_a_job_has_its_own_time_limit() -> None:
     async def body(pool: WorkerPool) -> None:
         await pool.run(pid_after, 1.0, timeout=5.0)  # past the pool's 0.5 s
-        with pytest.raises(JobTimeoutError, match="time limit of 0.5 s"):
+        with pytest.raises(JobTimeoutError, match=r"time limit of 0\.5 s"):
             await pool.run(pid_after, 1.0)
 
     with_pool(body, job_timeout=0.5)

@@ -24,7 +24,7 @@ __all__ = ["router"]
 
 router = APIRouter()
 
-JobId = Annotated[str, Path(description="The job's id, from its 202 answer.", max_length=64)]
+JobId = Annotated[str, Path(description="The job's id, from its 202 answer.")]
 
 
 @router.post(

@@ -51,16 +51,16 @@ def main(argv: list[str] | None = None) -> None:
         f"volume: {args.side}³ voxels, {labels} labels, .npy of {len(body) / 2**20:.0f} MiB, "
         f"built in {built:.1f} s"
     )
-    settings = {
-        "workers": "2",
-        "max_pixels": str(args.side**3),
-        "max_body_bytes": str(len(body) + 2**20),
-        "job_memory_mb": "8192",
-        "main_memory_mb": "4096",
-    }
     with (
         tempfile.TemporaryDirectory() as tmp,
-        running_server(Path(tmp) / "server.log", **settings) as (proc, base),
+        running_server(
+            Path(tmp) / "server.log",
+            workers="2",
+            max_pixels=str(args.side**3),
+            max_body_bytes=str(len(body) + 2**20),
+            job_memory_mb="8192",
+            main_memory_mb="4096",
+        ) as (proc, base),
     ):
         client = httpx.Client(base_url=base, timeout=120)
         headers = {"content-type": "application/x-npy", "prefer": "respond-async"}

@@ -28,6 +28,7 @@ from service.worker.long_jobs import (
     LongJobRunner,
     LongJobs,
     ResultTooLargeError,
+    State,
     StoredAnswer,
 )
 from service.worker.pool import JobCancelledError
@@ -88,7 +89,7 @@ async def _run(jobs: LongJobs, job: LongJob, handler: Handler, call: ShapeReques
         response = await _error_answer(request, exc)
     if not job.admitted.is_set():  # answered without the pool: the request's own answer
         return response
-    state = "done" if response.status_code < 400 else "failed"
+    state: State = "done" if response.status_code < 400 else "failed"
     answer = _stored(response)
     try:
         jobs.finish(job, state, answer)

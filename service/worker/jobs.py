@@ -263,9 +263,7 @@ def _run_job(job: Job, progress: Callable[[int, int], None] | None = None) -> Jo
     )
 
 
-def _run_volume_job(
-    job: Job, progress: Callable[[int, int], None] | None = None
-) -> JobResult:
+def _run_volume_job(job: Job, progress: Callable[[int, int], None] | None = None) -> JobResult:
     """A volume's job: its voxels count against the pixel limit and the budgets."""
     from skelprune.volume import prune_volume, read_volume, refuse_image_options
 

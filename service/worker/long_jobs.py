@@ -42,6 +42,7 @@ __all__ = [
     "LongJobRunner",
     "LongJobs",
     "ResultTooLargeError",
+    "State",
     "StoredAnswer",
     "TooManyJobsError",
     "run_reporting",

@@ -175,12 +175,12 @@ DELETE_DESCRIPTION = """
 Cancel a queued or running job: a running job's worker process is stopped (its memory
 returned) and replaced; the answer is its status, `state: cancelled`, kept until
 `SKELPRUNE_LONG_JOB_TTL`. A finished job (done, failed or cancelled) is forgotten, with
-its result: 204.
+its result (its URLs answer 404 from then on); the answer is its last status.
 """
 
 DELETE_RESPONSES: Responses = {
     200: {
-        "description": "The job was cancelled: its status.",
+        "description": "The job was cancelled, or forgotten if it had finished: its status.",
         "content": {
             "application/json": {
                 "schema": {"$ref": "#/components/schemas/JobStatus"},
@@ -188,7 +188,6 @@ DELETE_RESPONSES: Responses = {
             }
         },
     },
-    204: {"description": "The finished job and its result were forgotten."},
     401: UNAUTHORIZED,
     404: _NOT_FOUND,
 }

@@ -285,14 +285,20 @@ class LongJobs:
 
     async def cancel(self, job: LongJob, wait: float = 10.0) -> None:
         """Stop the job: a running one's worker is killed (its memory returned) and
-        replaced; a queued one never starts. Waits up to ``wait`` s for it to end."""
+        replaced; one still waiting for a slot or a worker never starts. Waits up to
+        ``wait`` s for it to end."""
         job.cancel.set()
         task = job.task
         if task is None or task.done():
             return
         if job.state == "queued":
             task.cancel()
-        await asyncio.wait({task}, timeout=wait)
+        # a job in a worker ends within a watchdog sample of the event; one that has a
+        # slot but still waits for a free worker is stopped waiting
+        done, _ = await asyncio.wait({task}, timeout=min(2.0, wait))
+        if not done:
+            task.cancel()
+            await asyncio.wait({task}, timeout=wait)
 
     async def close(self) -> None:
         """Cancel every job (at shutdown: a restart keeps none)."""

@@ -15,6 +15,7 @@ import pytest
 from fastapi.testclient import TestClient
 from starlette.requests import Request
 
+import skelprune
 from service.http.long_job import prefers_async
 from service.http.routes.prune import job_function
 from service.settings import Settings
@@ -35,6 +36,7 @@ from service.worker.pool import (
 )
 from service.worker.process import report_progress
 from testkit import DATA
+from testkit.label_volumes import touching_tubes
 
 pytestmark = pytest.mark.timeout(180)
 
@@ -169,6 +171,32 @@ def test_unqueued_jobs_wait_without_taking_the_queue() -> None:
     assert a == b  # the one worker ran both
 
 
+def test_cancel_a_long_job_still_waiting_for_a_worker() -> None:
+    async def body(pool: WorkerPool) -> None:
+        store = LongJobs(pool, max_jobs=2, slots=1, timeout=60.0, ttl=60.0, max_bytes=100)
+        busy = asyncio.create_task(pool.run(pid_after, 4.0))  # the only worker
+        while pool.busy == 0:
+            await asyncio.sleep(0.01)
+        job = store.new()
+        job.task = asyncio.create_task(store.run(job, count_to, 5))
+        while pool.waiting_unqueued == 0:
+            await asyncio.sleep(0.01)
+        assert job.state == "running"  # it holds its slot, not a worker
+        await store.cancel(job)
+        assert job.task.cancelled() and pool.waiting_unqueued == 0
+        pid = await busy
+        assert await pool.run(os.getpid) == pid and pool.restarts == 0  # nobody killed
+
+    with_pool(body)
+
+
+def test_a_volume_reports_its_components_as_they_are_pruned() -> None:
+    seen: list[tuple[int, int]] = []
+    volume = touching_tubes(48, 3)
+    res = skelprune.prune(volume, progress=lambda d, t: seen.append((d, t)))
+    assert seen == [(k, 9) for k in range(10)] and len(res.components) == 9
+
+
 # --------------------------------------------------------------------------- the store
 
 
@@ -260,7 +288,7 @@ def _wait_for(client: TestClient, url: str, until: Callable[[dict[str, Any]], bo
         time.sleep(0.05)
 
 
-def test_progress_cancel_and_a_bug_through_the_app(client: TestClient) -> None:
+def test_progress_and_cancel_through_the_app(client: TestClient) -> None:
     client.app.dependency_overrides[job_function] = lambda: slow_job  # type: ignore[attr-defined]
     try:
         resp = client.post("/v1/jobs", content=BIRD, headers={"content-type": "image/png"})
@@ -273,7 +301,8 @@ def test_progress_cancel_and_a_bug_through_the_app(client: TestClient) -> None:
         assert cancelled.status_code == 200 and cancelled.json()["state"] == "cancelled"
         result = client.get(url + "/result")
         assert result.status_code == 409 and result.json()["type"].endswith("job-cancelled")
-        assert client.delete(url).status_code == 204  # a finished job is forgotten
+        forgotten = client.delete(url)  # a finished job is forgotten
+        assert forgotten.status_code == 200 and forgotten.json()["state"] == "cancelled"
         assert client.get(url).status_code == 404
     finally:
         client.app.dependency_overrides.clear()  # type: ignore[attr-defined]

@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Depends, Path, Request, Response
+from fastapi import APIRouter, Depends, Request, Response
 
 from service.apidocs import jobs_docs
 from service.http.long_job import jobs_of, status_answer, submit
@@ -24,7 +24,23 @@ __all__ = ["router"]
 
 router = APIRouter()
 
-JobId = Annotated[str, Path(description="The job's id, from its 202 answer.")]
+#: The ``{job_id}`` of the routes below, read from the path as it is (any text: an id
+#: that is no job's is a 404), so that no request validation (422) applies.
+JOB_ID = {
+    "parameters": [
+        {
+            "name": "job_id",
+            "in": "path",
+            "required": True,
+            "description": "The job's id, from its 202 answer.",
+            "schema": {"type": "string"},
+        }
+    ]
+}
+
+
+def _job_id(request: Request) -> str:
+    return str(request.path_params["job_id"])
 
 
 @router.post(
@@ -50,9 +66,11 @@ async def submit_job(
     description=jobs_docs.STATUS_DESCRIPTION,
     response_model=jobs_docs.JobStatus,
     responses=jobs_docs.STATUS_RESPONSES,
+    openapi_extra=JOB_ID,
     tags=["jobs"],
 )
-async def job_status(request: Request, job_id: JobId) -> Response:
+async def job_status(request: Request) -> Response:
+    job_id = _job_id(request)
     return status_answer(jobs_of(request).get(job_id))
 
 
@@ -62,9 +80,11 @@ async def job_status(request: Request, job_id: JobId) -> Response:
     description=jobs_docs.RESULT_DESCRIPTION,
     response_class=Response,
     responses=jobs_docs.RESULT_RESPONSES,
+    openapi_extra=JOB_ID,
     tags=["jobs"],
 )
-async def job_result(request: Request, job_id: JobId) -> Response:
+async def job_result(request: Request) -> Response:
+    job_id = _job_id(request)
     job = jobs_of(request).get(job_id)
     if job.state == "cancelled":
         raise JobCancelledError(f"long job {job_id} was cancelled: it has no result")
@@ -84,13 +104,15 @@ async def job_result(request: Request, job_id: JobId) -> Response:
     description=jobs_docs.DELETE_DESCRIPTION,
     response_class=Response,
     responses=jobs_docs.DELETE_RESPONSES,
+    openapi_extra=JOB_ID,
     tags=["jobs"],
 )
-async def delete_job(request: Request, job_id: JobId) -> Response:
+async def delete_job(request: Request) -> Response:
+    job_id = _job_id(request)
     jobs = jobs_of(request)
     job = jobs.get(job_id)
-    if job.state in FINISHED:
+    if job.state in FINISHED:  # forgotten, with its result: its last status
         jobs.discard(job)
-        return Response(status_code=204)
+        return status_answer(job)
     await jobs.cancel(job)
     return status_answer(job)

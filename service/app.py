@@ -24,6 +24,7 @@ from service.http.routes import ROUTERS
 from service.metrics import metrics
 from service.settings import Settings
 from service.worker.jobs import warmup
+from service.worker.long_jobs import LongJobs
 from service.worker.pool import WorkerPool
 
 __all__ = ["create_app"]
@@ -79,6 +80,15 @@ def create_app(
         memory_limit=settings.job_memory_mb * 2**20,
     )
 
+    long_jobs = LongJobs(
+        pool,
+        max_jobs=settings.long_jobs,
+        slots=settings.long_job_slots,
+        timeout=settings.long_job_timeout,
+        ttl=settings.long_job_ttl,
+        max_bytes=settings.long_job_results_bytes,
+    )
+
     async def start_in_background() -> None:
         try:
             await pool.start()
@@ -109,6 +119,7 @@ def create_app(
         try:
             yield
         finally:
+            await long_jobs.close()  # a restart keeps no long job (docs/service.md)
             await pool.close()
             if warming is not None:  # closing stopped its workers: it ends at once
                 await asyncio.gather(warming, return_exceptions=True)
@@ -126,6 +137,7 @@ def create_app(
     registry = CollectorRegistry()
     app.state.settings = settings
     app.state.pool = pool
+    app.state.long_jobs = long_jobs
     app.state.pool_failure = None  # why the pool did not start, if it did not
     app.state.metrics = metrics(registry, pool)
     for router in ROUTERS:
@@ -144,15 +156,22 @@ def create_app(
             CORSMiddleware,
             allow_origins=settings.cors_origins,
             allow_credentials=False,
-            allow_methods=["GET", "POST"],
+            allow_methods=["GET", "POST", "DELETE"],
             allow_headers=[
                 "Authorization",
                 "X-API-Key",
                 "Content-Type",
                 "Accept",
+                "Prefer",
                 REQUEST_ID_HEADER,
             ],
-            expose_headers=[REQUEST_ID_HEADER, "Retry-After", "WWW-Authenticate"],
+            expose_headers=[
+                REQUEST_ID_HEADER,
+                "Retry-After",
+                "WWW-Authenticate",
+                "Location",
+                "Preference-Applied",
+            ],
             max_age=600,
         )
     app.add_middleware(SlashRedirectMiddleware, paths=partial(_fixed_paths, app))

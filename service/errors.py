@@ -21,7 +21,14 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.requests import ClientDisconnect
 
 from service.logs import request_id_var
+from service.worker.long_jobs import (
+    JobNotFoundError,
+    JobPendingError,
+    ResultTooLargeError,
+    TooManyJobsError,
+)
 from service.worker.pool import (
+    JobCancelledError,
     JobFailedError,
     JobOverMemoryError,
     JobTimeoutError,
@@ -134,6 +141,11 @@ PROBLEMS: dict[type[BaseException], ProblemKind] = {
     NotAcceptableError: ProblemKind(406, "not-acceptable", "Not acceptable"),
     UnauthorizedError: ProblemKind(401, "unauthorized", "Unauthorized"),
     QueueFullError: ProblemKind(503, "queue-full", "Service busy"),
+    TooManyJobsError: ProblemKind(503, "too-many-jobs", "Too many long jobs"),
+    JobNotFoundError: ProblemKind(404, "job-not-found", "Unknown job"),
+    JobPendingError: ProblemKind(409, "job-pending", "Job not finished"),
+    JobCancelledError: ProblemKind(409, "job-cancelled", "Job cancelled"),
+    ResultTooLargeError: ProblemKind(413, "result-too-large", "Result too large to keep"),
     MainMemoryError: ProblemKind(503, "main-memory", "Service busy"),
     PoolStartingError: ProblemKind(503, "starting", "Service starting"),
     PoolClosedError: ProblemKind(503, "unavailable", "Service unavailable"),

@@ -77,6 +77,38 @@ class Settings(BaseSettings):
     job_timeout: float = Field(
         30.0, gt=0, description="Seconds a job may run before its worker is killed (504)."
     )
+    long_job_timeout: float = Field(
+        1800.0,
+        gt=0,
+        description="Seconds a long job (POST /v1/jobs, or Prefer: respond-async) may run "
+        "before its worker is killed; its time estimate is screened against it.",
+    )
+    long_jobs: int = Field(
+        8,
+        ge=1,
+        le=10_000,
+        description="Long jobs queued or running at once; one more gets 503 "
+        "(too-many-jobs, with Retry-After). Finished jobs do not count.",
+    )
+    long_job_workers: int | None = Field(
+        None,
+        ge=1,
+        le=256,
+        description="Workers long jobs may hold at once (default: all workers but one, at "
+        "least one), so that synchronous requests always find a worker; the others wait "
+        "their turn, queued.",
+    )
+    long_job_ttl: float = Field(
+        3600.0,
+        gt=0,
+        description="Seconds a finished long job's status and result are kept (then 404).",
+    )
+    long_job_results_bytes: int = Field(
+        256 * 2**20,
+        ge=1,
+        description="Bytes of finished long jobs' results kept in memory, all together: "
+        "the oldest are dropped first; a result larger than this fails the job (413).",
+    )
     startup_timeout: float = Field(
         300.0, gt=0, description="Seconds a worker may take to start and warm up."
     )
@@ -188,6 +220,13 @@ class Settings(BaseSettings):
         if self.time_estimate_scale <= 0:
             return None
         return self.job_timeout / self.time_estimate_scale
+
+    @property
+    def long_job_slots(self) -> int:
+        """Workers long jobs may hold at once: ``long_job_workers``, or all but one."""
+        if self.long_job_workers is not None:
+            return min(self.long_job_workers, self.workers)
+        return max(1, self.workers - 1)
 
     @field_validator("api_key", mode="before")
     @classmethod

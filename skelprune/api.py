@@ -161,7 +161,7 @@ def prune(
         if is_volume(source, spacing) or (spacing and isinstance(source, np.ndarray)):
             refuse_misplaced(given, "volume", answers, output.overlay)
             return _prune_volume(
-                source, options, volume or VolumeOptions(), output, limits, answers
+                source, options, volume or VolumeOptions(), output, limits, answers, progress
             )
         if isinstance(source, Input):
             if read is not None or raster is not None:
@@ -208,6 +208,7 @@ def _prune_volume(
     output: OutputOptions,
     limits: Limits,
     answers: Collection[str] | None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> VolumeResult:
     """A volume, read within the pixel limit, its estimate within the budget."""
     voxels = read_volume(source, max_voxels=limits.max_pixels)
@@ -218,7 +219,7 @@ def _prune_volume(
     check_budget(
         volume_estimate(voxels, answer_pixels), limits.memory, limits.seconds, VOLUME_BASIS
     )
-    return prune_volume(voxels, options, volume, output)
+    return prune_volume(voxels, options, volume, output, progress=progress)
 
 
 def prune_input(

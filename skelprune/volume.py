@@ -14,6 +14,7 @@ from __future__ import annotations
 import io
 import math
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
@@ -404,9 +405,11 @@ def prune_volume(
     options: PruneOptions,
     volume_options: VolumeOptions,
     output: OutputOptions | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> VolumeResult:
     """Prune every 26-connected component of a volume (what :func:`skelprune.prune` runs
-    for a 3-D array or a ``.npy`` path).
+    for a 3-D array or a ``.npy`` path). ``progress(done, total)`` is called once the
+    components are found (``done=0``) and after each is pruned.
 
     Raises
     ------
@@ -439,8 +442,13 @@ def prune_volume(
         output=OutputOptions() if output is None else output,
         volume=volume != 0,
     )
-    for crop, origin, label in volume_components(volume):
+    components = volume_components(volume)
+    if progress is not None:
+        progress(0, len(components))
+    for k, (crop, origin, label) in enumerate(components):
         component = prune_volume_component(crop, origin, applied, spacing)
         component.label = label
         result.components.append(component)
+        if progress is not None:
+            progress(k + 1, len(components))
     return result

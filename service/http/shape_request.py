@@ -24,7 +24,7 @@ from service.http.query import parse_query
 from service.http.schemas import PruneQuery
 from service.settings import Settings
 from service.worker.jobs import Media
-from service.worker.pool import WorkerPool
+from service.worker.pool import JobRunner
 from skelprune.budget import mib, resident_bytes
 
 if TYPE_CHECKING:
@@ -71,7 +71,7 @@ class ShapeRequest:
     request: Request
     query: PruneQuery
     settings: Settings
-    pool: WorkerPool
+    pool: JobRunner  # the worker pool; a long job's runner for a long job
     metrics: Metrics
     media: Media | None  # the answer the Accept header asks for (None: the endpoint has one)
     kind: BodyKind

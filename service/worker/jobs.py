@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
@@ -176,21 +177,22 @@ def read_job(job: Job) -> Input:
     )
 
 
-def run_job(job: Job) -> JobResult:
+def run_job(job: Job, progress: Callable[[int, int], None] | None = None) -> JobResult:
     """Prune the job's input under its limits and serialise the answer: the library's
-    :func:`skelprune.prune` and :func:`skelprune.encode`, what every front calls."""
+    :func:`skelprune.prune` and :func:`skelprune.encode`, what every front calls.
+    ``progress(done, total)`` is called as components (windows) are pruned."""
     t0 = time.perf_counter()
     try:
         if job.media == "geojson" and job.output.lines != "branches":
             return _run_lines_job(job)
-        return _answer(job, t0)
+        return _answer(job, t0, progress)
     except MemoryError:  # rendering the answer, past the estimate: the input's size
         from skelprune.budget import out_of_memory
 
         raise out_of_memory(job.limits.memory) from None
 
 
-def _answer(job: Job, t0: float) -> JobResult:
+def _answer(job: Job, t0: float, progress: Callable[[int, int], None] | None = None) -> JobResult:
     from skelprune.api import prune
     from skelprune.output.encode import MEDIA_TYPES as ANSWER_TYPES
     from skelprune.output.encode import encode
@@ -206,6 +208,7 @@ def _answer(job: Job, t0: float) -> JobResult:
         limits=job.limits,
         answers=(job.media,),
         kind=job.kind,
+        progress=progress,
     )
     elapsed = time.perf_counter() - t0
     body = encode(res, job.media)

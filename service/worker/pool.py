@@ -9,6 +9,10 @@ worker breaks the whole executor. Here every worker is one process with one pipe
   :class:`WorkerCrashedError`; the pool keeps serving;
 - at most ``queue_size`` jobs wait for a free worker; one more raises
   :class:`QueueFullError` at once;
+- a job run with a ``cancel`` event that gets set has its process killed and replaced
+  (:class:`JobCancelledError`), and its ``progress`` callback receives the
+  ``("progress", (done, total))`` messages the worker sends before its answer
+  (:func:`service.worker.process.report_progress`);
 - with a ``memory_limit``, the parent samples the worker's resident set (``/proc``)
   while a job runs: a worker over the limit is killed and replaced
   (:class:`JobOverMemoryError`), and a worker whose resident set did not come back
@@ -27,23 +31,40 @@ import contextlib
 import contextvars
 import logging
 import multiprocessing as mp
-import signal
 import threading
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
+from service.worker.pool_errors import (
+    JobCancelledError,
+    JobFailedError,
+    JobLimits,
+    JobOverMemoryError,
+    JobRunner,
+    JobTimeoutError,
+    PoolClosedError,
+    PoolError,
+    PoolStartingError,
+    Progress,
+    QueueFullError,
+    WorkerCrashedError,
+    exit_reason,
+)
 from service.worker.process import worker_main
 from skelprune.budget import mib, resident_bytes
 
 __all__ = [
+    "JobCancelledError",
     "JobFailedError",
     "JobOverMemoryError",
+    "JobRunner",
     "JobTimeoutError",
     "PoolClosedError",
     "PoolError",
     "PoolStartingError",
+    "Progress",
     "QueueFullError",
     "WorkerCrashedError",
     "WorkerPool",
@@ -53,49 +74,6 @@ log = logging.getLogger("service.pool")
 
 #: Seconds between two samples of a running job's resident set.
 MEMORY_SAMPLE_SECONDS = 0.02
-
-
-class PoolError(Exception):
-    """Base class of pool failures (never the caller's input)."""
-
-
-class QueueFullError(PoolError):
-    """All workers are busy and the wait queue is full."""
-
-
-class PoolClosedError(PoolError):
-    """The pool is not started or is shutting down."""
-
-
-class PoolStartingError(PoolClosedError):
-    """The pool is still warming up its workers (a 503 that will pass)."""
-
-
-class JobTimeoutError(PoolError):
-    """The job ran over its time limit; its worker was killed and replaced."""
-
-
-class WorkerCrashedError(PoolError):
-    """The worker process died while running the job; it was replaced."""
-
-
-class JobOverMemoryError(PoolError):
-    """The job's worker held more than its memory limit; it was killed and replaced."""
-
-
-class JobFailedError(PoolError):
-    """The job raised an unexpected exception inside the worker (a bug, not bad input)."""
-
-
-def _exit_reason(code: int | None) -> str:
-    if code is None:
-        return "did not exit"
-    if code < 0:
-        try:
-            return f"killed by signal {signal.Signals(-code).name}"
-        except ValueError:
-            return f"killed by signal {-code}"
-    return f"exit code {code}"
 
 
 class _Worker:
@@ -135,7 +113,7 @@ class _Worker:
             return self.conn.recv()
         except (EOFError, OSError):
             self.proc.join(1)
-            raise WorkerCrashedError(died.format(reason=_exit_reason(self.proc.exitcode))) from None
+            raise WorkerCrashedError(died.format(reason=exit_reason(self.proc.exitcode))) from None
 
     def resident(self) -> int:
         """The worker's resident set now, bytes."""
@@ -147,12 +125,20 @@ class _Worker:
         args: tuple[Any, ...],
         timeout: float,
         memory_limit: int | None = None,
+        progress: Progress | None = None,
+        cancel: threading.Event | None = None,
     ) -> Any:
         self.conn.send((fn, args))
-        self._wait(timeout, memory_limit)
-        tag, payload = self._receive(
-            "the worker process died while running this job ({reason}); it has been replaced"
-        )
+        deadline = time.monotonic() + timeout
+        while True:
+            self._wait(timeout, deadline, memory_limit, cancel)
+            tag, payload = self._receive(
+                "the worker process died while running this job ({reason}); it has been replaced"
+            )
+            if tag != "progress":  # a job's progress comes before its answer
+                break
+            if progress is not None:
+                progress(*payload)
         if tag == "ok":
             return payload
         if tag == "error":
@@ -162,17 +148,25 @@ class _Worker:
         log.debug("worker traceback:\n%s", trace)  # only at SKELPRUNE_LOG_LEVEL=debug
         raise JobFailedError("the job failed with an internal error")
 
-    def _wait(self, timeout: float, memory_limit: int | None) -> None:
-        """Wait for the job's answer; its resident set is sampled meanwhile."""
+    def _wait(
+        self,
+        timeout: float,
+        deadline: float,
+        memory_limit: int | None,
+        cancel: threading.Event | None,
+    ) -> None:
+        """Wait for the job's next message; its resident set is sampled meanwhile, and
+        its ``cancel`` event watched."""
         timed_out = JobTimeoutError(f"job exceeded the time limit of {timeout:g} s and was stopped")
-        if memory_limit is None:
-            if not self.conn.poll(timeout):
+        if memory_limit is None and cancel is None:
+            if not self.conn.poll(max(0.0, deadline - time.monotonic())):
                 raise timed_out
             return
-        deadline = time.monotonic() + timeout
         while not self.conn.poll(MEMORY_SAMPLE_SECONDS):
-            held = self.resident()
-            if held > memory_limit:
+            if cancel is not None and cancel.is_set():
+                raise JobCancelledError("the job was cancelled and its worker stopped")
+            held = self.resident() if memory_limit is not None else 0
+            if memory_limit is not None and held > memory_limit:
                 raise JobOverMemoryError(
                     f"this input needed more than the memory budget of {mib(memory_limit)} "
                     f"a job (its worker held {mib(held)}) and was stopped: send fewer pixels "
@@ -257,6 +251,7 @@ class WorkerPool:
         self._executor: ThreadPoolExecutor | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
         self.waiting = 0
+        self.waiting_unqueued = 0  # jobs run with queue=False waiting for a worker
         self.busy = 0
         self.restarts = 0
         self.recycled = 0
@@ -276,7 +271,7 @@ class WorkerPool:
         """
         self.closed = False
         self.starting = True
-        self.waiting = self.busy = 0
+        self.waiting = self.waiting_unqueued = self.busy = 0
         loop = self._loop = asyncio.get_running_loop()
         self._idle = asyncio.Queue()
         self._executor = ThreadPoolExecutor(self.size, thread_name_prefix="skelprune-pool")
@@ -320,7 +315,7 @@ class WorkerPool:
         """Stop all workers (running jobs are killed, waiting ones get PoolClosedError)."""
         self.closed = True
         if self._idle is not None:
-            for _ in range(self.waiting):
+            for _ in range(self.waiting + self.waiting_unqueued):
                 self._idle.put_nowait(None)
         with self._lock:
             workers = list(self._workers)
@@ -370,11 +365,33 @@ class WorkerPool:
             return sum(w.proc.is_alive() for w in self._workers)
 
     # -- jobs ----------------------------------------------------------------------
-    async def run(self, fn: Callable[..., Any], *args: Any) -> Any:
+    async def run(
+        self,
+        fn: Callable[..., Any],
+        *args: Any,
+        timeout: float | None = None,
+        progress: Progress | None = None,
+        cancel: threading.Event | None = None,
+        queue: bool = True,
+    ) -> Any:
         """Run ``fn(*args)`` in a worker and return its result.
 
         ``fn`` and its arguments must be picklable (module-level function).
         Domain errors (:class:`SkelpruneError`) raised by ``fn`` are re-raised here.
+
+        Parameters
+        ----------
+        timeout : float, optional
+            Seconds the job may run (default: the pool's ``job_timeout``).
+        progress : callable, optional
+            Called with each ``(done, total)`` the job reports, in the job's thread.
+        cancel : threading.Event, optional
+            Set, it stops the job: its worker is killed and replaced
+            (:class:`JobCancelledError`).
+        queue : bool
+            Count the job in the wait queue (refused when it is full); ``False`` for
+            jobs admitted by a limit of their own (long jobs), which wait for a worker
+            without taking a place in the queue.
         """
         if self.starting and not self.closed:
             raise PoolStartingError(
@@ -382,22 +399,31 @@ class WorkerPool:
             )
         if not self.started or self.closed or self._idle is None or self._loop is None:
             raise PoolClosedError("the worker pool is not running")
-        if self._idle.empty() and self.waiting >= self.queue_size:
+        if queue and self._idle.empty() and self.waiting >= self.queue_size:
             raise QueueFullError(
                 f"all {self.size} workers are busy and {self.waiting} jobs are already waiting"
             )
-        self.waiting += 1
+        if queue:
+            self.waiting += 1
+        else:
+            self.waiting_unqueued += 1
         try:
             worker = await self._idle.get()
         finally:
-            self.waiting -= 1
+            if queue:
+                self.waiting -= 1
+            else:
+                self.waiting_unqueued -= 1
         if worker is None:
             raise PoolClosedError("the worker pool shut down while this job was waiting")
         self.busy += 1
         assert self._executor is not None
         # in the caller's context: what the job thread logs carries the request's ID
         ctx = contextvars.copy_context()
-        fut = self._loop.run_in_executor(self._executor, ctx.run, self._run_on, worker, fn, args)
+        limits = JobLimits(self.job_timeout if timeout is None else timeout, progress, cancel)
+        fut = self._loop.run_in_executor(
+            self._executor, ctx.run, self._run_on, worker, fn, args, limits
+        )
         return await fut
 
     def _recycle_if_grown(self, worker: _Worker) -> _Worker:
@@ -417,26 +443,37 @@ class WorkerPool:
         self.busy -= 1
         if self.closed:
             worker.stop(0.1)
-            if self._idle is not None and self.waiting:
+            if self._idle is not None and (self.waiting or self.waiting_unqueued):
                 self._idle.put_nowait(None)
         elif self._idle is not None:
             self._idle.put_nowait(worker)
 
-    def _run_on(self, worker: _Worker, fn: Callable[..., Any], args: tuple[Any, ...]) -> Any:
+    def _run_on(
+        self, worker: _Worker, fn: Callable[..., Any], args: tuple[Any, ...], limits: JobLimits
+    ) -> Any:
         """Thread body: run one job, replace the worker on timeout/crash, always hand it back."""
         assert self._loop is not None
         try:
             if not worker.proc.is_alive():  # died while idle (e.g. OOM killer): no job lost
-                worker = self._replace(worker, f"found dead ({_exit_reason(worker.proc.exitcode)})")
+                worker = self._replace(worker, f"found dead ({exit_reason(worker.proc.exitcode)})")
             try:
                 worker.wait_ready(self.startup_timeout)
             except WorkerCrashedError as exc:
                 worker = self._replace(worker, str(exc))
                 raise
+            if limits.cancel is not None and limits.cancel.is_set():  # before it starts
+                raise JobCancelledError("the job was cancelled before it started")
             t0 = time.perf_counter()
             try:
-                result = worker.call(fn, args, self.job_timeout, self.memory_limit)
-            except (JobTimeoutError, WorkerCrashedError, JobOverMemoryError) as exc:
+                result = worker.call(
+                    fn, args, limits.timeout, self.memory_limit, limits.progress, limits.cancel
+                )
+            except (
+                JobTimeoutError,
+                WorkerCrashedError,
+                JobOverMemoryError,
+                JobCancelledError,
+            ) as exc:
                 worker = self._replace(worker, str(exc))
                 raise
             except OSError as exc:  # broken pipe on send: the worker is gone

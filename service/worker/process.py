@@ -14,7 +14,17 @@ from typing import Any
 
 from skelprune.errors import SkelpruneError
 
-__all__ = ["worker_main"]
+__all__ = ["report_progress", "worker_main"]
+
+#: This worker's end of its pipe (set by :func:`worker_main`): where progress goes.
+_parent: Connection | None = None
+
+
+def report_progress(done: int, total: int) -> None:
+    """Tell the parent how far the running job is (``("progress", (done, total))``, read
+    by the pool before the job's answer); outside a worker it does nothing."""
+    if _parent is not None:
+        _parent.send(("progress", (int(done), int(total))))
 
 
 @functools.cache
@@ -39,6 +49,8 @@ def _trim_heap() -> None:
 def worker_main(conn: Connection, initializer: Callable[[], object] | None) -> None:
     """Worker process: warm up, say ready (with what the initializer returned, for the
     log), then run ``(fn, args)`` jobs until told to stop."""
+    global _parent
+    _parent = conn
     # Ctrl-C in a terminal reaches the whole process group; the parent decides when we stop.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     info = None

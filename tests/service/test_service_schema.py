@@ -76,9 +76,15 @@ schemathesis.openapi.media_type(
 
 # Small limits so that generated inputs stay cheap to prune. Loaded from the dict, not
 # from the app, so the pool only starts (lazily, on the first call) when this test runs.
+# Room for every long job the generated requests submit (no 503 too-many-jobs).
 APP = create_app(
     Settings(
-        workers=2, queue_size=64, max_pixels=256 * 256, polygon_longest_side=64, job_timeout=60
+        workers=2,
+        queue_size=64,
+        max_pixels=256 * 256,
+        polygon_longest_side=64,
+        job_timeout=60,
+        long_jobs=1000,
     )
 )
 schema = schemathesis.openapi.from_dict(APP.openapi())

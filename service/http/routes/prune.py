@@ -14,6 +14,7 @@ from fastapi.responses import StreamingResponse
 from service.apidocs import openapi
 from service.apidocs.examples import PRUNE_RESPONSES
 from service.errors import InternalError, lookup, problem
+from service.http import long_job
 from service.http.bodies import (
     BATCH_MAX_ITEMS,
     batch_size,
@@ -80,6 +81,8 @@ async def prune(
     call: Annotated[ShapeRequest, Depends(PRUNE)],
     fn: Annotated[Callable[[Job], Any], Depends(job_function)],
 ) -> Response:
+    if long_job.wants_async(call):  # Prefer: respond-async: 202 and a long job
+        return await long_job.submit(call, fn, prune)
     settings = call.settings
     png, geojson, envelope = None, None, None
     if call.kind == "image":

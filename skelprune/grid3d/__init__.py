@@ -22,20 +22,15 @@ if TYPE_CHECKING:
     from .graph import VolumeGraph
     from .medial_axis import CurveSkeleton, curve_skeleton
 
-#: Where each name lives (a module of this package).
-_LAZY = {
-    "OFFSETS": "_topology",
-    "STEP_KINDS": "_topology",
-    "step_lengths": "_topology",
-    "squared_distance": "distance",
-    "VolumeGraph": "graph",
-    "CurveSkeleton": "medial_axis",
-    "curve_skeleton": "medial_axis",
-    "ball_counts": "balls",
-    "exclusive_volume": "balls",
-    "lost_volume": "balls",
-    "reconstruction": "balls",
+#: The names each module of this package exports, imported on first use.
+_MODULES = {
+    "_topology": ("OFFSETS", "STEP_KINDS", "step_lengths"),
+    "distance": ("squared_distance",),
+    "graph": ("VolumeGraph",),
+    "medial_axis": ("CurveSkeleton", "curve_skeleton"),
+    "balls": ("ball_counts", "exclusive_volume", "lost_volume", "reconstruction"),
 }
+_LAZY = {name: module for module, names in _MODULES.items() for name in names}
 
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY)
 

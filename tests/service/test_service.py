@@ -288,7 +288,11 @@ def _header_only_png(width: int, height: int) -> bytes:
         ({"content": BIRD, "params": {"beta": "nan"}}, 422, "beta"),
         ({"content": BIRD, "params": {"method": "magic"}}, 422, "method"),
         ({"content": BIRD, "params": {"betta": "9"}}, 422, "betta"),
-        ({"content": BIRD, "params": {"pixel_size": "2"}}, 422, "only apply to polygon"),
+        (
+            {"content": BIRD, "params": {"pixel_size": "2"}},
+            422,
+            "of image input (PNG or TIFF), not to the JSON",
+        ),
         ({"content": BIRD, "headers": {"accept": "text/html"}}, 406, "text/html"),
         ({"content": b"x" * 500_000}, 413, "exceeds the limit of 400000 bytes"),
     ],

@@ -31,7 +31,7 @@ if TYPE_CHECKING:
 from .grid import IDENTITY_ORIENTATION, Orientation, oriented
 from .grid._open_edge import open_edge, open_extension
 from .grid._roughness import boundary_roughness
-from .grid._rowcover import cover_counts, uncover_count
+from .grid._rowcover import cover_counts, last_losses, uncover_count
 from .grid.coverage import Coverage
 from .grid.graph import SQRT2, BranchGraph, step_length
 from .grid.medial_axis import MedialAxis, oriented_medial_axis, squared_distance
@@ -253,6 +253,18 @@ class Skeleton:
         shape = np.pad(self.mask, pad)
         rows, cols, r2 = self.rows + pad, self.cols + pad, grown_r2(self.r2, reach)
         idx = self.points()
+        # Each pixel is lost at the removal of the last disk covering it: one pass
+        # claims every pixel for its last removal, when the removals are distinct points.
+        drop = np.full(rows.size, len(removals), np.int64)  # never removed
+        for i, pts in enumerate(removals):
+            drop[pts] = i
+        taken = sum(len(pts) for pts in removals)
+        if np.count_nonzero(drop[idx] < len(removals)) == taken:
+            loss, covered = last_losses(
+                shape, rows[idx], cols[idx], r2[idx], drop[idx], len(removals)
+            )
+            first = int(np.count_nonzero(shape)) - int(covered)
+            return np.concatenate([[first], first + np.cumsum(loss)]).astype(np.int64)
         c = cover_counts(shape.shape[0], shape.shape[1], rows[idx], cols[idx], r2[idx])
         lost = [int(np.count_nonzero(shape & (c == 0)))]
         for pts in removals:

@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from .pruning.limbs import LimbGuard
 
 from .grid import IDENTITY_ORIENTATION, Orientation, oriented
+from .grid._intervals import owner_runs
 from .grid._open_edge import open_edge, open_extension
 from .grid._roughness import boundary_roughness
 from .grid._rowcover import cover_counts, last_losses, uncover_count
@@ -260,9 +261,8 @@ class Skeleton:
             drop[pts] = i
         taken = sum(len(pts) for pts in removals)
         if np.count_nonzero(drop[idx] < len(removals)) == taken:
-            loss, covered = last_losses(
-                shape, rows[idx], cols[idx], r2[idx], drop[idx], len(removals)
-            )
+            runs, offsets = owner_runs(rows[idx], cols[idx], r2[idx], drop[idx], len(removals) + 1)
+            loss, covered = last_losses(shape, runs, offsets, len(removals))
             first = int(np.count_nonzero(shape)) - int(covered)
             return np.concatenate([[first], first + np.cumsum(loss)]).astype(np.int64)
         c = cover_counts(shape.shape[0], shape.shape[1], rows[idx], cols[idx], r2[idx])

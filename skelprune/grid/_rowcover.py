@@ -222,49 +222,57 @@ def exclusive_losses(mask, c, rows, cols, r2, drop, n_drop):
 
 
 @njit(cache=True)
-def last_losses(mask, rows, cols, r2, drop, n_drop):
-    """Pixels of ``mask`` by the largest ``drop`` index among the disks covering them.
+def last_losses(mask, runs, offsets, n_drop):
+    """Pixels of ``mask`` by the largest drop index among the disks covering them.
 
-    ``loss[d]`` (``d < n_drop``) counts the pixels of ``mask`` whose covering disks all
-    have ``drop ≤ d``, one of them ``d``: dropping the disks in the order of their index,
-    ``loss[d]`` is what dropping those of index ``d`` uncovers. Returns ``loss`` and the
-    pixels of ``mask`` the disks cover in all (``drop ≥ n_drop`` included). One pass for
-    all the drops, as :func:`exclusive_losses` (each pixel claimed once, by its largest
-    drop index), instead of one :func:`uncover_count` per drop.
+    ``runs``, ``offsets``: the union of the disks of each drop index ``0 … n_drop``
+    (:func:`skelprune.grid._intervals.owner_runs` with the drop indices for labels;
+    ``n_drop`` for the disks never dropped). ``loss[d]`` (``d < n_drop``) counts the pixels
+    whose covering disks all have a drop index ``≤ d``, one of them ``d``: dropping the
+    disks in the order of their index, what dropping those of index ``d`` uncovers.
+    Returns ``loss`` and the pixels of ``mask`` covered in all.
+
+    One pass for all the drops instead of one :func:`uncover_count` per drop: per row,
+    the runs in decreasing drop index claim the pixels of ``mask`` they cover, skipping
+    claimed ones with a union-find, so each pixel is claimed once, by its largest drop
+    index. A drop's disks overlap row by row: a row holds one run of each drop or a few,
+    not one per disk.
     """
-    n = rows.size
-    order = np.argsort(-drop, kind="mergesort")
-    rr, qq, vv, tt, rad, y0, nrow, first, ids = _by_top(rows, cols, r2, order, drop)
-    active, tmp = np.empty(n, np.int64), np.empty(n, np.int64)
-    lo, hi, t = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64)
-    w = mask.shape[1]
-    run = np.zeros(w + 1, np.int32)
-    nxt = np.empty(w + 1, np.int32)
+    m = runs.shape[0]
+    n_labels = offsets.size - 1
+    label = np.empty(m, np.int64)
+    for b in range(n_labels):
+        for i in range(offsets[b], offsets[b + 1]):
+            label[i] = b
+    # by row, then by decreasing drop index: each pixel claimed by its largest
+    order = np.argsort(runs[:, 0] * n_labels + (n_labels - 1 - label))
+    nxt = np.empty(mask.shape[1] + 1, np.int32)
     loss = np.zeros(n_drop, np.int64)
-    covered, na = 0, 0
-    for i in range(nrow):
-        y = y0 + i
-        new = ids[first[i] : first[i + 1]]
-        active, tmp, na, left, right = _row(
-            y, new, rr, qq, vv, tt, rad, active, tmp, na, lo, hi, t, run
-        )
-        if na == 0:
-            continue
+    covered = 0
+    i = 0
+    while i < m:
+        y = runs[order[i], 0]
+        left, right = runs[order[i], 1], runs[order[i], 2]
+        j = i + 1
+        while j < m and runs[order[j], 0] == y:
+            left = min(left, runs[order[j], 1])
+            right = max(right, runs[order[j], 2])
+            j += 1
         row_m = mask[y]
         for x in range(left, right + 1):
-            run[x] = 0  # (the count itself is not needed: the claims skip the gaps)
             nxt[x] = x if row_m[x] else x + 1
-        run[right + 1] = 0
         nxt[right + 1] = right + 1
-        for j in range(na):  # decreasing drop index
-            d = t[j]
-            x = find_root(nxt, lo[j])
-            while x <= hi[j]:
+        for k in range(i, j):
+            e = order[k]
+            d = label[e]
+            x = find_root(nxt, runs[e, 1])
+            while x <= runs[e, 2]:
                 covered += 1
                 if d < n_drop:
                     loss[d] += 1
                 nxt[x] = x + 1
                 x = find_root(nxt, x + 1)
+        i = j
     return loss, covered
 
 

@@ -13,8 +13,9 @@ The drawn shapes (apple, heart, cup, holed blob, octopus, teddy, horseshoe) are
 rasterised small and scaled up, as a scanned silhouette is: their softened staircase
 boundary gives hundreds of branches with huge disks, the slow case for the pruning.
 After the table, the slowest shape is run once more under cProfile and its top entries
-printed; the last two columns are the service's time estimate
-(:func:`skelprune.budget.estimate`) and the slower of the measured times over it.
+printed; the last three columns are the CPU seconds of the pruning runs (both option
+sets when both are timed: what a job's process spends, whatever the machine's load), the
+service's time estimate (:func:`skelprune.budget.estimate`) and the one over the other.
 
 Each shape is timed with the default options and with ``trim=False`` (the tips'
 cut off), which shows the other stages alone. ``SKELPRUNE_BENCH_TRIM=off`` times only
@@ -191,8 +192,9 @@ mask = np.load(sys.argv[1])
 repeat, default_too, untrimmed_too = int(sys.argv[2]), sys.argv[3] == "1", sys.argv[4] == "1"
 skelprune.prune(mask[::8, ::8]).to_dict()
 skelprune.prune(mask[::8, ::8], trim=False).to_dict()
-total, untrimmed, edt = [], [], []
+total, untrimmed, edt, cpu = [], [], [], []
 for _ in range(repeat):  # interleaved, so that a slow spell hits all
+    c = time.process_time()
     if default_too:
         t = time.perf_counter()
         skelprune.prune(mask).to_dict()
@@ -201,6 +203,7 @@ for _ in range(repeat):  # interleaved, so that a slow spell hits all
         t = time.perf_counter()
         skelprune.prune(mask, trim=False).to_dict()
         untrimmed.append(time.perf_counter() - t)
+    cpu.append(time.process_time() - c)
     t = time.perf_counter()
     ndimage.distance_transform_edt(mask)
     edt.append(time.perf_counter() - t)
@@ -215,13 +218,14 @@ except ImportError:  # (a checkout whose medial axis lives elsewhere)
     pass
 med = lambda v: float(np.median(v)) if v else float("nan")
 print(json.dumps([med(total), med(untrimmed), med(edt), axis,
-                  resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024]))
+                  resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, med(cpu)]))
 """
 
 
-def _run(tree: str, mask_file: str, repeat: int) -> tuple[float, float, float, float, float]:
+def _run(tree: str, mask_file: str, repeat: int) -> tuple[float, float, float, float, float, float]:
     """Time one mask in a fresh process of the checkout ``tree``: (pipeline, trim off,
-    EDT, medial axis, peak RSS in MB), medians of ``repeat`` runs."""
+    EDT, medial axis, peak RSS in MB, CPU seconds of the pruning runs), medians of
+    ``repeat`` runs."""
     env = {**os.environ, "PYTHONPATH": tree}
     args = [mask_file, str(repeat), str(int(DEFAULT_TOO)), str(int(UNTRIMMED_TOO))]
     out = subprocess.run(
@@ -232,8 +236,8 @@ def _run(tree: str, mask_file: str, repeat: int) -> tuple[float, float, float, f
         text=True,
         check=True,
     )
-    total, untrimmed, edt, axis, rss = json.loads(out.stdout.strip().splitlines()[-1])
-    return total, untrimmed, edt, axis, rss
+    total, untrimmed, edt, axis, rss, cpu = json.loads(out.stdout.strip().splitlines()[-1])
+    return total, untrimmed, edt, axis, rss, cpu
 
 
 def _profile(name: str, size: int, out: mp.Queue) -> None:
@@ -282,7 +286,7 @@ def main() -> None:
                 np.save(mask_file, mask)
                 guess = estimate(mask).seconds
                 before = _run(BEFORE, mask_file, repeat) if BEFORE else None
-                total, untrimmed, edt, axis, rss = _run(here, mask_file, repeat)
+                total, untrimmed, edt, axis, rss, cpu = _run(here, mask_file, repeat)
                 timed = total if DEFAULT_TOO else untrimmed
                 slowest = max(slowest, (timed, name, size))
                 row = [f"{size} px", name]
@@ -294,7 +298,7 @@ def main() -> None:
                 if UNTRIMMED_TOO:
                     row += _cells(untrimmed, edt)
                 row += [f"{edt:.2f}", f"{100 * axis / timed:.0f} %", f"{rss:.0f}"]
-                row += [f"{guess:.1f}", f"{np.nanmax([total, untrimmed]) / guess:.2f}"]
+                row += [f"{cpu:.2f}", f"{guess:.1f}", f"{cpu / guess:.2f}"]
                 rows.append(row)
     how = "pipeline" if DEFAULT_TOO else "trim off"
     header = ["longest side", "shape"]
@@ -305,7 +309,7 @@ def main() -> None:
     if UNTRIMMED_TOO:
         header += ["trim off, s", "trim off: ratio to EDT"]
     header += ["EDT alone, s", f"medial axis / {how}", "peak RSS, MB"]
-    header += ["estimate, s", "measured / estimate"]
+    header += ["CPU, s", "estimate, s", "CPU / estimate"]
     print(table(header, rows))
     reps = f"median of {REPEAT} runs" if REPEAT else "median of 3 runs up to 2048 px, one above"
     print(f"\n{reps}; one process per shape, size and checkout")

@@ -7,6 +7,10 @@ polyline that starts inside the body, leaves it at its *exit* and runs on to a r
 flat end; ``length`` is how far the shape reaches beyond the body along that polyline.
 A skeleton *keeps* a limb when it reaches into the limb, beyond the body, by at least
 half that length (:func:`limb_reach`).
+
+:func:`box_limb_test` is the limb test as first written (the box of the branch's disks,
+its counts and a distance transform), the oracle of the pipeline's;
+:func:`checked_limb_tests` makes every limb test of the pipeline compare the two.
 """
 
 from __future__ import annotations

@@ -46,6 +46,7 @@ __all__ = [
     "SECONDS_PER_PART",
     "SECONDS_PER_PART_PAIR",
     "SECONDS_PER_PIXEL",
+    "SECONDS_PER_PIXEL_LOCAL",
     "SECONDS_PER_POSITION",
     "SECONDS_PER_SKELETON_POINT",
     "SECONDS_PER_VOLUME_LABEL",
@@ -83,8 +84,13 @@ BYTES_PER_SKELETON_POINT = 768
 BYTES_PER_COMPONENT = 16 * 1024
 #: ... and per pixel of an answer image (the overlay, RGB, and its PNG encoding).
 BYTES_PER_ANSWER_PIXEL = 16
-#: Seconds per input pixel (distance transform, medial axis: ~0.3 µs for 4096² blobs) ...
-SECONDS_PER_PIXEL = 0.5e-6
+#: Seconds per input pixel (distance transform, medial axis, the pruning of a blob's full
+#: axis): the estimate is above the CPU time of every large blob of ``python -m
+#: benchmarks large`` at 2048² and 4096² (0.12-0.47 µs a pixel; the drawn heart, whose
+#: axis runs off the frame, 0.72 and 1.02 µs: 17.1 s at 4096², estimated 17.8 s) ...
+SECONDS_PER_PIXEL = 1.0e-6
+#: ... with ``scope="local"`` (windows a few hundred pixels wide: no blob's full axis) ...
+SECONDS_PER_PIXEL_LOCAL = 0.5e-6
 #: ... per pixel that can be a skeleton point (pixel noise, checkerboards: 25–60 µs) ...
 SECONDS_PER_SKELETON_POINT = 60e-6
 #: ... and per component (isolated dots: 0.3–0.7 ms).
@@ -190,17 +196,20 @@ def estimate(
     labels: np.ndarray | None = None,
 ) -> Estimate:
     """Worst-case memory and time of pruning ``mask`` (and rendering ``answer_pixels``),
-    with the scope's cost per pixel (:data:`BYTES_PER_PIXEL_LOCAL` for ``"local"``);
+    with the scope's cost per pixel (:data:`BYTES_PER_PIXEL_LOCAL` and
+    :data:`SECONDS_PER_PIXEL_LOCAL` for ``"local"``);
     ``labels``: a label image's labels, each pruned alone (:func:`shape_counts`)."""
     pixels, fg, boundary, n_components = shape_counts(mask, labels)
     skeleton = min(fg, boundary)
-    per_pixel = BYTES_PER_PIXEL_LOCAL if scope == "local" else BYTES_PER_PIXEL
+    local = scope == "local"
+    per_pixel = BYTES_PER_PIXEL_LOCAL if local else BYTES_PER_PIXEL
+    seconds_per_pixel = SECONDS_PER_PIXEL_LOCAL if local else SECONDS_PER_PIXEL
     return Estimate(
         bytes=per_pixel * pixels
         + BYTES_PER_SKELETON_POINT * skeleton
         + BYTES_PER_COMPONENT * n_components
         + BYTES_PER_ANSWER_PIXEL * answer_pixels,
-        seconds=SECONDS_PER_PIXEL * pixels
+        seconds=seconds_per_pixel * pixels
         + SECONDS_PER_SKELETON_POINT * skeleton
         + SECONDS_PER_COMPONENT * n_components,
     )

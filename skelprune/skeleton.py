@@ -29,9 +29,10 @@ if TYPE_CHECKING:
     from .grid.limbs import LimbGuard
 
 from .grid import IDENTITY_ORIENTATION, Orientation, oriented
+from .grid._intervals import owner_runs
 from .grid._open_edge import open_edge, open_extension
 from .grid._roughness import boundary_roughness
-from .grid._rowcover import cover_counts, uncover_count
+from .grid._rowcover import cover_counts, last_losses, uncover_count
 from .grid.coverage import Coverage
 from .grid.graph import SQRT2, BranchGraph
 from .grid.medial_axis import MedialAxis, oriented_medial_axis, squared_distance
@@ -229,6 +230,17 @@ class Skeleton(AxisOnGraph[BranchGraph]):
         shape = np.pad(self.mask, pad)
         rows, cols, r2 = self.rows + pad, self.cols + pad, grown_r2(self.r2, reach)
         idx = self.points()
+        # Each pixel is lost at the removal of the last disk covering it: one pass
+        # claims every pixel for its last removal, when the removals are distinct points.
+        drop = np.full(rows.size, len(removals), np.int64)  # never removed
+        for i, pts in enumerate(removals):
+            drop[pts] = i
+        taken = sum(len(pts) for pts in removals)
+        if np.count_nonzero(drop[idx] < len(removals)) == taken:
+            runs, offsets = owner_runs(rows[idx], cols[idx], r2[idx], drop[idx], len(removals) + 1)
+            loss, covered = last_losses(shape, runs, offsets, len(removals))
+            first = int(np.count_nonzero(shape)) - int(covered)
+            return np.concatenate([[first], first + np.cumsum(loss)]).astype(np.int64)
         c = cover_counts(shape.shape[0], shape.shape[1], rows[idx], cols[idx], r2[idx])
         lost = [int(np.count_nonzero(shape & (c == 0)))]
         for pts in removals:

@@ -7,16 +7,36 @@ polyline that starts inside the body, leaves it at its *exit* and runs on to a r
 flat end; ``length`` is how far the shape reaches beyond the body along that polyline.
 A skeleton *keeps* a limb when it reaches into the limb, beyond the body, by at least
 half that length (:func:`limb_reach`).
+
+:func:`box_limb_test` is the limb test as first written (the box of the branch's disks,
+its counts and a distance transform), the oracle of the pipeline's;
+:func:`checked_limb_tests` makes every limb test of the pipeline compare the two.
 """
 
 from __future__ import annotations
 
 import itertools
+import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
-__all__ = ["BODIES", "Limb", "LimbShape", "limb_reach", "limb_shape", "limb_shapes"]
+from skelprune.grid._edt import _squared_edt
+from skelprune.grid._rowcover import uncover
+
+__all__ = [
+    "BODIES",
+    "Limb",
+    "LimbShape",
+    "box_limb_test",
+    "checked_limb_tests",
+    "limb_reach",
+    "limb_shape",
+    "limb_shapes",
+]
 
 #: Body kinds, drawn in turn.
 BODIES = ("ellipse", "circle", "cell", "soma", "fruit")
@@ -211,3 +231,93 @@ def round_ended(seed: int) -> tuple[np.ndarray, list[tuple[float, float, float]]
     top, left = rows.min() - 4, cols.min() - 4
     crop = m[top : rows.max() + 5, left : cols.max() + 5]
     return crop, [(cy - top, cx - left, r) for cy, cx, r in discs]
+
+
+def box_limb_test(graph, mask: np.ndarray, r2: np.ndarray, b: int) -> bool:
+    """The limb test of end branch ``b`` on ``graph``'s current skeleton as first written
+    (docs/algorithm.md, "Limbs"): the disk counts of every live point, the counts without
+    the branch's disks over the box of its disks, and a distance transform of the pixels
+    only the branch covers; a point's disk is whole when its centre lies at least its
+    radius from any other pixel. The oracle of :class:`skelprune.grid.limbs.LimbGuard`
+    (without its area screen, ``exclusive``, and its memory of the limbs found)."""
+    from skelprune.grid._rowcover import cover_counts
+
+    alive = graph.alive_points()
+    h, w = mask.shape
+    counts = cover_counts(h, w, graph.rows[alive], graph.cols[alive], r2[alive])
+    pts = np.asarray(graph.branches[b].points, np.int64)
+    whole, widest = _box_whole_disks(counts, graph.rows[pts], graph.cols[pts], r2[pts])
+    return bool(whole > 0 and whole >= 2.0 * math.sqrt(float(widest)))
+
+
+@njit(cache=True)
+def _box_whole_disks(counts, rows, cols, r2):
+    """How many of a branch's points deeper than the rim have their whole disk covered
+    by the branch alone, and the largest squared radius among them (0, 0 when fewer than
+    4 points are deeper than the rim: ``2·r > 2·√2`` needs at least 4).
+
+    ``counts``: the disk counts of the current skeleton, the branch's disks included.
+    """
+    deep = 0
+    for k in range(r2.size):
+        if r2[k] > 2:
+            deep += 1
+    if deep < 4:
+        return 0, 0
+    # The box of the branch's disks and one pixel more: what it alone covers lies
+    # inside, with a pixel it does not cover all around (for the distances).
+    h, w = counts.shape
+    top, left, bottom, right = h, w, 0, 0
+    for k in range(rows.size):
+        rad = math.ceil(math.sqrt(r2[k]))
+        top = min(top, rows[k] - rad)
+        left = min(left, cols[k] - rad)
+        bottom = max(bottom, rows[k] + rad + 1)
+        right = max(right, cols[k] + rad + 1)
+    top, left = max(top, 0), max(left, 0)
+    bottom, right = min(bottom, h), min(right, w)
+    before = counts[top:bottom, left:right]
+    after = before.copy()
+    uncover(after, rows - top, cols - left, r2)
+    d2 = _squared_edt((after == 0) & (before > 0))
+    whole = widest = 0
+    for k in range(rows.size):
+        if r2[k] > 2 and d2[rows[k] - top, cols[k] - left] >= r2[k]:
+            whole += 1
+            widest = max(widest, r2[k])
+    return whole, widest
+
+
+@contextmanager
+def checked_limb_tests() -> Iterator[list[int]]:
+    """Within the block, every limb test of the image grid's pruning is also made by
+    :func:`box_limb_test` and the two must agree (``AssertionError`` otherwise); yields a
+    list whose one item counts the tests compared."""
+    from skelprune.grid.limbs import MIN_LIMB_AREA, LimbGuard
+    from skelprune.skeleton import Skeleton
+
+    calls = [0]
+
+    class Checked(LimbGuard):
+        def is_limb(self, b: int, exclusive: int) -> bool:
+            known = bool(self.limb[b])
+            found = super().is_limb(b, exclusive)
+            if not known and exclusive >= MIN_LIMB_AREA:
+                expected = box_limb_test(self.graph, self.mask, self.r2, b)
+                assert found == expected, (b, found, expected)
+                calls[0] += 1
+            return found
+
+    original = Skeleton.limb_test
+
+    def limb_test(self: Skeleton, graph):  # type: ignore[no-untyped-def]
+        guard = original(self, graph)
+        checked = Checked(graph, guard.mask, guard.r2)
+        checked.limb[:] = guard.limb
+        return checked
+
+    Skeleton.limb_test = limb_test  # type: ignore[method-assign]
+    try:
+        yield calls
+    finally:
+        Skeleton.limb_test = original  # type: ignore[method-assign]

@@ -25,14 +25,11 @@ instead. The sequence then ends when only limbs are left as end branches.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
-from numba import njit
 
 from ..pruning.limb_memory import LimbMemory
-from ._edt import _squared_edt
-from ._rowcover import cover_counts, uncover
+from ._limb_counts import is_limb_on_tiles
+from .coverage import Coverage
 from .graph import BranchGraph
 
 __all__ = ["MIN_LIMB_AREA", "RIM", "LimbGuard"]
@@ -47,7 +44,7 @@ MIN_LIMB_AREA = 16
 
 
 class LimbGuard(LimbMemory):
-    """The disk counts of the sequence's current skeleton and the limbs found so far.
+    """The limbs found so far, tested on the coverage of the sequence's current skeleton.
 
     Parameters
     ----------
@@ -57,6 +54,15 @@ class LimbGuard(LimbMemory):
         The padded shape.
     r2 : int array
         Squared radius of every point of ``graph``.
+
+    Attributes
+    ----------
+    coverage : Coverage or None
+        The coverage of the current skeleton, one owner per branch and per junction
+        cluster: a pixel of a branch's disk that no other point's disk reaches is one
+        with a single owner. Made from ``graph`` when first needed and then kept up to
+        date by :meth:`removed` and :meth:`merged`; or given (:meth:`follow`) by a
+        sequence that keeps its own up to date, the branch ``b`` as owner ``b + 1``.
 
     Examples
     --------
@@ -77,6 +83,38 @@ class LimbGuard(LimbMemory):
         super().__init__(graph)
         self.graph: BranchGraph = graph
         self.mask, self.r2 = mask, r2
+        self.coverage: Coverage | None = None
+        # Whether this guard made the coverage (and so keeps it up to date), the label
+        # of the first junction in it, and the junction of the branch last removed.
+        self._own, self._junction0, self._junction = False, 0, -1
+
+    def follow(self, coverage: Coverage) -> None:
+        """Test on ``coverage``, which its owner keeps up to date (branch ``b`` labelled
+        ``b + 1``, as :func:`~skelprune.pruning.bayesian.pruning_sequence` does)."""
+        self.coverage, self._own = coverage, False
+
+    def _coverage(self) -> Coverage:
+        if self.coverage is None:
+            g = self.graph
+            nb = len(g.branches)
+            labels = np.zeros(g.rows.size, np.int64)
+            for b, br in enumerate(g.branches):
+                if br.alive:
+                    labels[br.points] = b + 1
+            for j, junc in enumerate(g.junctions):
+                if junc.alive:
+                    labels[junc.points] = nb + 1 + j
+            alive = g.alive_points()
+            self.coverage = Coverage(
+                self.mask,
+                g.rows[alive],
+                g.cols[alive],
+                self.r2[alive],
+                labels[alive],
+                nb + len(g.junctions) + 1,
+            )
+            self._own, self._junction0 = True, nb + 1
+        return self.coverage
 
     def is_limb(self, b: int, exclusive: int) -> bool:
         """Whether end branch ``b``, which alone covers ``exclusive`` pixels, is a limb,
@@ -85,56 +123,30 @@ class LimbGuard(LimbMemory):
             return True
         if exclusive < MIN_LIMB_AREA:
             return False
-        if self.counts is None:
-            g, alive = self.graph, self.graph.alive_points()
-            h, w = self.mask.shape
-            self.counts = cover_counts(h, w, g.rows[alive], g.cols[alive], self.r2[alive])
-        pts = self._points(b)
+        cov = self._coverage()
+        pts = np.asarray(self.graph.branches[b].points, np.int64)
         g = self.graph
-        whole, widest = _whole_disks(self.counts, g.rows[pts], g.cols[pts], self.r2[pts])
-        found = whole > 0 and whole >= 2.0 * math.sqrt(float(widest))
+        found = bool(
+            is_limb_on_tiles(
+                cov.c, cov.opened, cov.tile, cov.tw, g.rows[pts], g.cols[pts], self.r2[pts], RIM
+            )
+        )
         self.limb[b] = found
         return found
 
-    def _uncover(self, points: np.ndarray) -> None:
-        g = self.graph
-        assert self.counts is not None
-        uncover(self.counts, g.rows[points], g.cols[points], self.r2[points])
+    def removed(self, b: int) -> None:
+        """Branch ``b`` leaves the skeleton (call before the graph removes it)."""
+        if self.coverage is None or not self._own:
+            return
+        node = self.graph.branches[b].node
+        jid = node[0] if node[0] is not None else node[1]
+        self._junction = -1 if jid is None else jid
+        self.coverage.remove_label(b + 1)
 
-
-@njit(cache=True)
-def _whole_disks(counts, rows, cols, r2):
-    """How many of a branch's points deeper than the rim have their whole disk covered
-    by the branch alone, and the largest squared radius among them (0, 0 when fewer than
-    4 points are deeper than the rim: ``2·r > 2·√2`` needs at least 4).
-
-    ``counts``: the disk counts of the current skeleton, the branch's disks included.
-    """
-    deep = 0
-    for k in range(r2.size):
-        if r2[k] > RIM:
-            deep += 1
-    if deep < 4:
-        return 0, 0
-    # The box of the branch's disks and one pixel more: what it alone covers lies
-    # inside, with a pixel it does not cover all around (for the distances).
-    h, w = counts.shape
-    top, left, bottom, right = h, w, 0, 0
-    for k in range(rows.size):
-        rad = math.ceil(math.sqrt(r2[k]))
-        top = min(top, rows[k] - rad)
-        left = min(left, cols[k] - rad)
-        bottom = max(bottom, rows[k] + rad + 1)
-        right = max(right, cols[k] + rad + 1)
-    top, left = max(top, 0), max(left, 0)
-    bottom, right = min(bottom, h), min(right, w)
-    before = counts[top:bottom, left:right]
-    after = before.copy()
-    uncover(after, rows - top, cols - left, r2)
-    d2 = _squared_edt((after == 0) & (before > 0))
-    whole = widest = 0
-    for k in range(rows.size):
-        if r2[k] > RIM and d2[rows[k] - top, cols[k] - left] >= r2[k]:
-            whole += 1
-            widest = max(widest, r2[k])
-    return whole, widest
+    def merged(self, kept: int, absorbed: int) -> None:
+        """``absorbed`` became part of ``kept`` (with the junction of the branch last
+        removed): a limb in it keeps ``kept`` a limb."""
+        super().merged(kept, absorbed)
+        if self.coverage is not None and self._own:
+            self.coverage.merge_label(self._junction0 + self._junction, kept + 1)
+            self.coverage.merge_label(absorbed + 1, kept + 1)

@@ -178,6 +178,9 @@ def pruning_sequence(
     # Limbs are never candidates (docs/algorithm.md, "Limbs"); only the greedy order
     # looks for them.
     guard = start.limb_test(graph) if order is None else None
+    follow = getattr(guard, "follow", None)
+    if follow is not None:  # a grid's limb test that reads the sequence's own coverage
+        follow(cov)
 
     def mark_end(b: int) -> None:
         end = graph.is_end_branch(b) and not (guard is not None and guard.limb[b])

@@ -27,7 +27,7 @@ from typer.exceptions import TyperException
 
 from .cli_files import FOLDER_SUFFIXES as FOLDER_SUFFIXES  # importable from here too
 from .cli_files import PROGRESS_AFTER as PROGRESS_AFTER  # importable from here too
-from .cli_files import _expand, _prune, _prune_file
+from .cli_files import _expand, _prune, _prune_file, is_zarr
 from .cli_geo import register as register_geo
 from .cli_match import match_command as match_command  # importable from here too
 from .cli_match import register as register_match
@@ -183,7 +183,7 @@ def prune_command(
     inputs = _expand(files)
     if not inputs:
         raise _usage("no PNG, TIFF, GeoJSON or .npy file given")
-    if len(inputs) == 1 and not files[0].is_dir():
+    if len(inputs) == 1 and not (files[0].is_dir() and not is_zarr(files[0])):
         try:
             res, doc = _prune(str(inputs[0]), options, read, raster, output, geojson, volume)
         except (SkelpruneError, OSError) as exc:

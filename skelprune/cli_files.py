@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import SkelpruneError
+from .io.zarr import is_zarr
 from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions, VolumeOptions
 
 #: What a folder is searched for (any case).
@@ -31,8 +32,11 @@ def _prune(
     from .api import prune
     from .volume import is_volume
 
-    if is_volume(path):
-        res: Any = prune(Path(path), options, output=output, volume=volume or VolumeOptions())
+    if is_volume(path):  # components done on a terminal's stderr
+        from .volume import prune_volume
+
+        tty = sys.stderr.isatty()
+        res: Any = prune_volume(Path(path), options, volume or VolumeOptions(), output, progress=tty)
     else:
         res = prune(
             Path(path), options, read=read, raster=raster, output=output, progress=_progress(path)
@@ -91,7 +95,7 @@ def _prune_file(
 def _expand(paths: list[Path]) -> list[Path]:
     files: list[Path] = []
     for p in paths:
-        if p.is_dir():  # shape.PNG counts as much as shape.png
+        if p.is_dir() and not is_zarr(p):  # shape.PNG counts as much as shape.png
             files.extend(
                 sorted(
                     f for f in p.iterdir() if f.suffix.lower() in FOLDER_SUFFIXES and f.is_file()

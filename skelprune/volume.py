@@ -60,8 +60,8 @@ NPY_MAGIC = b"\x93NUMPY"
 
 
 def is_volume(source: Any, spacing_given: bool = False) -> bool:
-    """Whether ``source`` is a volume: the path of a ``.npy`` file or of a multi-page TIFF
-    (a stack), or a 3-D array whose last axis is longer than an image's channels
+    """Whether ``source`` is a volume: the path of a ``.npy`` file, of a multi-page TIFF
+    (a stack) or of a Zarr store (:mod:`skelprune.io.zarr`), or a 3-D array whose last axis is longer than an image's channels
     (:data:`IMAGE_CHANNELS`), or any 3-D array when ``spacing_given`` (a ``(Z, Y, X)``
     volume with ``X ≤ 4`` is read as a volume when ``spacing`` is given)."""
     if isinstance(source, np.ndarray):
@@ -73,6 +73,10 @@ def is_volume(source: Any, spacing_given: bool = False) -> bool:
         return head == NPY_MAGIC or (head[:2] in (b"II", b"MM") and tiff_pages(bytes(source)) > 1)
     if not isinstance(source, str | os.PathLike):
         return False
+    from .io.zarr import is_zarr
+
+    if is_zarr(source):
+        return True
     name = str(source).lower()
     if name.endswith(".npy"):
         return True
@@ -274,9 +278,29 @@ def refuse_image_options(read: ReadOptions | None, output: OutputOptions) -> Non
         )
 
 
+def _is_zarr(source: Any) -> bool:
+    from .io.zarr import is_zarr
+
+    return is_zarr(source)
+
+
+def read_zarr(
+    source: str | os.PathLike[str], max_voxels: int = MAX_VOLUME_VOXELS
+) -> tuple[np.ndarray, tuple[float, float, float] | None]:
+    """A Zarr array or OME-Zarr image as an array, refused past ``max_voxels`` voxels
+    from its metadata (before any chunk is read), with its OME-Zarr voxel size (``None``
+    for a plain array)."""
+    from .io.zarr import open_zarr_volume
+
+    store = open_zarr_volume(source)
+    _within_limit(store.shape, max_voxels)
+    return store.read(), store.spacing
+
+
 def read_volume(source: Any, max_voxels: int | None = None) -> np.ndarray:
-    """A volume as an array: ``source`` itself, a ``.npy`` file (no pickles) or a
-    multi-page TIFF (its pages along ``z``), as a path or as the file's bytes; files of
+    """A volume as an array: ``source`` itself, a ``.npy`` file (no pickles), a
+    multi-page TIFF (its pages along ``z``) or a Zarr / OME-Zarr store (the
+    full-resolution level), as a path or, but for Zarr, as the file's bytes; files of
     more than ``max_voxels`` voxels (default :data:`MAX_VOLUME_VOXELS`) are refused from
     their header, and so are arrays when ``max_voxels`` is given.
 
@@ -296,6 +320,8 @@ def read_volume(source: Any, max_voxels: int | None = None) -> np.ndarray:
             from .io.tiff import read_tiff_stack
 
             arr = read_tiff_stack(data, max_voxels=limit)
+    elif _is_zarr(source):
+        arr, _ = read_zarr(source, limit)
     elif isinstance(source, str | os.PathLike) and str(source).lower().endswith(TIFF_SUFFIXES):
         arr = _read_stack(source, limit)
     elif isinstance(source, str | os.PathLike):
@@ -321,58 +347,31 @@ def volume_components(
     shape of its own).
 
     A label volume's components are each label's pieces, found inside the label's
-    bounding box (one pass over the volume finds every box), so that the work follows
-    the objects' sizes, not labels × voxels. Order: by label, then as
+    bounding box from the label's own voxels (one pass over the volume groups the
+    voxels by label, :mod:`skelprune.volume_labels`), so that the work follows the
+    labelled voxels, not labels × voxels. Order: by label, then as
     ``scipy.ndimage.label`` finds them.
 
     >>> v = np.zeros((3, 4, 5), np.int64); v[1, 1, 1:3] = 7; v[1, 2:4, 4] = 2
     >>> [(c.shape, o, lab) for c, o, lab in volume_components(v)]
     [((3, 4, 3), (0, 1, 3), 2), ((3, 3, 4), (0, 0, 0), 7)]
     """
-    from scipy import ndimage
-
     binary = volume.dtype == np.bool_ or not np.any((volume != 0) & (volume != 1))
-    if binary:
-        boxes: list[tuple[int | None, tuple[slice, ...]]] = [
-            (None, tuple(slice(0, n) for n in volume.shape))
-        ]
-    else:
-        boxes = list(_label_boxes(volume))
-    out = []
-    cube = np.ones((3, 3, 3), bool)
-    for value, box in boxes:
-        part = volume[box]
-        mask = part != 0 if value is None else part == value
-        lab, _ = ndimage.label(mask, structure=cube)
-        for i, piece in enumerate(ndimage.find_objects(lab), start=1):
-            if piece is None:
-                continue
-            crop = np.pad(lab[piece] == i, 1)
-            origin = (
-                box[0].start + piece[0].start - 1,
-                box[1].start + piece[1].start - 1,
-                box[2].start + piece[2].start - 1,
-            )
-            out.append((crop, origin, value))
-    return out
+    if not binary:
+        from .volume_labels import label_groups, label_pieces
 
-
-def _label_boxes(volume: np.ndarray) -> list[tuple[int, tuple[slice, ...]]]:
-    """Every non-zero value of a label volume with its bounding box, by value: one sort
-    and one pass (any integers: negative, or past int64 for uint64)."""
+        return list(label_pieces(label_groups(volume)))
     from scipy import ndimage
 
-    values, inverse = np.unique(volume, return_inverse=True)
-    dense = inverse.reshape(volume.shape).astype(np.intp) + 1
-    zero = int(np.searchsorted(values, 0))
-    if zero < len(values) and values[zero] == 0:
-        dense[dense == zero + 1] = 0
-    found = ndimage.find_objects(dense)
-    return [
-        (int(v), box)
-        for v, box in zip(values.tolist(), found, strict=False)
-        if v != 0 and box is not None
-    ]
+    out = []
+    lab, _ = ndimage.label(volume != 0, structure=np.ones((3, 3, 3), bool))
+    for i, piece in enumerate(ndimage.find_objects(lab), start=1):
+        if piece is None:
+            continue
+        crop = np.pad(lab[piece] == i, 1)
+        origin = (piece[0].start - 1, piece[1].start - 1, piece[2].start - 1)
+        out.append((crop, origin, None))
+    return out
 
 
 def prune_volume_component(
@@ -404,9 +403,16 @@ def prune_volume(
     options: PruneOptions,
     volume_options: VolumeOptions,
     output: OutputOptions | None = None,
+    workers: int = 1,
+    client: Any = None,
+    progress: Any = False,
 ) -> VolumeResult:
     """Prune every 26-connected component of a volume (what :func:`skelprune.prune` runs
-    for a 3-D array or a ``.npy`` path).
+    for a 3-D array, a ``.npy`` path, a TIFF stack or a Zarr store).
+
+    ``workers``, ``client`` and ``progress``: as
+    :func:`skelprune.volume_parallel.prune_volume_labels` takes them (default: in this
+    process, no progress).
 
     Raises
     ------
@@ -426,10 +432,16 @@ def prune_volume(
             "scope='local' prunes an image window by window and holds for images only; a "
             "volume is pruned whole"
         )
-    volume = read_volume(source)
+    spacing = volume_options.spacing
+    if _is_zarr(source):
+        volume, stored = read_zarr(source)
+        if stored is not None and spacing == VolumeOptions().spacing:
+            spacing = stored  # OME-Zarr's scale, unless a spacing is given
+        volume = read_volume(volume)  # the dims and dtype checks
+    else:
+        volume = read_volume(source)
     if not volume.any():
         raise EmptyMaskError("the volume has no voxel inside")
-    spacing = volume_options.spacing
     from .output.volume import VolumeResult
 
     result = VolumeResult(
@@ -439,8 +451,11 @@ def prune_volume(
         output=OutputOptions() if output is None else output,
         volume=volume != 0,
     )
-    for crop, origin, label in volume_components(volume):
-        component = prune_volume_component(crop, origin, applied, spacing)
-        component.label = label
-        result.components.append(component)
+    from .volume_parallel import Progress, prune_components
+
+    pieces = volume_components(volume)
+    tick = Progress(len(pieces)) if progress is True else (progress or None)
+    result.components.extend(
+        prune_components(pieces, applied, spacing, workers, client, tick)
+    )
     return result

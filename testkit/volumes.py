@@ -316,7 +316,8 @@ class LabelVolume:
     truth : SweptShape
         Every object's centre lines and tips, in the volume's frame, keeping only the
         centre points (and tips) whose voxel carries that object's label: where an object
-        runs into an earlier one it is cut there, and its centre line with it.
+        runs into an earlier one it is cut there, and its centre line with it (the cut
+        is a tip: a free end of the object).
     """
 
     labels: np.ndarray
@@ -353,6 +354,11 @@ def touching_trees(
             for a, b in zip(edges[::2], edges[1::2], strict=True):
                 lines.append(line[a:b] + corner)
                 radii.append(r[a:b])
+                # where an earlier tree cuts the line, the cut is a free end of this one
+                if a > 0:
+                    tips.append(line[a] + corner)
+                if b < len(line):
+                    tips.append(line[b - 1] + corner)
         for t in tree.tips:
             i = np.rint(t).astype(np.int64).clip(0, size - 1)
             if mine[i[0], i[1], i[2]]:

@@ -8,14 +8,19 @@
    ``256:100,256:300,512:2000``, ``side:n``). Each method runs in a fresh process on the
    same ``.npy``: skelprune (:func:`skelprune.volume_parallel.prune_volume_labels`, default
    options) and kimimaro (TEASAR, the parameters of :mod:`benchmarks.volume_methods`), on
-   one process and on ``SKELPRUNE_BENCH_WORKERS`` (default 2). Time is the median of
-   ``SKELPRUNE_BENCH_REPEAT`` runs (default 1), reading the array included; peak MB is the
-   largest process's peak resident size over the parent's size before the run (workers:
-   their own peak, the forked parent's pages they share included). Quality: F1 of the
-   skeleton voxels within 2 voxels of the true centre lines, tips found (an end point of
-   the label's skeleton within the tip's radius + 2), spurs (end points near no tip).
+   one process and on ``SKELPRUNE_BENCH_WORKERS`` (default 2; 1: one process only).
+   Time is the median of ``SKELPRUNE_BENCH_REPEAT`` runs (default 1), reading the array
+   included; peak MB is the largest process's peak resident size over the parent's size
+   before the run (workers: their own peak, the forked parent's pages they share
+   included). Quality: F1 of the skeleton voxels within 2 voxels of the true centre
+   lines, tips found (an end point of the label's skeleton within the tip's radius + 2),
+   spurs (end points near no tip).
 2. **Voxelized neurons**: navis's example neurons drawn at up to 256 voxels a side
    (:func:`testkit.neurons.example_neurons`), one process each method, the same scores.
+3. With ``--large`` (``--large-only``: it alone): a chunked 1024³ label volume on a local
+   2-worker Dask cluster (:mod:`benchmarks.bench_volume_chunks`).
+
+``--volumes-only`` and ``--neurons-only`` run one of the first two tables.
 """
 
 from __future__ import annotations
@@ -40,7 +45,13 @@ WORKERS = int(os.environ.get("SKELPRUNE_BENCH_WORKERS", "2"))
 REPEAT = int(os.environ.get("SKELPRUNE_BENCH_REPEAT", "1"))
 TOLERANCE = 2.0
 _OFFSETS = np.array(
-    [(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1) if (a, b, c) != (0, 0, 0)]
+    [
+        (a, b, c)
+        for a in (-1, 0, 1)
+        for b in (-1, 0, 1)
+        for c in (-1, 0, 1)
+        if (a, b, c) != (0, 0, 0)
+    ]
 )
 
 
@@ -94,7 +105,7 @@ METHODS = {"skelprune": _skelprune, "kimimaro": _kimimaro}
 
 def _timed(path: str, method: str, workers: int, out: mp.Queue) -> None:
     """In a fresh process: the run's median time, its peak memory, its skeleton."""
-    warm = np.zeros((14, 14, 20), np.uint16)
+    warm = np.zeros((14, 14, 20), np.uint32)  # the label volumes' dtype: kernels compiled
     warm[3:11, 3:11, 2:10] = 1
     warm[3:11, 3:11, 10:18] = 2
     METHODS[method](warm, 1)  # kernels loaded from their cache, imports done
@@ -205,11 +216,12 @@ def label_volumes() -> None:
             np.save(path, lv.labels)
             name = f"{side}³, {n} labels"
             del lv.labels
-            rows += _rows(name, path, lv.truth, [1, WORKERS])
+            rows += _rows(name, path, lv.truth, [1, WORKERS] if WORKERS > 1 else [1])
             Path(path).unlink()
+            print(f"{name}: done", flush=True)
     header = ["volume", "method", "s", "peak MB", "F1@2", "tips found", "spurs"]
     print("Label volumes of touching branching tubes (fresh process each; same run):\n")
-    print(table(header, rows))
+    print(table(header, rows), flush=True)
 
 
 def neurons() -> None:
@@ -226,18 +238,20 @@ def neurons() -> None:
     print(table(header, rows))
     times = {m: [float(r[2]) for r in rows if r[1] == m and r[2] != "failed"] for m in METHODS}
     if all(times.values()):
-        print(
-            "\nmedian s: "
-            + ", ".join(f"{m} {np.median(t):.2f}" for m, t in times.items())
-        )
+        print("\nmedian s: " + ", ".join(f"{m} {np.median(t):.2f}" for m, t in times.items()))
 
 
 def main(argv: list[str] | None = None) -> None:
     args = argv or []
-    if "--neurons-only" not in args:
-        label_volumes()
-    if "--volumes-only" not in args:
-        neurons()
+    if "--large-only" not in args:
+        if "--neurons-only" not in args:
+            label_volumes()
+        if "--volumes-only" not in args:
+            neurons()
+    if "--large" in args or "--large-only" in args:
+        from .bench_volume_chunks import main as large
+
+        large()
 
 
 if __name__ == "__main__":

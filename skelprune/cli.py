@@ -27,7 +27,7 @@ from typer.exceptions import TyperException
 
 from .cli_files import FOLDER_SUFFIXES as FOLDER_SUFFIXES  # importable from here too
 from .cli_files import PROGRESS_AFTER as PROGRESS_AFTER  # importable from here too
-from .cli_files import _expand, _prune, _prune_file, is_zarr
+from .cli_files import _expand, _prune, _prune_file
 from .cli_geo import register as register_geo
 from .cli_match import match_command as match_command  # importable from here too
 from .cli_match import register as register_match
@@ -70,6 +70,7 @@ from .cli_options import (
     _volume_or_exit,
 )
 from .errors import SkelpruneError
+from .io.zarr import is_zarr
 from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions
 
 # A command imports what it uses, in its own body: `--help` and `--version` load typer and

@@ -36,7 +36,9 @@ def _prune(
         from .volume import prune_volume
 
         tty = sys.stderr.isatty()
-        res: Any = prune_volume(Path(path), options, volume or VolumeOptions(), output, progress=tty)
+        res: Any = prune_volume(
+            Path(path), options, volume or VolumeOptions(), output, progress=tty
+        )
     else:
         res = prune(
             Path(path), options, read=read, raster=raster, output=output, progress=_progress(path)

@@ -61,9 +61,10 @@ NPY_MAGIC = b"\x93NUMPY"
 
 def is_volume(source: Any, spacing_given: bool = False) -> bool:
     """Whether ``source`` is a volume: the path of a ``.npy`` file, of a multi-page TIFF
-    (a stack) or of a Zarr store (:mod:`skelprune.io.zarr`), or a 3-D array whose last axis is longer than an image's channels
-    (:data:`IMAGE_CHANNELS`), or any 3-D array when ``spacing_given`` (a ``(Z, Y, X)``
-    volume with ``X ≤ 4`` is read as a volume when ``spacing`` is given)."""
+    (a stack) or of a Zarr store (:mod:`skelprune.io.zarr`), or a 3-D array whose last
+    axis is longer than an image's channels (:data:`IMAGE_CHANNELS`), or any 3-D array
+    when ``spacing_given`` (a ``(Z, Y, X)`` volume with ``X ≤ 4`` is read as a volume
+    when ``spacing`` is given)."""
     if isinstance(source, np.ndarray):
         return source.ndim == 3 and (spacing_given or source.shape[-1] > IMAGE_CHANNELS)
     if isinstance(source, bytes | bytearray | memoryview):
@@ -363,7 +364,7 @@ def volume_components(
         return list(label_pieces(label_groups(volume)))
     from scipy import ndimage
 
-    out = []
+    out: list[tuple[np.ndarray, tuple[int, int, int], int | None]] = []
     lab, _ = ndimage.label(volume != 0, structure=np.ones((3, 3, 3), bool))
     for i, piece in enumerate(ndimage.find_objects(lab), start=1):
         if piece is None:
@@ -455,7 +456,5 @@ def prune_volume(
 
     pieces = volume_components(volume)
     tick = Progress(len(pieces)) if progress is True else (progress or None)
-    result.components.extend(
-        prune_components(pieces, applied, spacing, workers, client, tick)
-    )
+    result.components.extend(prune_components(pieces, applied, spacing, workers, client, tick))
     return result

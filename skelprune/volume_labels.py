@@ -86,7 +86,7 @@ def label_groups(volume: np.ndarray) -> LabelGroups:
         empty = np.zeros((0, 6), np.int64)
         return LabelGroups([], empty, np.zeros(1, np.int64), np.zeros(0, np.int64), shape)
     lo, hi = int(flat.min()), int(flat.max())
-    if hi - lo < DENSE_SPAN + flat.size // 8 and -(2**63) <= lo and hi < 2**63:
+    if hi - lo < DENSE_SPAN + flat.size // 8 and lo >= -(2**63) and hi < 2**63:
         # dense ids: value - lo, read straight from the volume (no copy of the voxels)
         ids_of = flat if flat.dtype.itemsize < 8 or flat.dtype.kind == "i" else flat.view(np.int64)
         counts, boxes = _count(ids_of, lo, hi - lo + 1, shape[1], shape[2])
@@ -137,7 +137,7 @@ def label_pieces(
 
 
 @njit(cache=True)
-def _count(flat, lo, n, ny, nx):
+def _count(flat, lo, n, ny, nx):  # type: ignore[no-untyped-def]
     counts = np.zeros(n, np.int64)
     boxes = np.empty((n, 6), np.int64)
     boxes[:, :3] = 1 << 62
@@ -169,7 +169,7 @@ def _count(flat, lo, n, ny, nx):
 
 
 @njit(cache=True)
-def _place(flat, lo, next_slot, total):
+def _place(flat, lo, next_slot, total):  # type: ignore[no-untyped-def]
     out = np.empty(total, np.int64)
     for p in range(flat.size):
         v = flat[p]
@@ -182,7 +182,7 @@ def _place(flat, lo, next_slot, total):
 
 
 @njit(cache=True)
-def _count_ids(ids, where, n, ny, nx):
+def _count_ids(ids, where, n, ny, nx):  # type: ignore[no-untyped-def]
     counts = np.zeros(n, np.int64)
     boxes = np.empty((n, 6), np.int64)
     boxes[:, :3] = 1 << 62
@@ -206,7 +206,7 @@ def _count_ids(ids, where, n, ny, nx):
 
 
 @njit(cache=True)
-def _place_ids(ids, where, next_slot):
+def _place_ids(ids, where, next_slot):  # type: ignore[no-untyped-def]
     out = np.empty(ids.size, np.int64)
     for k in range(ids.size):
         i = ids[k]
@@ -216,7 +216,7 @@ def _place_ids(ids, where, next_slot):
 
 
 @njit(cache=True)
-def _paint(out, voxels, box, plane_shape):
+def _paint(out, voxels, box, plane_shape) -> None:  # type: ignore[no-untyped-def]
     ny, nx = plane_shape[0], plane_shape[1]
     plane = ny * nx
     for p in voxels:

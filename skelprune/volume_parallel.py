@@ -127,7 +127,9 @@ def prune_components(
         # fork where there is one: the workers start with the kernels already loaded
         method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
         with ProcessPoolExecutor(workers, mp_context=mp.get_context(method)) as pool:
-            jobs = {pool.submit(_prune_batch, b, options, spacing): i for i, b in enumerate(batches)}
+            jobs = {
+                pool.submit(_prune_batch, b, options, spacing): i for i, b in enumerate(batches)
+            }
             from concurrent.futures import as_completed as done_first
 
             for fut in done_first(jobs):

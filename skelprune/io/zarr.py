@@ -112,7 +112,7 @@ def open_zarr_volume(path: str | os.PathLike[str]) -> ZarrVolume:
         array = node
     index = _spatial_index(array.shape, axes, shown)
     dtype = array.dtype
-    if not (dtype == bool or getattr(dtype, "kind", "") in "iu"):
+    if getattr(dtype, "kind", "") not in "biu":
         raise InvalidImageError(
             f"the Zarr array {shown!r} holds {dtype} values; a volume holds booleans or "
             "integer labels (bool, int8-int64, uint8-uint64)"
@@ -135,7 +135,10 @@ def _multiscale(group: Any, shown: str) -> tuple[Any, Any, list[str] | None]:
         array = group[dataset["path"]]
         axes = [a["name"] if isinstance(a, dict) else str(a) for a in ms.get("axes", [])]
         scale = [1.0] * len(array.shape)
-        for transforms in (dataset.get("coordinateTransformations"), ms.get("coordinateTransformations")):
+        for transforms in (
+            dataset.get("coordinateTransformations"),
+            ms.get("coordinateTransformations"),
+        ):
             for t in transforms or []:
                 if t.get("type") == "scale":
                     scale = [a * float(b) for a, b in zip(scale, t["scale"], strict=True)]

@@ -128,7 +128,8 @@ def prune_zarr_chunked(
     max_box_voxels : int
         The most voxels a label's box may hold (what one task reads at once).
     batch_voxels : int
-        Labels go to tasks in batches of about this many labelled voxels.
+        Labels go to tasks in batches of at most about this many labelled voxels (and
+        at least four batches a worker).
     progress : callable, optional
         Called with the count of labels done as each batch finishes.
 
@@ -175,10 +176,14 @@ def prune_zarr_chunked(
                     f"label {v}'s box holds {size} voxels, more than max_box_voxels="
                     f"{max_box_voxels} (what one task reads at once)"
                 )
+        # at least four batches a worker, so that every worker has labels to prune
+        n_workers = max(len(dask_client.scheduler_info().get("workers", {})), 1)
+        total = sum(b[6] for b in merged.values())
+        target = min(batch_voxels, max(total // (4 * n_workers), 1))
         batches: list[list[tuple[int, tuple[int, ...]]]] = [[]]
         size = 0
         for v in sorted(merged):
-            if size >= batch_voxels:
+            if size >= target:
                 batches.append([])
                 size = 0
             batches[-1].append((v, tuple(merged[v][:6])))
@@ -197,8 +202,8 @@ def prune_zarr_chunked(
         if own:
             dask_client.close()
     mask = np.zeros(store.shape, bool)  # the overlay's mask: one byte a voxel, client side
-    for b in boxes:
-        mask[b] = store.read(b) != 0
+    for chunk in boxes:
+        mask[chunk] = store.read(chunk) != 0
     result = VolumeResult(
         shape=(int(store.shape[0]), int(store.shape[1]), int(store.shape[2])),
         spacing=spacing,

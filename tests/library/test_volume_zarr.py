@@ -81,7 +81,10 @@ def test_ome_zarr_from_the_ome_zarr_writer(tmp_path: Path) -> None:
     writer = pytest.importorskip("ome_zarr.writer")
     path = tmp_path / "written.zarr"
     writer.write_image(
-        VOLUME, zarr.open_group(str(path), mode="w"), axes="zyx", scale_factors=[2],
+        VOLUME,
+        zarr.open_group(str(path), mode="w"),
+        axes="zyx",
+        scale_factors=[2],
         scale={"z": 3.0, "y": 1.0, "x": 1.0},
     )
     assert open_zarr_volume(path).spacing == (3.0, 1.0, 1.0)
@@ -95,7 +98,7 @@ def test_bad_stores_are_refused_clearly(tmp_path: Path) -> None:
     with pytest.raises(InvalidImageError, match=r"holds no \.zarray, \.zgroup or zarr\.json"):
         skelprune.prune(tmp_path / "empty.zarr")
     _array(tmp_path / "flat.zarr", np.ones((4, 5), np.uint8), chunks=(4, 5))
-    with pytest.raises(InvalidImageError, match="3-D array.*2 spatial dimensions"):
+    with pytest.raises(InvalidImageError, match=r"3-D array.*2 spatial dimensions"):
         skelprune.prune(tmp_path / "flat.zarr")
     _array(tmp_path / "float.zarr", np.ones((4, 5, 6), np.float32), chunks=(4, 5, 6))
     with pytest.raises(InvalidImageError, match="float32 values"):

@@ -171,16 +171,26 @@ def _integer_squared(fg, weights, out) -> None:
     res = np.empty(n, np.int64)
     s = np.empty(n, np.int64)
     t = np.empty(n, np.int64)
-    for z in range(nz):
+    for z in range(nz):  # a line of zeros stays zeros: crops are mostly background
         for x in range(nx):
+            busy = False
             for y in range(ny):
                 line[y] = g[z, y, x]
+                busy |= line[y] != 0
+            if not busy:
+                continue
             _envelope(line, ny, weights[1], res, s, t)
             for y in range(ny):
                 g[z, y, x] = res[y]
         for y in range(ny):
+            busy = False
             for x in range(nx):
                 line[x] = g[z, y, x]
+                busy |= line[x] != 0
+            if not busy:
+                for x in range(nx):
+                    out[z, y, x] = 0.0
+                continue
             _envelope(line, nx, weights[2], res, s, t)
             for x in range(nx):
                 out[z, y, x] = float(res[x]) if fg[z, y, x] else 0.0

@@ -118,3 +118,28 @@ def test_progress_writes_components_done() -> None:
 def test_bad_worker_counts_are_refused(workers) -> None:
     with pytest.raises(InvalidOptionError, match="workers"):
         prune_volume_labels(np.ones((5, 5, 6), np.uint8), workers=workers)
+
+
+def _scipy_roughness(volume: np.ndarray) -> float:
+    """The roughness by scipy's cross erosions and dilations (the reference)."""
+    m = np.pad(volume, 2)
+    cross = ndimage.generate_binary_structure(3, 1)
+    eroded = ndimage.binary_erosion(m, cross)
+    perimeter = int(np.count_nonzero(m & ~eroded))
+    if not perimeter:
+        return 0.0
+    opened = ndimage.binary_dilation(eroded, cross)
+    closed = ndimage.binary_erosion(ndimage.binary_dilation(m, cross), cross)
+    return (int(np.count_nonzero(m & ~opened)) + int(np.count_nonzero(closed & ~m))) / perimeter
+
+
+def test_volume_roughness_counts_what_scipys_morphology_counts() -> None:
+    from skelprune.grid._roughness import volume_roughness
+    from testkit.volumes import random_tree
+
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        v = rng.random(tuple(rng.integers(1, 12, 3))) < rng.uniform(0.1, 0.95)
+        assert volume_roughness(v) == _scipy_roughness(v)
+    tree = random_tree(1, 48).volume(0.7, seed=1)
+    assert volume_roughness(tree) == _scipy_roughness(tree) > 0

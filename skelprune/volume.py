@@ -364,12 +364,14 @@ def volume_components(
         return list(label_pieces(label_groups(volume)))
     from scipy import ndimage
 
+    from .grid3d.distance import pad
+
     out: list[tuple[np.ndarray, tuple[int, int, int], int | None]] = []
     lab, _ = ndimage.label(volume != 0, structure=np.ones((3, 3, 3), bool))
     for i, piece in enumerate(ndimage.find_objects(lab), start=1):
         if piece is None:
             continue
-        crop = np.pad(lab[piece] == i, 1)
+        crop = pad(lab[piece] == i)
         origin = (piece[0].start - 1, piece[1].start - 1, piece[2].start - 1)
         out.append((crop, origin, None))
     return out

@@ -120,6 +120,8 @@ def label_pieces(
     volume: by label, then as ``scipy.ndimage.label`` finds them in the label's box."""
     from scipy import ndimage
 
+    from .grid3d.distance import pad
+
     cube = np.ones((3, 3, 3), bool)
     for i, value in enumerate(groups.values):
         box = groups.boxes[i]
@@ -127,7 +129,7 @@ def label_pieces(
         for k, piece in enumerate(ndimage.find_objects(lab), start=1):
             if piece is None:
                 continue
-            crop = np.pad(lab[piece] == k, 1)
+            crop = pad(lab[piece] == k)
             origin = (
                 int(box[0]) + piece[0].start - 1,
                 int(box[1]) + piece[1].start - 1,

@@ -70,7 +70,10 @@ def check_spacing(spacing: object) -> tuple[float, float, float]:
 def pad(volume: np.ndarray) -> np.ndarray:
     """``volume`` with one background voxel all around (the kernels look one voxel
     beyond every voxel inside without bounds checks)."""
-    return np.pad(volume, 1)
+    volume = np.asarray(volume)
+    out = np.zeros(tuple(n + 2 for n in volume.shape), volume.dtype)  # np.pad, faster
+    out[(slice(1, -1),) * volume.ndim] = volume
+    return out
 
 
 def squared_distance(

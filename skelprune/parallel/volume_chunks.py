@@ -61,6 +61,7 @@ def _prune_labels(
     """Pass 2: each label's box read from the store, its pieces pruned in order."""
     from scipy import ndimage
 
+    from ..grid3d.distance import pad
     from ..io.zarr import open_zarr_volume
     from ..volume import prune_volume_component
 
@@ -75,7 +76,7 @@ def _prune_labels(
         for k, piece in enumerate(ndimage.find_objects(lab), start=1):
             if piece is None:
                 continue
-            crop = np.pad(lab[piece] == k, 1)
+            crop = pad(lab[piece] == k)
             origin = (
                 b[0] + piece[0].start - 1,
                 b[1] + piece[1].start - 1,

@@ -22,7 +22,9 @@ Three tables:
    and one above, beside ``scipy.ndimage.distance_transform_edt`` with ``sampling`` on
    the same volume in the same process: the ratio is to that EDT.
 
-``python -m benchmarks volumes`` (a few minutes on one core). The picture of
+``python -m benchmarks volumes`` (a few minutes on one core). ``python -m benchmarks
+volumes --labels``: label volumes and voxelized neurons against kimimaro
+(:mod:`benchmarks.bench_volume_labels`). The picture of
 docs/volumes.md: ``python -m benchmarks.bench_volumes --figure docs/figures/volumes-tree.png``.
 """
 
@@ -242,7 +244,12 @@ def figure(path: str, seed: int = 3) -> None:
     fig.savefig(path, dpi=80)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    if argv and "--labels" in argv:  # label volumes and neurons against kimimaro
+        from .bench_volume_labels import main as labels_main
+
+        labels_main([a for a in argv if a != "--labels"])
+        return
     _quality()
     _speed()
 

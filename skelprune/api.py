@@ -29,7 +29,8 @@ from .pipeline import prune_component, prune_components
 
 if TYPE_CHECKING:
     from .output.volume import VolumeResult
-from .volume import is_volume, prune_volume, read_volume
+from .io.zarr import is_zarr
+from .volume import MAX_VOLUME_VOXELS, is_volume, prune_volume, read_volume, read_zarr
 
 __all__ = ["METHODS", "components", "prune", "prune_component", "prune_input"]
 
@@ -210,8 +211,15 @@ def _prune_volume(
     answers: Collection[str] | None,
     progress: Callable[[int, int], None] | None = None,
 ) -> VolumeResult:
-    """A volume, read within the pixel limit, its estimate within the budget."""
-    voxels = read_volume(source, max_voxels=limits.max_pixels)
+    """A volume, read within the pixel limit, its estimate within the budget (a Zarr
+    store's voxel size from its OME-Zarr scale, unless a spacing is given)."""
+    if is_zarr(source):
+        voxels, stored = read_zarr(source, limits.max_pixels or MAX_VOLUME_VOXELS)
+        if stored is not None and volume == VolumeOptions():
+            volume = VolumeOptions(spacing=stored)
+        voxels = read_volume(voxels)  # the dims' and the dtype's checks
+    else:
+        voxels = read_volume(source, max_voxels=limits.max_pixels)
     answer_pixels = 0
     if answers is not None and "png" in answers:
         scale, answer_pixels = projections_scale(voxels.shape, output, limits.max_pixels)

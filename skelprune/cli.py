@@ -40,6 +40,7 @@ from .cli_options import (
     with_options,
 )
 from .errors import SkelpruneError
+from .io.zarr import is_zarr
 from .options import VolumeOptions
 
 # A command imports what it uses, in its own body: `--help` and `--version` load typer and
@@ -135,7 +136,7 @@ def prune_command(
     if not inputs:
         raise _usage("no PNG, TIFF, GeoJSON or .npy file given")
     spacing = None if volume == VolumeOptions() else volume
-    if len(inputs) == 1 and not files[0].is_dir():
+    if len(inputs) == 1 and not (files[0].is_dir() and not is_zarr(files[0])):
         answers = tuple(a for a, out in files_asked.items() if out is not None)
         try:
             res, answer = _prune(

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import SkelpruneError
+from .io.zarr import is_zarr
 from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions, VolumeOptions
 
 #: What a folder is searched for (any case).
@@ -100,7 +101,7 @@ def _prune_file(
 def _expand(paths: list[Path]) -> list[Path]:
     files: list[Path] = []
     for p in paths:
-        if p.is_dir():  # shape.PNG counts as much as shape.png
+        if p.is_dir() and not is_zarr(p):  # shape.PNG counts as much as shape.png
             files.extend(
                 sorted(
                     f for f in p.iterdir() if f.suffix.lower() in FOLDER_SUFFIXES and f.is_file()

@@ -27,7 +27,7 @@ from .errors import (
     InvalidOptionError,
     SkelpruneError,
 )
-from .options import OutputOptions, PruneOptions, ReadOptions, VolumeOptions
+from .options import OutputOptions, PruneOptions, VolumeOptions
 from .pruning.bayesian import pruning_sequence
 from .pruning.choice import chosen_step
 
@@ -42,7 +42,6 @@ __all__ = [
     "is_volume",
     "prune_volume",
     "read_volume",
-    "refuse_image_options",
     "volume_components",
 ]
 
@@ -61,10 +60,11 @@ NPY_MAGIC = b"\x93NUMPY"
 
 
 def is_volume(source: Any, spacing_given: bool = False) -> bool:
-    """Whether ``source`` is a volume: the path of a ``.npy`` file or of a multi-page TIFF
-    (a stack), or a 3-D array whose last axis is longer than an image's channels
-    (:data:`IMAGE_CHANNELS`), or any 3-D array when ``spacing_given`` (a ``(Z, Y, X)``
-    volume with ``X ≤ 4`` is read as a volume when ``spacing`` is given)."""
+    """Whether ``source`` is a volume: the path of a ``.npy`` file, of a multi-page TIFF
+    (a stack) or of a Zarr store (:mod:`skelprune.io.zarr`), or a 3-D array whose last
+    axis is longer than an image's channels (:data:`IMAGE_CHANNELS`), or any 3-D array
+    when ``spacing_given`` (a ``(Z, Y, X)`` volume with ``X ≤ 4`` is read as a volume
+    when ``spacing`` is given)."""
     if isinstance(source, np.ndarray):
         return source.ndim == 3 and (spacing_given or source.shape[-1] > IMAGE_CHANNELS)
     if isinstance(source, bytes | bytearray | memoryview):
@@ -74,6 +74,10 @@ def is_volume(source: Any, spacing_given: bool = False) -> bool:
         return head == NPY_MAGIC or (head[:2] in (b"II", b"MM") and tiff_pages(bytes(source)) > 1)
     if not isinstance(source, str | os.PathLike):
         return False
+    from .io.zarr import is_zarr
+
+    if is_zarr(source):
+        return True
     name = str(source).lower()
     if name.endswith(".npy"):
         return True
@@ -252,32 +256,29 @@ def _read_npy(path: str | os.PathLike[str], max_voxels: int) -> np.ndarray:
         raise InvalidImageError(f"cannot read {os.fspath(path)!r} as a .npy array: {exc}") from None
 
 
-def refuse_image_options(read: ReadOptions | None, output: OutputOptions) -> None:
-    """Refuse the options that hold for images only, given for a volume (what the service
-    and a data-set run answer for a volume).
+def _is_zarr(source: Any) -> bool:
+    from .io.zarr import is_zarr
 
-    Raises
-    ------
-    InvalidOptionError
-        Read options other than the defaults, or an ``overlay``, ``sequence`` or
-        ``overlay_legend`` asked of the document.
-    """
-    if read is not None and read != ReadOptions():
-        raise InvalidOptionError(
-            "read options (foreground, labels, fill_holes, min_area) apply to images; a "
-            "volume's non-zero voxels are its shapes, each label its own"
-        )
-    shown = [k for k in ("overlay", "sequence", "overlay_legend") if getattr(output, k)]
-    if shown:
-        raise InvalidOptionError(
-            f"option(s) {', '.join(shown)} apply to images; a volume's JSON document is its "
-            "graph, and its picture the image/png answer"
-        )
+    return is_zarr(source)
+
+
+def read_zarr(
+    source: str | os.PathLike[str], max_voxels: int = MAX_VOLUME_VOXELS
+) -> tuple[np.ndarray, tuple[float, float, float] | None]:
+    """A Zarr array or OME-Zarr image as an array, refused past ``max_voxels`` voxels
+    from its metadata (before any chunk is read), with its OME-Zarr voxel size (``None``
+    for a plain array)."""
+    from .io.zarr import open_zarr_volume
+
+    store = open_zarr_volume(source)
+    _within_limit(store.shape, max_voxels)
+    return store.read(), store.spacing
 
 
 def read_volume(source: Any, max_voxels: int | None = None) -> np.ndarray:
-    """A volume as an array: ``source`` itself, a ``.npy`` file (no pickles) or a
-    multi-page TIFF (its pages along ``z``), as a path or as the file's bytes; files of
+    """A volume as an array: ``source`` itself, a ``.npy`` file (no pickles), a
+    multi-page TIFF (its pages along ``z``) or a Zarr / OME-Zarr store (the
+    full-resolution level), as a path or, but for Zarr, as the file's bytes; files of
     more than ``max_voxels`` voxels (default :data:`MAX_VOLUME_VOXELS`) are refused from
     their header, and so are arrays when ``max_voxels`` is given.
 
@@ -297,6 +298,8 @@ def read_volume(source: Any, max_voxels: int | None = None) -> np.ndarray:
             from .io.tiff import read_tiff_stack
 
             arr = read_tiff_stack(data, max_voxels=limit)
+    elif _is_zarr(source):
+        arr, _ = read_zarr(source, limit)
     elif isinstance(source, str | os.PathLike) and str(source).lower().endswith(TIFF_SUFFIXES):
         arr = _read_stack(source, limit)
     elif isinstance(source, str | os.PathLike):
@@ -322,58 +325,33 @@ def volume_components(
     shape of its own).
 
     A label volume's components are each label's pieces, found inside the label's
-    bounding box (one pass over the volume finds every box), so that the work follows
-    the objects' sizes, not labels × voxels. Order: by label, then as
+    bounding box from the label's own voxels (one pass over the volume groups the
+    voxels by label, :mod:`skelprune.volume_labels`), so that the work follows the
+    labelled voxels, not labels × voxels. Order: by label, then as
     ``scipy.ndimage.label`` finds them.
 
     >>> v = np.zeros((3, 4, 5), np.int64); v[1, 1, 1:3] = 7; v[1, 2:4, 4] = 2
     >>> [(c.shape, o, lab) for c, o, lab in volume_components(v)]
     [((3, 4, 3), (0, 1, 3), 2), ((3, 3, 4), (0, 0, 0), 7)]
     """
-    from scipy import ndimage
-
     binary = volume.dtype == np.bool_ or not np.any((volume != 0) & (volume != 1))
-    if binary:
-        boxes: list[tuple[int | None, tuple[slice, ...]]] = [
-            (None, tuple(slice(0, n) for n in volume.shape))
-        ]
-    else:
-        boxes = list(_label_boxes(volume))
-    out = []
-    cube = np.ones((3, 3, 3), bool)
-    for value, box in boxes:
-        part = volume[box]
-        mask = part != 0 if value is None else part == value
-        lab, _ = ndimage.label(mask, structure=cube)
-        for i, piece in enumerate(ndimage.find_objects(lab), start=1):
-            if piece is None:
-                continue
-            crop = np.pad(lab[piece] == i, 1)
-            origin = (
-                box[0].start + piece[0].start - 1,
-                box[1].start + piece[1].start - 1,
-                box[2].start + piece[2].start - 1,
-            )
-            out.append((crop, origin, value))
-    return out
+    if not binary:
+        from .volume_labels import label_groups, label_pieces
 
-
-def _label_boxes(volume: np.ndarray) -> list[tuple[int, tuple[slice, ...]]]:
-    """Every non-zero value of a label volume with its bounding box, by value: one sort
-    and one pass (any integers: negative, or past int64 for uint64)."""
+        return list(label_pieces(label_groups(volume)))
     from scipy import ndimage
 
-    values, inverse = np.unique(volume, return_inverse=True)
-    dense = inverse.reshape(volume.shape).astype(np.intp) + 1
-    zero = int(np.searchsorted(values, 0))
-    if zero < len(values) and values[zero] == 0:
-        dense[dense == zero + 1] = 0
-    found = ndimage.find_objects(dense)
-    return [
-        (int(v), box)
-        for v, box in zip(values.tolist(), found, strict=False)
-        if v != 0 and box is not None
-    ]
+    from .grid3d.distance import pad
+
+    out: list[tuple[np.ndarray, tuple[int, int, int], int | None]] = []
+    lab, _ = ndimage.label(volume != 0, structure=np.ones((3, 3, 3), bool))
+    for i, piece in enumerate(ndimage.find_objects(lab), start=1):
+        if piece is None:
+            continue
+        crop = pad(lab[piece] == i)
+        origin = (piece[0].start - 1, piece[1].start - 1, piece[2].start - 1)
+        out.append((crop, origin, None))
+    return out
 
 
 def prune_volume_component(
@@ -405,11 +383,16 @@ def prune_volume(
     options: PruneOptions,
     volume_options: VolumeOptions,
     output: OutputOptions | None = None,
+    workers: int = 1,
+    client: Any = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> VolumeResult:
     """Prune every 26-connected component of a volume (what :func:`skelprune.prune` runs
-    for a 3-D array or a ``.npy`` path). ``progress(done, total)`` is called once the
-    components are found (``done=0``) and after each is pruned.
+    for a 3-D array, a ``.npy`` path, a TIFF stack or a Zarr store).
+
+    ``workers`` and ``client``: as :func:`skelprune.volume_parallel.prune_volume_labels`
+    takes them (default: in this process). ``progress(done, total)`` is called once the
+    components are found (``done=0``) and as each is pruned.
 
     Raises
     ------
@@ -429,10 +412,16 @@ def prune_volume(
             "scope='local' prunes an image window by window and holds for images only; a "
             "volume is pruned whole"
         )
-    volume = read_volume(source)
+    spacing = volume_options.spacing
+    if _is_zarr(source):
+        volume, stored = read_zarr(source)
+        if stored is not None and spacing == VolumeOptions().spacing:
+            spacing = stored  # OME-Zarr's scale, unless a spacing is given
+        volume = read_volume(volume)  # the dims and dtype checks
+    else:
+        volume = read_volume(source)
     if not volume.any():
         raise EmptyMaskError("the volume has no voxel inside")
-    spacing = volume_options.spacing
     from .output.volume import VolumeResult
 
     result = VolumeResult(
@@ -442,13 +431,22 @@ def prune_volume(
         output=OutputOptions() if output is None else output,
         volume=volume != 0,
     )
-    components = volume_components(volume)
-    if progress is not None:
-        progress(0, len(components))
-    for k, (crop, origin, label) in enumerate(components):
-        component = prune_volume_component(crop, origin, applied, spacing)
-        component.label = label
-        result.components.append(component)
-        if progress is not None:
-            progress(k + 1, len(components))
+    from .volume_parallel import prune_components
+
+    pieces = volume_components(volume)
+    tick = None if progress is None else _counted(progress, len(pieces))
+    result.components.extend(prune_components(pieces, applied, spacing, workers, client, tick))
     return result
+
+
+def _counted(progress: Callable[[int, int], None], total: int) -> Callable[[int], None]:
+    """``progress(done, total)`` told ``(0, total)`` now, and fed by ``tick(n)`` as ``n``
+    more components are done."""
+    progress(0, total)
+    done = [0]
+
+    def tick(n: int = 1) -> None:
+        done[0] += n
+        progress(done[0], total)
+
+    return tick

@@ -25,12 +25,14 @@ import numpy as np
 from numba import njit
 
 __all__ = [
+    "LabelVolume",
     "SweptShape",
     "ball",
     "linked_tori",
     "random_blobs",
     "random_tree",
     "torus",
+    "touching_trees",
     "tube",
     "y_tubes",
 ]
@@ -301,3 +303,67 @@ def _rotate(v: np.ndarray, axis: np.ndarray, angle: float) -> np.ndarray:
         + np.cross(axis, v) * math.sin(angle)
         + axis * float(axis @ v) * (1 - math.cos(angle))
     )
+
+
+@dataclass
+class LabelVolume:
+    """A label volume of touching objects with known centre lines.
+
+    Attributes
+    ----------
+    labels : (Z, Y, X) uint32 array
+        0 outside; each object its own value ``1 .. n``.
+    truth : SweptShape
+        Every object's centre lines and tips, in the volume's frame, keeping only the
+        centre points (and tips) whose voxel carries that object's label: where an object
+        runs into an earlier one it is cut there, and its centre line with it (the cut
+        is a tip: a free end of the object).
+    """
+
+    labels: np.ndarray
+    truth: SweptShape
+
+
+def touching_trees(
+    n: int, side: int = 256, seed: int = 0, tree_size: int | None = None
+) -> LabelVolume:
+    """``n`` small random trees (:func:`random_tree`, ``tree_size`` voxels a side,
+    default ``max(24, 2.4·side / n^(1/3))``) packed into a ``side``³ cube, each its own
+    label. Trees are placed at random corners, first come first served: a tree keeps only
+    the voxels no earlier tree holds, so neighbours touch along their cut faces."""
+    rng = np.random.default_rng(seed)
+    size = tree_size or max(24, round(2.4 * side / n ** (1 / 3)))
+    size = min(size, side)
+    labels = np.zeros((side, side, side), np.uint32)
+    lines: list[np.ndarray] = []
+    radii: list[np.ndarray] = []
+    tips: list[np.ndarray] = []
+    for k in range(n):
+        tree = random_tree(int(rng.integers(1 << 30)), size, depth=2)
+        mask = tree.volume()
+        corner = rng.integers(0, side - size + 1, 3)
+        box = tuple(slice(int(c), int(c) + size) for c in corner)
+        region = labels[box]
+        mine = mask & (region == 0)
+        region[mine] = k + 1
+        for line, r in zip(tree.lines, tree.radii, strict=True):
+            idx = np.rint(line).astype(np.int64).clip(0, size - 1)
+            keep = mine[idx[:, 0], idx[:, 1], idx[:, 2]]
+            # each run of kept points a line of its own
+            edges = np.flatnonzero(np.diff(np.concatenate([[0], keep.astype(np.int8), [0]])))
+            for a, b in zip(edges[::2], edges[1::2], strict=True):
+                lines.append(line[a:b] + corner)
+                radii.append(r[a:b])
+                # where an earlier tree cuts the line, the cut is a free end of this one
+                if a > 0:
+                    tips.append(line[a] + corner)
+                if b < len(line):
+                    tips.append(line[b - 1] + corner)
+        for t in tree.tips:
+            i = np.rint(t).astype(np.int64).clip(0, size - 1)
+            if mine[i[0], i[1], i[2]]:
+                tips.append(t + corner)
+    truth = SweptShape(
+        (side, side, side), (1.0, 1.0, 1.0), lines, radii, np.array(tips).reshape(-1, 3)
+    )
+    return LabelVolume(labels, truth)

@@ -2,9 +2,10 @@
 
 A voxel's **squared radius** ``r2`` is the squared physical distance from its centre to
 the centre of the nearest background voxel, ``(a·dz)² + (b·dy)² + (c·dx)²`` for the
-integer offsets ``(a, b, c)`` between them. The nearest background voxel comes from
-scipy's exact feature transform with ``sampling=spacing`` on the volume padded by one
-background voxel (so a volume touching its border works too), and ``r2`` is evaluated
+integer offsets ``(a, b, c)`` between them, on the volume padded by one background voxel
+(so a volume touching its border works too). For whole-number spacings it is found by
+an exact separable transform in integers; otherwise the nearest background voxel comes
+from scipy's exact feature transform with ``sampling=spacing``, and ``r2`` is evaluated
 with the same expression, in the same order, as the ball test of
 :mod:`skelprune.grid3d.balls`: a ball never covers the background voxel its
 radius was measured to.
@@ -69,7 +70,10 @@ def check_spacing(spacing: object) -> tuple[float, float, float]:
 def pad(volume: np.ndarray) -> np.ndarray:
     """``volume`` with one background voxel all around (the kernels look one voxel
     beyond every voxel inside without bounds checks)."""
-    return np.pad(volume, 1)
+    volume = np.asarray(volume)
+    out = np.zeros(tuple(n + 2 for n in volume.shape), volume.dtype)  # np.pad, faster
+    out[(slice(1, -1),) * volume.ndim] = volume
+    return out
 
 
 def squared_distance(
@@ -99,7 +103,18 @@ def squared_distance(
 
 
 def padded_squared_distance(padded: np.ndarray, spacing: tuple[float, float, float]) -> np.ndarray:
-    """:func:`squared_distance` of a volume already padded (bool, checked spacing)."""
+    """:func:`squared_distance` of a volume already padded (bool, checked spacing).
+
+    Whole-number spacings (the isotropic grid, ``(3, 1, 1)``...) take a separable exact
+    transform in integers (:func:`_integer_squared`): every squared distance is then a
+    whole number, the same whichever exact method finds it. Other spacings take scipy's
+    feature transform and the ball test's expression, so that values match bit for bit.
+    """
+    weights = [round(s * s) for s in spacing]
+    if all(float(s).is_integer() and s <= 1 << 10 for s in spacing):
+        out = np.empty(padded.shape, dtype=np.float64)
+        _integer_squared(np.ascontiguousarray(padded), np.array(weights, np.int64), out)
+        return out
     from scipy import ndimage
 
     # the feature transform only: scipy's distances would cost three float64 volumes more
@@ -125,3 +140,85 @@ def _squared_from_features(fg, fz, fy, fx, spacing, out) -> None:
                 b = (fy[z, y, x] - y) * sy
                 c = (fx[z, y, x] - x) * sx
                 out[z, y, x] = a * a + b * b + c * c
+
+
+@njit(cache=True)
+def _integer_squared(fg, weights, out) -> None:
+    """Exact squared distances in whole numbers, axis by axis (Meijster et al. 2000):
+    along ``z`` the nearest background voxel of the column, then along ``y`` and ``x``
+    the lower envelope of the parabolas ``w·(u − i)² + g(i)``, with integer separators.
+    The volume is padded: every line holds background, so every value is finite."""
+    nz, ny, nx = fg.shape
+    g = np.empty((nz, ny, nx), np.int64)
+    wz = weights[0]
+    for z in range(nz):  # down the columns, a plane at a time: the last background above
+        for y in range(ny):
+            for x in range(nx):
+                if not fg[z, y, x]:
+                    g[z, y, x] = 0
+                elif z == 0:
+                    g[z, y, x] = 1
+                else:
+                    g[z, y, x] = g[z - 1, y, x] + 1
+    for z in range(nz - 2, -1, -1):  # and up: the nearer of the two
+        for y in range(ny):
+            for x in range(nx):
+                if g[z + 1, y, x] + 1 < g[z, y, x]:
+                    g[z, y, x] = g[z + 1, y, x] + 1
+    for z in range(nz):
+        for y in range(ny):
+            for x in range(nx):
+                g[z, y, x] = wz * g[z, y, x] * g[z, y, x]
+    n = max(ny, nx)
+    line = np.empty(n, np.int64)
+    res = np.empty(n, np.int64)
+    s = np.empty(n, np.int64)
+    t = np.empty(n, np.int64)
+    for z in range(nz):  # a line of zeros stays zeros: crops are mostly background
+        for x in range(nx):
+            busy = False
+            for y in range(ny):
+                line[y] = g[z, y, x]
+                busy |= line[y] != 0
+            if not busy:
+                continue
+            _envelope(line, ny, weights[1], res, s, t)
+            for y in range(ny):
+                g[z, y, x] = res[y]
+        for y in range(ny):
+            busy = False
+            for x in range(nx):
+                line[x] = g[z, y, x]
+                busy |= line[x] != 0
+            if not busy:
+                for x in range(nx):
+                    out[z, y, x] = 0.0
+                continue
+            _envelope(line, nx, weights[2], res, s, t)
+            for x in range(nx):
+                out[z, y, x] = float(res[x]) if fg[z, y, x] else 0.0
+
+
+@njit(cache=True, inline="always")
+def _envelope(f, m, w, out, s, t) -> None:
+    """``out[u] = min_i w·(u − i)² + f[i]`` for ``u < m`` (exact, integers)."""
+    q = 0
+    s[0] = 0
+    t[0] = 0
+    for u in range(1, m):
+        while q >= 0 and w * (t[q] - s[q]) ** 2 + f[s[q]] > w * (t[q] - u) ** 2 + f[u]:
+            q -= 1
+        if q < 0:
+            q = 0
+            s[0] = u
+        else:
+            i = s[q]
+            sep = (w * (u * u - i * i) + f[u] - f[i]) // (2 * w * (u - i))
+            if sep + 1 < m:
+                q += 1
+                s[q] = u
+                t[q] = sep + 1
+    for u in range(m - 1, -1, -1):
+        out[u] = w * (u - s[q]) ** 2 + f[s[q]]
+        if u == t[q]:
+            q -= 1

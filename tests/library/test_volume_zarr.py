@@ -77,20 +77,6 @@ def test_ome_zarr_time_and_channel_axes_of_one_are_dropped(tmp_path: Path) -> No
         open_zarr_volume(path)
 
 
-def test_ome_zarr_from_the_ome_zarr_writer(tmp_path: Path) -> None:
-    writer = pytest.importorskip("ome_zarr.writer")
-    path = tmp_path / "written.zarr"
-    writer.write_image(
-        VOLUME,
-        zarr.open_group(str(path), mode="w"),
-        axes="zyx",
-        scale_factors=[2],
-        scale={"z": 3.0, "y": 1.0, "x": 1.0},
-    )
-    assert open_zarr_volume(path).spacing == (3.0, 1.0, 1.0)
-    assert _doc(skelprune.prune(path)) == _doc(skelprune.prune(VOLUME, spacing=(3, 1, 1)))
-
-
 def test_bad_stores_are_refused_clearly(tmp_path: Path) -> None:
     with pytest.raises(InvalidImageError, match="no such folder"):
         skelprune.prune(tmp_path / "missing.zarr")

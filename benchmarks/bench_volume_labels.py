@@ -6,7 +6,7 @@
    tubes packed into a ``side``³ cube, each its own label, touching where they meet,
    with known centre lines and tips. Cases ``SKELPRUNE_BENCH_LABEL_CASES`` (default
    ``256:100,256:300,512:2000``, ``side:n``). Each method runs in a fresh process on the
-   same ``.npy``: skelprune (:func:`skelprune.volume_parallel.prune_volume_labels`, default
+   same ``.npy``: skelprune (:func:`skelprune.volume.prune_volume_labels`, default
    options) and kimimaro (TEASAR, the parameters of :mod:`benchmarks.volume_methods`), on
    one process and on ``SKELPRUNE_BENCH_WORKERS`` (default 2; 1: one process only).
    Time is the median of ``SKELPRUNE_BENCH_REPEAT`` runs (default 1), reading the array
@@ -64,7 +64,7 @@ def _status_mb(field: str) -> float:
 
 
 def _skelprune(volume: np.ndarray, workers: int) -> tuple[np.ndarray, np.ndarray]:
-    from skelprune.volume_parallel import prune_volume_labels
+    from skelprune.volume import prune_volume_labels
 
     res = prune_volume_labels(volume, workers=workers)
     pts, labels = [], []

@@ -28,12 +28,10 @@ from .errors import (
     SkelpruneError,
 )
 from .options import OutputOptions, PruneOptions, VolumeOptions
-from .pruning.bayesian import pruning_sequence
-from .pruning.choice import chosen_step
 
 if TYPE_CHECKING:  # the volume grid is imported when a volume is pruned, not before
-    from .output.volume import VolumeComponent, VolumeResult
-from .pruning.margin import branch_margins
+    from .output.volume import VolumeResult
+    from .volume_parallel import Progress
 
 __all__ = [
     "IMAGE_CHANNELS",
@@ -41,6 +39,7 @@ __all__ = [
     "check_volume_size",
     "is_volume",
     "prune_volume",
+    "prune_volume_labels",
     "read_volume",
     "volume_components",
 ]
@@ -354,30 +353,6 @@ def volume_components(
     return out
 
 
-def prune_volume_component(
-    crop: np.ndarray,
-    origin: tuple[int, int, int],
-    options: PruneOptions,
-    spacing: tuple[float, float, float],
-) -> VolumeComponent:
-    """The curve skeleton of one padded component crop and its pruning."""
-    from .grid3d.skeleton import VolumeSkeleton
-    from .grid3d.tips import trim_volume_tips
-    from .output.volume import VolumeComponent
-
-    axis = VolumeSkeleton.curve_skeleton(crop, spacing, origin)
-    norm = axis.normalisation(options.beta)
-    seq = pruning_sequence(axis, norm.alpha, norm.lbar)
-    chosen = chosen_step(seq, options.choice, options.min_margin)
-    answer = seq.skeleton_at(chosen)
-    trim = None
-    if options.trim and seq.alpha is not None:
-        trim = trim_volume_tips(answer, seq.lost[chosen], seq.alpha, seq.lbar)
-        answer = trim.skeleton
-    margins = branch_margins(answer.graph, seq, chosen, trim)
-    return VolumeComponent(axis, answer, seq, chosen, margins, trim)
-
-
 def prune_volume(
     source: Any,
     options: PruneOptions,
@@ -390,7 +365,7 @@ def prune_volume(
     """Prune every 26-connected component of a volume (what :func:`skelprune.prune` runs
     for a 3-D array, a ``.npy`` path, a TIFF stack or a Zarr store).
 
-    ``workers`` and ``client``: as :func:`skelprune.volume_parallel.prune_volume_labels`
+    ``workers`` and ``client``: as :func:`skelprune.volume.prune_volume_labels`
     takes them (default: in this process). ``progress(done, total)`` is called once the
     components are found (``done=0``) and as each is pruned.
 
@@ -450,3 +425,67 @@ def _counted(progress: Callable[[int, int], None], total: int) -> Callable[[int]
         progress(done[0], total)
 
     return tick
+
+
+def prune_volume_labels(
+    source: Any,
+    options: PruneOptions | None = None,
+    volume: VolumeOptions | None = None,
+    output: OutputOptions | None = None,
+    *,
+    workers: int | None = None,
+    client: Any = None,
+    progress: bool | Callable[[int, int], None] = False,
+    **keywords: Any,
+) -> VolumeResult:
+    """Prune a (label) volume as :func:`skelprune.prune` does, its components in parallel.
+
+    Parameters
+    ----------
+    source
+        A 3-D array, a ``.npy`` file, a TIFF stack or a Zarr / OME-Zarr store.
+    options, volume, output, **keywords
+        As for :func:`skelprune.prune` (``spacing=``, ``beta=``, ...).
+    workers : int, optional
+        Worker processes on this machine (default: one a CPU core; 1: in this process).
+    client : dask.distributed.Client or str, optional
+        Prune on a Dask cluster instead (a client or a scheduler's address).
+    progress : bool or callable
+        ``True``: components done on stderr; a callable: ``progress(done, total)``, as
+        :func:`skelprune.prune` calls it.
+
+    Returns
+    -------
+    VolumeResult
+        The same components as :func:`skelprune.prune` gives, in the same order.
+
+    Examples
+    --------
+    >>> v = np.zeros((20, 20, 40), np.uint16); v[4:12, 4:12, 2:20] = 3; v[4:12, 4:12, 20:38] = 9
+    >>> res = prune_volume_labels(v, workers=2)
+    >>> [c.label for c in res.components]
+    [3, 9]
+    """
+    from .options import resolve_options, volume_value
+
+    if workers is not None and (type(workers) is not int or workers < 1):
+        raise InvalidOptionError(f"workers is a whole number >= 1, not {workers!r}")
+    volume = volume_value(volume, keywords) or VolumeOptions()
+    opts, _, _, out = resolve_options(options, None, None, output, keywords)
+    n = workers or os.cpu_count() or 1
+    shown = _on_stderr() if progress is True else (progress or None)
+    return prune_volume(source, opts, volume, out, workers=n, client=client, progress=shown)
+
+
+def _on_stderr() -> Callable[[int, int], None]:
+    """``progress(done, total)`` drawn by a :class:`Progress` on stderr."""
+    from .volume_parallel import Progress
+
+    bars: list[Progress] = []
+
+    def show(done: int, total: int) -> None:
+        if not bars:
+            bars.append(Progress(total))
+        bars[0](done - bars[0].done)
+
+    return show

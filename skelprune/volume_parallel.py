@@ -10,7 +10,6 @@ map it runs.
 from __future__ import annotations
 
 import multiprocessing as mp
-import os
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -19,13 +18,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .errors import InvalidOptionError
-from .options import OutputOptions, PruneOptions, VolumeOptions
+from .options import PruneOptions
 
 if TYPE_CHECKING:
-    from .output.volume import VolumeComponent, VolumeResult
+    from .output.volume import VolumeComponent
 
-__all__ = ["Progress", "prune_components", "prune_volume_labels"]
+__all__ = ["Progress", "prune_components", "prune_volume_component"]
 
 Piece = tuple[np.ndarray, tuple[int, int, int], "int | None"]
 
@@ -53,11 +51,36 @@ class Progress:
             self.stream.flush()
 
 
+def prune_volume_component(
+    crop: np.ndarray,
+    origin: tuple[int, int, int],
+    options: PruneOptions,
+    spacing: tuple[float, float, float],
+) -> VolumeComponent:
+    """The curve skeleton of one padded component crop and its pruning."""
+    from .grid3d.skeleton import VolumeSkeleton
+    from .grid3d.tips import trim_volume_tips
+    from .output.volume import VolumeComponent
+    from .pruning.bayesian import pruning_sequence
+    from .pruning.choice import chosen_step
+    from .pruning.margin import branch_margins
+
+    axis = VolumeSkeleton.curve_skeleton(crop, spacing, origin)
+    norm = axis.normalisation(options.beta)
+    seq = pruning_sequence(axis, norm.alpha, norm.lbar)
+    chosen = chosen_step(seq, options.choice, options.min_margin)
+    answer = seq.skeleton_at(chosen)
+    trim = None
+    if options.trim and seq.alpha is not None:
+        trim = trim_volume_tips(answer, seq.lost[chosen], seq.alpha, seq.lbar)
+        answer = trim.skeleton
+    margins = branch_margins(answer.graph, seq, chosen, trim)
+    return VolumeComponent(axis, answer, seq, chosen, margins, trim)
+
+
 def _prune_batch(
     batch: Sequence[Piece], options: PruneOptions, spacing: tuple[float, float, float]
 ) -> list[VolumeComponent]:
-    from .volume import prune_volume_component
-
     out = []
     for crop, origin, label in batch:
         component = prune_volume_component(crop, origin, options, spacing)
@@ -88,7 +111,7 @@ def prune_components(
     client: Any = None,
     progress: Callable[[int], None] | None = None,
 ) -> list[VolumeComponent]:
-    """Each piece pruned (:func:`skelprune.volume.prune_volume_component`), in order.
+    """Each piece pruned (:func:`prune_volume_component`), in order.
 
     ``workers > 1``: in a pool of that many processes; ``client``: a
     ``dask.distributed.Client`` (or a scheduler's address), each batch of pieces a task.
@@ -138,66 +161,3 @@ def prune_components(
                 if progress is not None:
                     progress(len(batches[i]))
     return [c for batch in results for c in batch]
-
-
-def prune_volume_labels(
-    source: Any,
-    options: PruneOptions | None = None,
-    volume: VolumeOptions | None = None,
-    output: OutputOptions | None = None,
-    *,
-    workers: int | None = None,
-    client: Any = None,
-    progress: bool | Callable[[int, int], None] = False,
-    **keywords: Any,
-) -> VolumeResult:
-    """Prune a (label) volume as :func:`skelprune.prune` does, its components in parallel.
-
-    Parameters
-    ----------
-    source
-        A 3-D array, a ``.npy`` file, a TIFF stack or a Zarr / OME-Zarr store.
-    options, volume, output, **keywords
-        As for :func:`skelprune.prune` (``spacing=``, ``beta=``, ...).
-    workers : int, optional
-        Worker processes on this machine (default: one a CPU core; 1: in this process).
-    client : dask.distributed.Client or str, optional
-        Prune on a Dask cluster instead (a client or a scheduler's address).
-    progress : bool or callable
-        ``True``: components done on stderr; a callable: ``progress(done, total)``, as
-        :func:`skelprune.prune` calls it.
-
-    Returns
-    -------
-    VolumeResult
-        The same components as :func:`skelprune.prune` gives, in the same order.
-
-    Examples
-    --------
-    >>> v = np.zeros((20, 20, 40), np.uint16); v[4:12, 4:12, 2:20] = 3; v[4:12, 4:12, 20:38] = 9
-    >>> res = prune_volume_labels(v, workers=2)
-    >>> [c.label for c in res.components]
-    [3, 9]
-    """
-    from .options import resolve_options, volume_value
-    from .volume import prune_volume
-
-    if workers is not None and (type(workers) is not int or workers < 1):
-        raise InvalidOptionError(f"workers is a whole number >= 1, not {workers!r}")
-    volume = volume_value(volume, keywords) or VolumeOptions()
-    opts, _, _, out = resolve_options(options, None, None, output, keywords)
-    n = workers or os.cpu_count() or 1
-    shown = _on_stderr() if progress is True else (progress or None)
-    return prune_volume(source, opts, volume, out, workers=n, client=client, progress=shown)
-
-
-def _on_stderr() -> Callable[[int, int], None]:
-    """``progress(done, total)`` drawn by a :class:`Progress` on stderr."""
-    bars: list[Progress] = []
-
-    def show(done: int, total: int) -> None:
-        if not bars:
-            bars.append(Progress(total))
-        bars[0](done - bars[0].done)
-
-    return show

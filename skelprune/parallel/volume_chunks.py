@@ -63,7 +63,7 @@ def _prune_labels(
 
     from ..grid3d.distance import pad
     from ..io.zarr import open_zarr_volume
-    from ..volume import prune_volume_component
+    from ..volume_parallel import prune_volume_component
 
     store = open_zarr_volume(path)
     cube = np.ones((3, 3, 3), bool)

@@ -14,9 +14,9 @@ from scipy import ndimage
 import skelprune
 from skelprune.errors import InvalidOptionError
 from skelprune.grid3d.distance import _squared_from_features, pad, padded_squared_distance
-from skelprune.volume import volume_components
+from skelprune.volume import prune_volume_labels, volume_components
 from skelprune.volume_labels import label_groups
-from skelprune.volume_parallel import Progress, prune_volume_labels
+from skelprune.volume_parallel import Progress
 from testkit.volumes import touching_trees
 
 

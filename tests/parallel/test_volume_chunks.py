@@ -12,7 +12,7 @@ import pytest
 import skelprune
 from skelprune.errors import ImageTooLargeError
 from skelprune.parallel.volume_chunks import prune_zarr_chunked
-from skelprune.volume_parallel import prune_volume_labels
+from skelprune.volume import prune_volume_labels
 from testkit.daskcluster import dask_cluster
 from testkit.volumes import touching_trees
 

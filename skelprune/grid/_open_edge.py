@@ -65,20 +65,42 @@ def open_edge(
     from ..pruning.choice import noise_depth
 
     depth = 2 + math.ceil(noise_depth(boundary_roughness(crop), 1.0))
-    band = crop & ndimage.binary_dilation(outside, np.ones((3, 3), bool), iterations=depth)
+    # within ``depth`` steps (8-connected) of the crop's outside rows and columns: the
+    # outside is whole rows and whole columns, so the steps are a row's or a column's gap
+    band = crop & (
+        (_gap(rows, image_shape[0]) <= depth)[:, None]
+        | (_gap(cols, image_shape[1]) <= depth)[None, :]
+    )
     runs, n = ndimage.label(band, np.ones((3, 3), bool))
     keep = np.zeros(n + 1, bool)
     for k, box in enumerate(ndimage.find_objects(runs), start=1):
-        run = runs == k
-        mouth = edge & ndimage.binary_dilation(run, np.ones((3, 3), bool))
+        # the run's mouth lies within a pixel of its box: read there, not over the crop
+        near = (
+            slice(max(box[0].start - 1, 0), box[0].stop + 1),
+            slice(max(box[1].start - 1, 0), box[1].stop + 1),
+        )
+        run = runs[near] == k
+        mouth = edge[near] & ndimage.binary_dilation(run, np.ones((3, 3), bool))
         if not mouth.any():
             continue
         length = max(box[0].stop - box[0].start, box[1].stop - box[1].start)
-        r = math.sqrt(float(far[mouth].max()))
+        r = math.sqrt(float(far[near][mouth].max()))
         keep[k] = length <= 2.0 * math.sqrt(2.0) * r + 2.0
     accepted = ndimage.binary_dilation(keep[runs], np.ones((3, 3), bool))
     edge = edge & accepted
     return edge if edge.any() else None
+
+
+def _gap(index: np.ndarray, size: int) -> np.ndarray:
+    """Each of a crop's rows (columns), given by its index in the image, its distance to
+    the crop's nearest row (column) outside the image: 0 outside, a large number where
+    the crop holds none."""
+    far = np.full(index.shape, np.iinfo(np.int64).max // 2, np.int64)
+    if index[0] < 0:
+        far = np.minimum(far, index + 1)
+    if index[-1] >= size:
+        far = np.minimum(far, size - index)
+    return far.clip(0)
 
 
 def open_extension(shape: np.ndarray, edge: np.ndarray) -> tuple[np.ndarray, int]:

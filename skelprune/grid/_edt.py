@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["squared_distance"]
+__all__ = ["lower_envelope", "squared_distance"]
 
 
 def squared_distance(padded: np.ndarray) -> np.ndarray:
@@ -58,29 +58,39 @@ def _squared_edt(fg: np.ndarray) -> np.ndarray:
             if out[y + 1, x] + 1 < out[y, x]:
                 out[y, x] = out[y + 1, x] + 1
     g = np.empty(w, dtype=np.int64)
-    s = np.empty(w, dtype=np.int64)  # columns whose parabola is on the envelope
-    t = np.empty(w, dtype=np.int64)  # where each starts to be the lowest
+    s = np.empty(w, dtype=np.int64)
+    t = np.empty(w, dtype=np.int64)
     for y in range(h):
         for x in range(w):
             g[x] = out[y, x] * out[y, x]
-        q = 0
-        s[0] = 0
-        t[0] = 0
-        for u in range(1, w):
-            while q >= 0 and (t[q] - s[q]) ** 2 + g[s[q]] > (t[q] - u) ** 2 + g[u]:
-                q -= 1
-            if q < 0:
-                q = 0
-                s[0] = u
-            else:
-                i = s[q]
-                sep = 1 + (u * u - i * i + g[u] - g[i]) // (2 * (u - i))
-                if sep < w:
-                    q += 1
-                    s[q] = u
-                    t[q] = sep
-        for u in range(w - 1, -1, -1):
-            out[y, u] = (u - s[q]) ** 2 + g[s[q]]
-            if u == t[q]:
-                q -= 1
+        lower_envelope(g, w, 1, out[y], s, t)
     return out
+
+
+@njit(cache=True, inline="always")
+def lower_envelope(f, m, w, out, s, t) -> None:
+    """``out[u] = min_i w·(u − i)² + f[i]`` for ``u < m``, exact in integers: the lower
+    envelope of the parabolas rooted at each ``i`` (Felzenszwalb & Huttenlocher), the row
+    pass of both grids' distance transforms. ``s`` holds the parabolas on the envelope,
+    ``t`` where each starts to be the lowest; ``out`` must not be ``f``.
+    """
+    q = 0
+    s[0] = 0
+    t[0] = 0
+    for u in range(1, m):
+        while q >= 0 and w * (t[q] - s[q]) ** 2 + f[s[q]] > w * (t[q] - u) ** 2 + f[u]:
+            q -= 1
+        if q < 0:
+            q = 0
+            s[0] = u
+        else:
+            i = s[q]
+            sep = (w * (u * u - i * i) + f[u] - f[i]) // (2 * w * (u - i))
+            if sep + 1 < m:
+                q += 1
+                s[q] = u
+                t[q] = sep + 1
+    for u in range(m - 1, -1, -1):
+        out[u] = w * (u - s[q]) ** 2 + f[s[q]]
+        if u == t[q]:
+            q -= 1

@@ -19,6 +19,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import EmptyMaskError, InvalidImageError, InvalidOptionError
+from ..grid._edt import lower_envelope
 
 __all__ = [
     "check_spacing",
@@ -182,7 +183,7 @@ def _integer_squared(fg, weights, out) -> None:
                 busy |= line[y] != 0
             if not busy:
                 continue
-            _envelope(line, ny, weights[1], res, s, t)
+            lower_envelope(line, ny, weights[1], res, s, t)
             for y in range(ny):
                 g[z, y, x] = res[y]
         for y in range(ny):
@@ -194,31 +195,6 @@ def _integer_squared(fg, weights, out) -> None:
                 for x in range(nx):
                     out[z, y, x] = 0.0
                 continue
-            _envelope(line, nx, weights[2], res, s, t)
+            lower_envelope(line, nx, weights[2], res, s, t)
             for x in range(nx):
                 out[z, y, x] = float(res[x]) if fg[z, y, x] else 0.0
-
-
-@njit(cache=True, inline="always")
-def _envelope(f, m, w, out, s, t) -> None:
-    """``out[u] = min_i w·(u − i)² + f[i]`` for ``u < m`` (exact, integers)."""
-    q = 0
-    s[0] = 0
-    t[0] = 0
-    for u in range(1, m):
-        while q >= 0 and w * (t[q] - s[q]) ** 2 + f[s[q]] > w * (t[q] - u) ** 2 + f[u]:
-            q -= 1
-        if q < 0:
-            q = 0
-            s[0] = u
-        else:
-            i = s[q]
-            sep = (w * (u * u - i * i) + f[u] - f[i]) // (2 * w * (u - i))
-            if sep + 1 < m:
-                q += 1
-                s[q] = u
-                t[q] = sep + 1
-    for u in range(m - 1, -1, -1):
-        out[u] = w * (u - s[q]) ** 2 + f[s[q]]
-        if u == t[q]:
-            q -= 1

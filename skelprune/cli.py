@@ -24,7 +24,6 @@ from typing import Annotated, Any
 import typer
 from typer.exceptions import TyperException
 
-from .cli_files import FOLDER_SUFFIXES as FOLDER_SUFFIXES  # importable from here too
 from .cli_files import PROGRESS_AFTER as PROGRESS_AFTER  # importable from here too
 from .cli_files import _expand, _prune, _prune_file
 from .cli_geo import register as register_geo
@@ -40,6 +39,7 @@ from .cli_options import (
     with_options,
 )
 from .errors import SkelpruneError
+from .io.folder import FOLDER_SUFFIXES as FOLDER_SUFFIXES  # importable from here too
 from .io.zarr import is_zarr
 from .options import VolumeOptions
 

@@ -11,11 +11,9 @@ from pathlib import Path
 from typing import Any
 
 from .errors import SkelpruneError
+from .io.folder import folder_inputs
 from .io.zarr import is_zarr
 from .options import OutputOptions, PruneOptions, RasterOptions, ReadOptions, VolumeOptions
-
-#: What a folder is searched for (any case).
-FOLDER_SUFFIXES = (".png", ".gif", ".geojson", ".tif", ".tiff", ".npy")
 
 
 def _prune(
@@ -101,12 +99,8 @@ def _prune_file(
 def _expand(paths: list[Path]) -> list[Path]:
     files: list[Path] = []
     for p in paths:
-        if p.is_dir() and not is_zarr(p):  # shape.PNG counts as much as shape.png
-            files.extend(
-                sorted(
-                    f for f in p.iterdir() if f.suffix.lower() in FOLDER_SUFFIXES and f.is_file()
-                )
-            )
+        if p.is_dir() and not is_zarr(p):
+            files.extend(folder_inputs(p))
         else:
             files.append(p)
     return files

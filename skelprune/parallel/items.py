@@ -21,13 +21,16 @@ from typing import Any
 import numpy as np
 
 from ..errors import InvalidImageError, InvalidOptionError
+from ..io.folder import FOLDER_SUFFIXES, folder_inputs
+from ..io.zarr import is_zarr
 from ..volume import is_volume
 
 __all__ = ["FILE_SUFFIXES", "Item", "Labels", "expand"]
 
-#: What a folder is searched for, any case (a ``.npy`` or a multi-page TIFF is a volume);
-#: a file named as such, or a glob's match, is taken whatever its ending.
-FILE_SUFFIXES = (".png", ".gif", ".geojson", ".json", ".tif", ".tiff", ".npy")
+#: What a folder is searched for besides :data:`~skelprune.io.folder.FOLDER_SUFFIXES`
+#: (a run's output folder holds its own ``.json`` documents, not in it); a file named as
+#: such, or a glob's match, is taken whatever its ending.
+FILE_SUFFIXES = (*FOLDER_SUFFIXES, ".json")
 #: Names no input may take: the run's own files under ``out``.
 RESERVED = ("problems",)
 _UNSAFE = re.compile(r"[^\w.+-]+")
@@ -138,14 +141,14 @@ def _safe(name: str) -> str:
 
 
 def _files(pattern: str) -> list[Path]:
-    """A folder's files of :data:`FILE_SUFFIXES`, a glob's matches, or the path itself."""
+    """A folder's inputs (files of :data:`FILE_SUFFIXES`, Zarr stores), a glob's matches,
+    or the path itself (a Zarr store: one input)."""
     path = Path(pattern)
-    if path.is_dir():
-        return sorted(
-            f for f in path.iterdir() if f.is_file() and f.suffix.lower() in FILE_SUFFIXES
-        )
+    if path.is_dir() and not is_zarr(path):
+        return folder_inputs(path, also=(".json",))
     if glob.has_magic(pattern):
-        return sorted(Path(p) for p in glob.glob(pattern, recursive=True) if Path(p).is_file())
+        found = (Path(p) for p in glob.glob(pattern, recursive=True))
+        return sorted(p for p in found if p.is_file() or is_zarr(p))
     return [path]
 
 

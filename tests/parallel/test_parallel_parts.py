@@ -47,6 +47,17 @@ def test_files_folders_and_globs_are_named_after_the_files(tmp_path: Path) -> No
     assert names({"first": tmp_path / "a" / "x.png"}) == ["first"]
 
 
+def test_a_zarr_store_is_one_input_alone_in_a_folder_or_a_glob(tmp_path: Path) -> None:
+    for store in ("cells.zarr", "plain"):  # a store by its name, or by its metadata
+        (tmp_path / store).mkdir()
+        (tmp_path / store / ".zarray").write_text("{}")
+    (tmp_path / "notes").mkdir()  # any other folder is no input
+    (tmp_path / "x.png").write_bytes(b"")
+    assert names(tmp_path / "cells.zarr") == ["cells"]
+    assert names(tmp_path) == ["cells", "plain", "x"]
+    assert names(str(tmp_path / "*")) == ["cells", "plain", "x"]
+
+
 def test_arrays_are_numbered_and_mappings_named() -> None:
     m = np.ones((4, 4), bool)
     assert names([m, m, m]) == ["0000", "0001", "0002"]

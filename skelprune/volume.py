@@ -308,7 +308,15 @@ def read_volume(source: Any, max_voxels: int | None = None) -> np.ndarray:
         if max_voxels is not None:
             _within_limit(arr.shape, max_voxels)
     if arr.ndim != 3:
-        raise InvalidImageError(f"a volume is a 3-D array; this one has {arr.ndim} dimensions")
+        hint = ""
+        if arr.ndim == 2 and not isinstance(source, np.ndarray):  # a mask saved with numpy
+            hint = (
+                " (a .npy file is read as a volume; for a 2-D image pass the array itself, "
+                "numpy.load(path), or save it as a PNG or TIFF)"
+            )
+        raise InvalidImageError(
+            f"a volume is a 3-D array; this one has {arr.ndim} dimensions{hint}"
+        )
     if not (arr.dtype == np.bool_ or np.issubdtype(arr.dtype, np.integer)):
         raise InvalidImageError(
             f"a volume holds booleans or integer labels, not {arr.dtype} values"

@@ -173,6 +173,14 @@ def test_a_valid_npy_volume_is_still_read() -> None:
     assert check_volume_size(npy_bytes(v), 60) == (3, 4, 5)
 
 
+def test_a_2d_npy_file_is_told_how_to_be_read_as_an_image() -> None:
+    flat = npy_bytes(np.ones((4, 5), bool))
+    with pytest.raises(InvalidImageError, match=r"2 dimensions \(a .npy file is read as a vol"):
+        read_volume(flat, 1000)
+    with pytest.raises(InvalidImageError, match=r"this one has 2 dimensions$"):
+        read_volume(np.ones((4, 5), bool))  # an array is told only what it is
+
+
 # ------------------------------------------------------------------ GeoTIFF and CRSs
 KEYS = [1, 1, 0, 2, 1024, 0, 1, 1, 3072, 0, 1]
 

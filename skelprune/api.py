@@ -212,7 +212,21 @@ def _prune_volume(
     progress: Callable[[int, int], None] | None = None,
 ) -> VolumeResult:
     """A volume, read within the pixel limit, its estimate within the budget (a Zarr
-    store's voxel size from its OME-Zarr scale, unless a spacing is given)."""
+    store's voxel size from its OME-Zarr scale, unless a spacing is given). A Zarr store
+    pruned inside a Dask task (as ``prune_many`` runs it on a cluster) is pruned chunk by
+    chunk on that cluster instead, never whole in one worker."""
+    if is_zarr(source) and (cluster := _task_cluster()) is not None:
+        from .parallel.volume_chunks import MAX_BOX_VOXELS, prune_zarr_chunked
+
+        with cluster as client:  # the task's slot is given back while its tasks run
+            return prune_zarr_chunked(
+                source,
+                client,
+                options,
+                volume,
+                output,
+                max_box_voxels=min(MAX_BOX_VOXELS, limits.max_pixels or MAX_BOX_VOXELS),
+            )
     if is_zarr(source):
         voxels, stored = read_zarr(source, limits.max_pixels or MAX_VOLUME_VOXELS)
         if stored is not None and volume == VolumeOptions():
@@ -228,6 +242,20 @@ def _prune_volume(
         volume_estimate(voxels, answer_pixels), limits.memory, limits.seconds, VOLUME_BASIS
     )
     return prune_volume(voxels, options, volume, output, progress=progress)
+
+
+def _task_cluster() -> Any:
+    """A client of the Dask cluster running this call as a task (a context manager), or
+    None outside a Dask worker."""
+    try:
+        from distributed import get_worker, worker_client
+    except ImportError:
+        return None
+    try:
+        get_worker()
+    except ValueError:  # not in a worker
+        return None
+    return worker_client()
 
 
 def prune_input(

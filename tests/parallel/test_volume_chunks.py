@@ -4,6 +4,7 @@ store pruned chunk by chunk, give the answer of the whole array pruned in one pr
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +18,7 @@ from testkit.daskcluster import dask_cluster
 from testkit.volumes import touching_trees
 
 zarr = pytest.importorskip("zarr")  # the zarr extra
+distributed = pytest.importorskip("distributed")  # the parallel extra
 
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(900)]
 
@@ -50,3 +52,26 @@ def test_chunks_and_tasks_on_dask_give_the_whole_arrays_answer(tmp_path: Path) -
     assert sum(done) == 12  # every label once
     assert np.array_equal(chunked.volume, labels != 0)
     assert _doc(chunked_binary) == _doc(whole_binary)
+
+
+def test_prune_many_prunes_a_zarr_store_chunk_by_chunk_on_its_cluster(tmp_path: Path) -> None:
+    from skelprune.limits import DATASET_LIMITS
+    from skelprune.parallel import prune_many
+
+    labels = touching_trees(8, 48, seed=4).labels
+    path = _store(tmp_path / "in" / "cells.zarr", labels)
+    out = tmp_path / "out"
+    small = replace(DATASET_LIMITS, max_pixels=1000)
+    with dask_cluster(tmp_path / "dask", workers=2) as address:
+        (done,) = prune_many(tmp_path / "in", client=address, out=out, files=("csv",))
+        (refused,) = prune_many(path, client=address, limits=small)
+        with distributed.Client(address) as client:  # what ran: the chunked path's tasks
+            ran = client.run_on_scheduler(lambda dask_scheduler: set(dask_scheduler.task_prefixes))
+    whole = skelprune.prune(path)
+    assert done.status == "done"
+    assert (out / "cells.json").read_bytes() == skelprune.encode(whole, "json") + b"\n"
+    assert (out / "cells.csv").read_bytes() == skelprune.encode(whole, "csv")
+    assert {"chunk_labels", "prune_labels"} <= ran  # (dask drops the leading _)
+    # a label's box, not the whole volume, is held to the run's size limit
+    assert refused.status == "failed" and refused.problem["kind"] == "image-too-large"
+    assert "max_box_voxels=1000" in refused.problem["detail"]

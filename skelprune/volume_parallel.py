@@ -14,7 +14,7 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
@@ -23,9 +23,17 @@ from .options import PruneOptions
 if TYPE_CHECKING:
     from .output.volume import VolumeComponent
 
-__all__ = ["Progress", "prune_components", "prune_volume_component"]
+__all__ = [
+    "Progress",
+    "in_batches",
+    "map_batches",
+    "prune_components",
+    "prune_volume_component",
+]
 
 Piece = tuple[np.ndarray, tuple[int, int, int], "int | None"]
+T = TypeVar("T")
+R = TypeVar("R")
 
 
 class Progress:
@@ -89,18 +97,63 @@ def _prune_batch(
     return out
 
 
-def _batches(pieces: Sequence[Piece], target_voxels: int) -> list[list[Piece]]:
-    """Consecutive pieces in batches of about ``target_voxels`` crop voxels: small
-    labels travel together, so a task's overhead is paid per batch."""
-    out: list[list[Piece]] = []
+def in_batches(items: Sequence[T], sizes: Sequence[int], target: int) -> list[list[T]]:
+    """Consecutive items in batches of about ``target`` in size (``sizes``, each item's):
+    small items travel together, so a task's overhead is paid per batch.
+
+    >>> in_batches("abcde", [3, 1, 1, 4, 1], 2)
+    [['a'], ['b', 'c'], ['d'], ['e']]
+    """
+    out: list[list[T]] = []
     size = 0
-    for piece in pieces:
-        if not out or size >= target_voxels:
+    for item, n in zip(items, sizes, strict=True):
+        if not out or size >= target:
             out.append([])
             size = 0
-        out[-1].append(piece)
-        size += piece[0].size
+        out[-1].append(item)
+        size += n
     return out
+
+
+def map_batches(
+    fn: Callable[..., list[R]],
+    batches: Sequence[Sequence[Any]],
+    args: tuple[Any, ...],
+    *,
+    client: Any = None,
+    workers: int = 1,
+    progress: Callable[[int], None] | None = None,
+) -> list[R]:
+    """``fn(batch, *args)`` for every batch, each a task: on ``client`` (a
+    ``dask.distributed.Client`` or a scheduler's address) or on a pool of ``workers``
+    processes; the results joined in the batches' order, ``progress(len(batch))`` as
+    each batch finishes."""
+    if client is not None:
+        from dask.distributed import Client, as_completed
+
+        own = isinstance(client, str)
+        executor: Any = Client(client) if own else client
+        options: dict[str, Any] = {"pure": False}
+        close = executor.close if own else (lambda: None)
+    else:
+        from concurrent.futures import as_completed  # type: ignore[assignment]
+
+        # fork where there is one: the workers start with the kernels already loaded
+        method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
+        executor = ProcessPoolExecutor(workers, mp_context=mp.get_context(method))
+        options = {}
+        close = executor.shutdown
+    results: list[list[R]] = [[] for _ in batches]
+    try:
+        futures = {executor.submit(fn, b, *args, **options): i for i, b in enumerate(batches)}
+        for fut in as_completed(futures):
+            i = futures[fut]
+            results[i] = fut.result()
+            if progress is not None:
+                progress(len(batches[i]))
+    finally:
+        close()
+    return [r for batch in results for r in batch]
 
 
 def prune_components(
@@ -126,38 +179,7 @@ def prune_components(
         return out
     total = sum(p[0].size for p in pieces)
     parts = max(1, 8 * (workers if client is None else 4))
-    batches = _batches(pieces, max(total // parts, 1))
-    results: list[list[VolumeComponent]] = [[] for _ in batches]
-    if client is not None:
-        from dask.distributed import Client, as_completed
-
-        own = isinstance(client, str)
-        dask_client = Client(client) if own else client
-        try:
-            futures = {
-                dask_client.submit(_prune_batch, b, options, spacing, pure=False): i
-                for i, b in enumerate(batches)
-            }
-            for fut in as_completed(futures):
-                i = futures[fut]
-                results[i] = fut.result()
-                if progress is not None:
-                    progress(len(batches[i]))
-        finally:
-            if own:
-                dask_client.close()
-    else:
-        # fork where there is one: the workers start with the kernels already loaded
-        method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
-        with ProcessPoolExecutor(workers, mp_context=mp.get_context(method)) as pool:
-            jobs = {
-                pool.submit(_prune_batch, b, options, spacing): i for i, b in enumerate(batches)
-            }
-            from concurrent.futures import as_completed as done_first
-
-            for fut in done_first(jobs):
-                i = jobs[fut]
-                results[i] = fut.result()
-                if progress is not None:
-                    progress(len(batches[i]))
-    return [c for batch in results for c in batch]
+    batches = in_batches(pieces, [p[0].size for p in pieces], max(total // parts, 1))
+    return map_batches(
+        _prune_batch, batches, (options, spacing), client=client, workers=workers, progress=progress
+    )

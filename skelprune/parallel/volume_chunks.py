@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import EmptyMaskError, ImageTooLargeError, InvalidOptionError
 from ..options import OutputOptions, PruneOptions, VolumeOptions
+from ..volume_parallel import in_batches, map_batches
 
 if TYPE_CHECKING:
     from ..output.volume import VolumeResult
@@ -52,8 +53,8 @@ def _chunk_labels(path: str, box: tuple[slice, slice, slice]) -> tuple[np.ndarra
 
 
 def _prune_labels(
-    path: str,
     labels: list[tuple[int, tuple[int, ...]]],
+    path: str,
     options: PruneOptions,
     spacing: tuple[float, float, float],
     binary: bool,
@@ -146,7 +147,7 @@ def prune_zarr_chunked(
     EmptyMaskError
         No voxel inside.
     """
-    from dask.distributed import Client, as_completed
+    from dask.distributed import Client
 
     from ..io.zarr import chunk_boxes, open_zarr_volume
     from ..output.volume import VolumeResult
@@ -181,24 +182,16 @@ def prune_zarr_chunked(
         n_workers = max(len(dask_client.scheduler_info().get("workers", {})), 1)
         total = sum(b[6] for b in merged.values())
         target = min(batch_voxels, max(total // (4 * n_workers), 1))
-        batches: list[list[tuple[int, tuple[int, ...]]]] = [[]]
-        size = 0
-        for v in sorted(merged):
-            if size >= target:
-                batches.append([])
-                size = 0
-            batches[-1].append((v, tuple(merged[v][:6])))
-            size += merged[v][6]
-        futures = {
-            dask_client.submit(_prune_labels, where, b, applied, spacing, binary, pure=False): i
-            for i, b in enumerate(batches)
-        }
-        results: list[list[Any]] = [[] for _ in batches]
-        for fut in as_completed(futures):
-            i = futures[fut]
-            results[i] = fut.result()
-            if progress is not None:
-                progress(len(batches[i]))
+        order = sorted(merged)
+        labels = [(v, tuple(merged[v][:6])) for v in order]
+        batches = in_batches(labels, [merged[v][6] for v in order], target)
+        components = map_batches(
+            _prune_labels,
+            batches,
+            (where, applied, spacing, binary),
+            client=dask_client,
+            progress=progress,
+        )
     finally:
         if own:
             dask_client.close()
@@ -212,5 +205,5 @@ def prune_zarr_chunked(
         output=OutputOptions() if output is None else output,
         volume=mask,
     )
-    result.components.extend(c for batch in results for c in batch)
+    result.components.extend(components)
     return result

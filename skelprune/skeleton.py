@@ -38,6 +38,7 @@ from .grid.graph import SQRT2, BranchGraph
 from .grid.medial_axis import MedialAxis, oriented_medial_axis, squared_distance
 from .grid.reconstruction import reconstruction
 from .pruning.branch_graph import AxisOnGraph
+from .pruning.choice import noise_depth
 from .pruning.normalisation import Normalisation
 from .pruning.normalisation import normalisation as shared_normalisation
 
@@ -84,6 +85,17 @@ def _connected(rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int]) -> bo
     img = np.zeros(shape, bool)
     img[rows, cols] = True
     return int(ndimage.label(img, np.ones((3, 3), bool))[1]) == 1
+
+
+def _beyond(shape: tuple[int, ...], origin: tuple[int, int], image_shape: tuple[int, int]) -> bool:
+    """Whether a crop of ``shape`` with its corner at ``origin`` reaches past the image
+    (a padded crop does where its component touches the image's border)."""
+    return bool(
+        origin[0] < 0
+        or origin[1] < 0
+        or origin[0] + shape[0] > image_shape[0]
+        or origin[1] + shape[1] > image_shape[1]
+    )
 
 
 def grown_r2(r2: np.ndarray, reach: float) -> np.ndarray:
@@ -151,7 +163,10 @@ class Skeleton(AxisOnGraph[BranchGraph]):
         goes on across it (:mod:`skelprune.grid._open_edge`)."""
         shape, orientation = oriented(crop)
         r2 = squared_distance(shape)
-        edge = None if image_shape is None else open_edge(crop, origin, image_shape)
+        edge = None
+        if image_shape is not None and _beyond(crop.shape, origin, image_shape):
+            noise = noise_depth(boundary_roughness(crop), 1.0)
+            edge = open_edge(crop, origin, image_shape, noise)
         if edge is None:
             axis = oriented_medial_axis(shape, r2)
             graph = BranchGraph(axis.rows, axis.cols, shape.shape)

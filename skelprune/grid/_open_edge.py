@@ -18,13 +18,12 @@ import numpy as np
 from scipy import ndimage
 
 from ._edt import squared_distance
-from ._roughness import boundary_roughness
 
 __all__ = ["open_edge", "open_extension"]
 
 
 def open_edge(
-    crop: np.ndarray, origin: tuple[int, int], image_shape: tuple[int, int]
+    crop: np.ndarray, origin: tuple[int, int], image_shape: tuple[int, int], noise: float
 ) -> np.ndarray | None:
     """The crop's pad pixels where the shape crosses the image's border (None: nowhere).
 
@@ -32,18 +31,19 @@ def open_edge(
     run: a run is a crossing when a disk of the shape gone on across it could span it,
     its length at most ``2·√2·r`` (a cut at up to 45°) with ``r`` the largest radius on
     it, runs read on the shape's band along the border, two pixels deeper than the
-    boundary's noise; a shape lying along the border (a cut far wider than the shape is
-    thick there) stays closed.
+    boundary's noise (``noise``: how deep it reaches, in pixels, which the caller's rule
+    gives); a shape lying along the border (a cut far wider than the shape is thick
+    there) stays closed.
 
     Examples
     --------
     >>> crop = np.zeros((12, 7), bool); crop[1:11, 2:5] = True  # 3 px wide, off the top
-    >>> open_edge(crop, (-1, 3), (20, 20)).nonzero()
+    >>> open_edge(crop, (-1, 3), (20, 20), 0.7).nonzero()
     (array([0, 0, 0]), array([2, 3, 4]))
-    >>> open_edge(crop, (2, 3), (20, 20)) is None
+    >>> open_edge(crop, (2, 3), (20, 20), 0.7) is None
     True
     >>> wide = np.zeros((5, 30), bool); wide[1:4, 1:29] = True  # lying along the top
-    >>> open_edge(wide, (-1, 3), (20, 40)) is None
+    >>> open_edge(wide, (-1, 3), (20, 40), 0.7) is None
     True
     """
     h, w = crop.shape
@@ -62,9 +62,7 @@ def open_edge(
     # The cut's runs are read on the shape's band along the border, two pixels deeper
     # than the boundary's noise (docs/algorithm.md), which a ragged boundary does not
     # part as it parts the contact itself.
-    from ..pruning.choice import noise_depth
-
-    depth = 2 + math.ceil(noise_depth(boundary_roughness(crop), 1.0))
+    depth = 2 + math.ceil(noise)
     # within ``depth`` steps (8-connected) of the crop's outside rows and columns: the
     # outside is whole rows and whole columns, so the steps are a row's or a column's gap
     band = crop & (

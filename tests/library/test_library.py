@@ -13,8 +13,10 @@ from skimage.measure import euler_number, label
 import skelprune
 from skelprune.api import components
 from skelprune.grid._open_edge import open_edge
+from skelprune.grid._roughness import boundary_roughness
 from skelprune.grid.medial_axis import DEGREE, SIMPLE, medial_axis, squared_distance
 from skelprune.grid.reconstruction import reconstruction, reconstruction_error
+from skelprune.pruning.choice import noise_depth
 from skelprune.skeleton import Skeleton
 from testkit.shapes import (
     blobs,
@@ -252,7 +254,8 @@ def test_pruned_skeleton_properties(mask):
     # a subset of the medial axis of each component (where a component runs off the
     # image, the axis of the shape going on across the border)
     for comp, (crop, origin) in zip(res.components, components(mask), strict=True):
-        if open_edge(crop, origin, mask.shape) is None:
+        noise = noise_depth(boundary_roughness(crop), 1.0)
+        if open_edge(crop, origin, mask.shape, noise) is None:
             m_axis = medial_axis(crop)
             ma_rows, ma_cols = m_axis.rows + origin[0], m_axis.cols + origin[1]
         else:

@@ -54,6 +54,6 @@ def test_a_shape_lying_along_the_border_is_as_if_padded() -> None:
 def test_open_edge_on_a_label_crop_and_nowhere_else() -> None:
     crop = np.zeros((6, 6), bool)
     crop[1:5, 1:5] = True
-    assert open_edge(crop, (3, 3), (20, 20)) is None  # inside the image
-    edge = open_edge(crop, (-1, 3), (20, 20))  # cut by the top: a 4-px crossing
+    assert open_edge(crop, (3, 3), (20, 20), 0.7) is None  # inside the image
+    edge = open_edge(crop, (-1, 3), (20, 20), 0.7)  # cut by the top: a 4-px crossing
     assert edge is not None and edge[0, 1:5].all() and edge.sum() == 4

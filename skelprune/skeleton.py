@@ -78,13 +78,24 @@ def _path_lengths(nbr, seed):
     return dist
 
 
-def _connected(rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int]) -> bool:
-    """Whether the pixels are one non-empty 8-connected set."""
+def _holes(img: np.ndarray) -> int:
+    """The holes of an 8-connected foreground: 4-connected background pieces off the
+    array's border."""
+    background, n = ndimage.label(~img)
+    edge = np.concatenate([background[0], background[-1], background[:, 0], background[:, -1]])
+    return n - int(np.count_nonzero(np.unique(edge)))
+
+
+def _homotopic(rows: np.ndarray, cols: np.ndarray, shape: np.ndarray) -> bool:
+    """Whether the pixels are one non-empty 8-connected set with the holes of
+    ``shape`` (a padded one-component crop): an axis with its topology."""
     if rows.size == 0:
         return False
-    img = np.zeros(shape, bool)
+    img = np.zeros(shape.shape, bool)
     img[rows, cols] = True
-    return int(ndimage.label(img, np.ones((3, 3), bool))[1]) == 1
+    if int(ndimage.label(img, np.ones((3, 3), bool))[1]) != 1:
+        return False
+    return _holes(img) == _holes(shape)
 
 
 def _beyond(shape: tuple[int, ...], origin: tuple[int, int], image_shape: tuple[int, int]) -> bool:
@@ -180,7 +191,8 @@ class Skeleton(AxisOnGraph[BranchGraph]):
         inside = (rows >= 0) & (rows < h) & (cols >= 0) & (cols < w)
         inside[inside] = shape[rows[inside], cols[inside]]
         rows, cols = rows[inside], cols[inside]
-        if not _connected(rows, cols, shape.shape):  # the cut split it: keep the plain one
+        # the cut split it, or opened a cycle round a hole: keep the plain one
+        if not _homotopic(rows, cols, shape):
             axis = oriented_medial_axis(shape, r2)
             graph = BranchGraph(axis.rows, axis.cols, shape.shape)
             return cls(shape, axis.rows, axis.cols, axis.r2, graph, orientation, origin)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+from skimage.measure import euler_number, label
 
 import skelprune
 from skelprune.grid._open_edge import open_edge
@@ -57,3 +58,30 @@ def test_open_edge_on_a_label_crop_and_nowhere_else() -> None:
     assert open_edge(crop, (3, 3), (20, 20), 0.7) is None  # inside the image
     edge = open_edge(crop, (-1, 3), (20, 20), 0.7)  # cut by the top: a 4-px crossing
     assert edge is not None and edge[0, 1:5].all() and edge.sum() == 4
+
+
+def test_a_hole_beside_the_border_keeps_its_cycle() -> None:
+    """The shape gone on across the border must not open the axis round a hole that
+    lies inside the image (found by test_library's property test): the axis keeps the
+    shape's topology, or the plain axis is taken."""
+    rows = [
+        ".............########.",
+        "....###.....#####...##",
+        "...#####...######...##",
+        "...#####...######...##",
+        "...#####...###########",
+        "...#####....##########",
+        "...######....########.",
+        "...#####.......####...",
+        "...#####..............",
+        "....####..............",
+        "....###...............",
+    ]
+    m = np.zeros((22, 22), bool)  # the shape in the lower part, off the right border
+    m[11:] = [[c == "#" for c in r] for r in rows]
+    res = skelprune.prune(m)
+    skeleton = np.zeros(m.shape, bool)
+    r, c, _ = res.skeleton_points()
+    skeleton[r, c] = True
+    assert euler_number(skeleton, connectivity=2) == euler_number(m, connectivity=2) == 1
+    assert label(skeleton, connectivity=2).max() == label(m, connectivity=2).max() == 2

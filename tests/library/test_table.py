@@ -14,7 +14,7 @@ import skelprune
 from skelprune.io.frame import IDENTITY, PixelFrame
 from skelprune.output.schema import PruneDocument, SkeletonGeoJSON, problems
 from skelprune.output.table import round_like_python
-from testkit.document_oracle import branch_line, component_dict
+from testkit.document_oracle import branch_line, component_dict, volume_skeleton_dict
 from testkit.shapes import dataset
 
 #: A frame with a flip, an offset and a pixel size whose products need rounding.
@@ -117,3 +117,50 @@ def test_frame_rounding_is_pythons_round_exactly() -> None:
             want = np.array([round(x, n) for x in a.tolist()])
             assert np.array_equal(got, want) and np.array_equal(np.signbit(got), np.signbit(want))
     assert round_like_python(np.array([1234.5]), -1).tolist() == [round(1234.5, -1)]
+
+
+def _volumes() -> dict[str, tuple[np.ndarray, tuple[float, float, float]]]:
+    from testkit.volume_snapshot import volumes
+
+    out = volumes(quick=True)
+    lone = np.zeros((5, 5, 5), bool)
+    lone[2, 2, 2] = True
+    zz, yy, xx = np.mgrid[:9, :15, :15]
+    rr = np.hypot(yy - 7, xx - 7)
+    out["lone"] = (lone, (1.0, 1.0, 1.0))
+    out["ring"] = ((rr > 3.5) & (rr < 6) & (abs(zz - 4) <= 1), (1.0, 1.0, 1.0))
+    return out
+
+
+def test_a_volume_reads_the_one_branch_table_with_a_z_column() -> None:
+    """A volume's answer is the image's table with ``z``: its document part equals the
+    voxel-by-voxel walk (loops without a node, lone voxels one node, the graph's branch
+    ids), its SWC lists the table's points, its CSV one row a table branch."""
+    seen = {"loop": 0, "lone": 0, "junction": 0}
+    for name, (volume, spacing) in _volumes().items():
+        res = skelprune.prune(volume, spacing=spacing, trim=name != "ring")
+        rows = res.summary()
+        assert len(rows) == sum(c.table.n_branches for c in res.components), name
+        swc = [ln for ln in res.to_swc().splitlines() if not ln.startswith("#")]
+        assert len(swc) == sum(c.table.pixels().size for c in res.components), name
+        for comp in res.components:
+            t = comp.table
+            assert t.ndim == 3 and t.coordinates().shape == (t.x.size, 3)
+            assert t.xyr().shape == (t.x.size, 4)
+            doc = comp.to_dict()["skeleton"]
+            ref = volume_skeleton_dict(comp)
+            assert _same([doc["nodes"], doc["branches"]], [ref["nodes"], ref["branches"]]), name
+            seen["loop"] += int((t.source < 0).sum())
+            seen["lone"] += int(np.sum(np.diff(t.path_offsets) == 1))
+            seen["junction"] += int(np.sum(t.node_kind == 1))
+            assert np.array_equal(t.source < 0, t.target < 0)
+    assert all(seen.values()), seen  # every case met
+
+
+def test_a_volume_table_has_no_frame() -> None:
+    v = np.zeros((12, 14, 40), bool)
+    v[3:9, 4:10, 3:37] = True
+    t = skelprune.prune(v).components[0].table
+    assert t.framed(IDENTITY) is t
+    with pytest.raises(ValueError, match="volume"):
+        t.framed(FRAME)

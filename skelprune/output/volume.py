@@ -16,14 +16,16 @@ import io
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
 from ..errors import InvalidOptionError
 from ..grid3d.skeleton import VolumeSkeleton
 from ..grid3d.tips import VolumeTrim
+from ..io.frame import PixelFrame
 from ..options import OutputOptions, PruneOptions
+from ..options_where import missing_answer
 from ..pruning.bayesian import PruningSequence, target
 from ..pruning.margin import Margins
 from .finite import finite, finite_cell, finite_number, finite_tree
@@ -310,12 +312,25 @@ class VolumeResult:
                     lines.append(f"{ids[q]} 0 {numbers} {up}")
         return "\n".join(lines) + "\n"
 
-    def to_geojson(self, *args: Any, **kwargs: Any) -> Any:
-        """Refused: GeoJSON holds plane geometry, a volume's skeleton is 3-D."""
-        raise InvalidOptionError(
-            "GeoJSON holds 2-D geometry and a volume's skeleton is 3-D: ask for the JSON "
-            "document (to_dict), SWC (to_swc) or a networkx graph (to_networkx)"
-        )
+    def to_geojson(
+        self,
+        frame: PixelFrame | None = None,
+        simplify: float | None = None,
+        cut_ends: bool | None = None,
+    ) -> NoReturn:
+        """Refused, whatever the arguments (those of an image's
+        :meth:`~skelprune.output.document.PruneResult.to_geojson`): GeoJSON holds map
+        geometry, and a volume's points are voxel indices in three dimensions, not map
+        coordinates. Its answers are the JSON document (:meth:`to_dict`), the overlay
+        (:meth:`overlay_png`), the CSV table (:meth:`to_csv`) and SWC (:meth:`to_swc`),
+        as :func:`skelprune.encode` says.
+
+        Raises
+        ------
+        InvalidOptionError
+            Always, in the words of :func:`skelprune.encode`'s refusal.
+        """
+        raise InvalidOptionError(missing_answer("a volume", "volume", "geojson"))
 
     def render_overlay(self, scale: int = 1) -> np.ndarray:
         """RGB image of the three maximum-intensity projections (along ``z`` top left,

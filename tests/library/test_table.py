@@ -88,6 +88,29 @@ def test_documents_conform_to_the_library_schema() -> None:
     assert problems(res.to_geojson(), SkeletonGeoJSON) == []
 
 
+def test_one_schema_holds_an_images_and_a_volumes_document() -> None:
+    """The one document schema: real volume documents (labels, anisotropic voxels, a
+    loop with null ends, a lone voxel) and real image documents conform; a volume's
+    node without ``z`` or with a three-number point does not."""
+    for name, (volume, spacing) in _volumes().items():
+        for opts in ({}, {"trim": False, "min_margin": 0}):
+            doc = json.loads(json.dumps(skelprune.prune(volume, spacing=spacing, **opts).to_dict()))
+            assert problems(doc) == [], name
+    labels = np.zeros((40, 60), np.uint8)
+    labels[5:35, 5:28], labels[5:35, 32:55] = 3, 7
+    ring = np.zeros((40, 60), bool)
+    ring[5:35, 5:55], ring[15:25, 20:40] = True, False
+    for image, opts in ((labels, {"labels": True}), (ring, {})):
+        doc = skelprune.prune(image, **opts).to_dict(sequence=True)
+        assert problems(json.loads(json.dumps(doc))) == []
+    doc = skelprune.prune(_volumes()["tree0-iso"][0]).to_dict()
+    node = doc["components"][0]["skeleton"]["nodes"][0]
+    del node["z"]
+    node["points"] = [[1.0, 2.0, 3.0, 4.0, 5.0]]
+    found = problems(doc)
+    assert "$.components[0].skeleton.nodes[0].points[0]: length 5 outside [3, 4]" in found
+
+
 def test_the_schema_check_finds_what_departs() -> None:
     m = np.zeros((20, 40), bool)
     m[5:15, 5:35] = True

@@ -11,7 +11,6 @@ lengths and widths are physical (``spacing``), volumes counted in voxels.
 
 from __future__ import annotations
 
-import csv
 import io
 import math
 from dataclasses import dataclass, field
@@ -28,7 +27,7 @@ from ..options import OutputOptions, PruneOptions
 from ..options_where import missing_answer
 from ..pruning.bayesian import PruningSequence, target
 from ..pruning.margin import Margins
-from .finite import finite, finite_cell, finite_number, finite_tree
+from .finite import finite, finite_number, finite_tree, rows_csv, rows_frame
 from .table import ENDPOINT, BranchTable, volume_table
 from .views import branch_dicts, node_dicts
 
@@ -192,12 +191,7 @@ class VolumeResult:
         (twice the ball radius: mean, least, largest) and its two ends, all in the units
         of ``spacing``; a pandas ``DataFrame`` when pandas is installed, else a list of
         row dicts (as an image's :meth:`~skelprune.output.document.PruneResult.summary`)."""
-        rows = self._branch_rows()
-        try:
-            import pandas as pd
-        except ImportError:
-            return rows
-        return pd.DataFrame(rows, columns=list(VOLUME_BRANCH_COLUMNS))
+        return rows_frame(self._branch_rows(), VOLUME_BRANCH_COLUMNS)
 
     def _branch_rows(self) -> list[dict[str, Any]]:
         dz, dy, dx = self.spacing
@@ -243,12 +237,7 @@ class VolumeResult:
     def to_csv(self) -> str:
         """:meth:`summary` as CSV text (a header row; empty cells for null), with or
         without pandas."""
-        buf = io.StringIO()
-        writer = csv.DictWriter(buf, fieldnames=list(VOLUME_BRANCH_COLUMNS), lineterminator="\n")
-        writer.writeheader()
-        for row in self._branch_rows():
-            writer.writerow({k: finite_cell(v) for k, v in row.items()})
-        return buf.getvalue()
+        return rows_csv(self._branch_rows(), VOLUME_BRANCH_COLUMNS)
 
     def to_networkx(self) -> Any:
         """The skeleton as a ``networkx.MultiGraph``: nodes ``(component, node id)`` with

@@ -16,7 +16,14 @@ from .errors import InvalidOptionError
 from .options import GROUPS
 from .options_checks import INPUT_KINDS
 
-__all__ = ["ANSWERS", "ANSWERS_OF", "INPUT_KINDS", "option_where", "refuse_misplaced"]
+__all__ = [
+    "ANSWERS",
+    "ANSWERS_OF",
+    "INPUT_KINDS",
+    "missing_answer",
+    "option_where",
+    "refuse_misplaced",
+]
 
 #: What each answer is called in a message (the media type in brackets).
 ANSWERS = {
@@ -34,12 +41,36 @@ ANSWERS_OF = {
     "polygon": ("json", "png", "geojson", "csv", "graphml"),
     "volume": ("json", "png", "csv", "swc"),
 }
+#: Why an input has not an answer, where a reason helps.
+WHY_NOT = {
+    ("volume", "geojson"): "its points are voxel indices in three dimensions, it has no "
+    "map coordinates",
+}
 _INPUTS = {
     "image": "image input (PNG or TIFF)",
     "polygon": "polygon input (GeoJSON)",
     "volume": "volume input (a .npy file or a TIFF stack)",
 }
 _WHERE = {f.name: f.metadata["where"] for group in GROUPS for f in fields(group)}
+
+
+def missing_answer(subject: str, kind: str, answer: str) -> str:
+    """The words that refuse ``answer`` to an input of ``kind`` (``subject``: what it is
+    called), with the reason where there is one (:data:`WHY_NOT`), naming the answers it
+    has: the one wording of the option checks, :func:`skelprune.encode` and a volume's
+    ``to_geojson``.
+
+    >>> missing_answer("a volume", "volume", "graphml")  # doctest: +NORMALIZE_WHITESPACE
+    'a volume has no GraphML graph (application/graphml+xml); its answers: the JSON
+     document (application/json), the overlay image (image/png), the CSV tables
+     (text/csv), the SWC answer (text/x-swc)'
+    """
+    why = WHY_NOT.get((kind, answer))
+    because = f": {why}" if why else ""
+    return (
+        f"{subject} has no {ANSWERS[answer].replace('the ', '', 1)}{because}; its answers: "
+        + ", ".join(ANSWERS[a] for a in ANSWERS_OF[kind])
+    )
 
 
 def option_where(name: str) -> dict[str, tuple[str, ...] | None]:
@@ -116,16 +147,14 @@ def refuse_misplaced(
      TIFF) with the CSV tables (text/csv) or the GraphML graph (application/graphml+xml)'
     >>> refused([], "volume", "geojson")  # doctest: +NORMALIZE_WHITESPACE
     'volume input (a .npy file or a TIFF stack) has no GeoJSON answer
-     (application/geo+json); its answers: the JSON document (application/json), the
+     (application/geo+json): its points are voxel indices in three dimensions, it has no
+     map coordinates; its answers: the JSON document (application/json), the
      overlay image (image/png), the CSV tables (text/csv), the SWC answer (text/x-swc)'
     """
     asked = None if answers is None else {answers} if isinstance(answers, str) else set(answers)
     for answer in sorted(asked or ()):
         if answer not in ANSWERS_OF[kind]:
-            raise InvalidOptionError(
-                f"{_INPUTS[kind]} has no {ANSWERS[answer].replace('the ', '', 1)}; its answers: "
-                + ", ".join(ANSWERS[a] for a in ANSWERS_OF[kind])
-            )
+            raise InvalidOptionError(missing_answer(_INPUTS[kind], kind, answer))
     if asked is not None and "json" in asked and overlay:
         asked.add("overlay")
     wrong_input: dict[str, list[str]] = {}

@@ -14,10 +14,11 @@ import numpy as np
 from skelprune.grid.reconstruction import reconstruction
 from skelprune.io.frame import IDENTITY, PixelFrame
 from skelprune.output.component import ComponentResult
+from skelprune.output.volume import VolumeComponent
 from skelprune.pruning.margin import Margins
 from skelprune.skeleton import Skeleton
 
-__all__ = ["branch_line", "component_dict"]
+__all__ = ["branch_line", "component_dict", "volume_skeleton_dict"]
 
 
 def _graph_table(
@@ -168,3 +169,60 @@ def branch_line(nodes: list[dict[str, Any]], branch: dict[str, Any]) -> list[lis
         if line[end][:2] != [node["x"], node["y"]] or (end == -1 and len(line) == 1):
             line.insert(len(line) if end == -1 else 0, [node["x"], node["y"], node["radius"]])
     return line
+
+
+def volume_skeleton_dict(comp: VolumeComponent) -> dict[str, Any]:
+    """A volume component's ``nodes`` and ``branches``, walked voxel by voxel as the
+    volume's document was built before it read a branch table: junctions at their voxel
+    of largest radius (ties: the smaller point index), then free ends as met; a loop
+    without junction has no node (null ends); branch ids the graph's own."""
+    s = comp.skeleton
+    g, r2, (oz, oy, ox) = s.graph, s.r2, s.origin
+
+    def where(p: int) -> list[float]:
+        return [float(s.x[p] + ox), float(s.y[p] + oy), float(s.z[p] + oz), float(np.sqrt(r2[p]))]
+
+    def node(p: int, kind: str, points: list[list[float]]) -> dict[str, Any]:
+        x, y, z, radius = where(p)
+        n = len(nodes)
+        return {"id": n, "x": x, "y": y, "z": z, "radius": radius, "kind": kind, "points": points}
+
+    nodes: list[dict[str, Any]] = []
+    of_junction: dict[int, int] = {}
+    for j, junc in enumerate(g.junctions):
+        if junc.alive:
+            of_junction[j] = len(nodes)
+            centre = max(junc.points, key=lambda p: (r2[p], -p))
+            nodes.append(node(centre, "junction", [where(p) for p in sorted(junc.points)]))
+    branches = []
+    for b, br in enumerate(g.branches):
+        if not br.alive:
+            continue
+        path = g.path(b)
+        ends: list[int | None] = []
+        for e in (0, 1):
+            if br.loop:
+                ends.append(None)
+            elif br.node[e] is not None:
+                ends.append(of_junction[br.node[e]])
+            elif e == 1 and len(path) == 1 and br.node[0] is None:
+                ends.append(ends[0])  # a lone voxel: one end point
+            else:
+                ends.append(len(nodes))
+                nodes.append(node(path[0] if e == 0 else path[-1], "endpoint", []))
+        length = 0.0
+        for c, w in zip(br.steps, s.step_weights.tolist(), strict=True):
+            length += c * w
+        branches.append(
+            {
+                "id": b,
+                "source": ends[0],
+                "target": ends[1],
+                "length": length,
+                "points": [where(p) for p in path],
+                "off_path": [where(p) for p in br.side],
+                "margin": comp.margins.margin.get(b),
+                "removed_at": comp.margins.removed_at.get(b),
+            }
+        )
+    return {"nodes": nodes, "branches": branches}

@@ -286,62 +286,6 @@ MAP_LINES: dict[str, Any] = {
         },
     },
 }
-#: A volume's document (docs/volumes.md, ``VolumeResult.to_dict``): the image document's
-#: graph with ``z``, points ``[x, y, z, radius]``, the voxel ``spacing``.
-VOLUME_DOCUMENT: dict[str, Any] = {
-    "title": "VolumeDocument",
-    "type": "object",
-    "required": ["dimensions", "width", "height", "depth", "spacing", "components"],
-    "properties": {
-        "dimensions": {"const": 3},
-        "width": {"type": "integer"},
-        "height": {"type": "integer"},
-        "depth": {"type": "integer"},
-        "spacing": {**_NUMBERS, "minItems": 3, "maxItems": 3},
-        "components": {
-            "type": "array",
-            "items": {
-                "type": "object",
-                "required": ["volume", "rer", "ss", "objective", "skeleton"],
-                "properties": {
-                    "skeleton": {
-                        "type": "object",
-                        "required": ["length", "endpoints", "nodes", "branches"],
-                        "properties": {
-                            "endpoints": {"type": "array", "items": {"type": "integer"}},
-                            "nodes": {
-                                "type": "array",
-                                "items": {
-                                    "type": "object",
-                                    "required": ["id", "x", "y", "z", "radius", "kind"],
-                                },
-                            },
-                            "branches": {
-                                "type": "array",
-                                "items": {
-                                    "type": "object",
-                                    "required": ["id", "source", "target", "length", "points"],
-                                    "properties": {
-                                        "points": {
-                                            "type": "array",
-                                            "items": {
-                                                **_NUMBERS,
-                                                "minItems": 4,
-                                                "maxItems": 4,
-                                                "description": "[x, y, z, radius]",
-                                            },
-                                        }
-                                    },
-                                },
-                            },
-                        },
-                    }
-                },
-            },
-        },
-    },
-}
-
 PRUNE_RESPONSES: dict[int | str, dict[str, Any]] = {
     200: {
         "description": "The pruned skeleton, in the format chosen by `Accept`.",
@@ -365,8 +309,8 @@ PRUNE_RESPONSES: dict[int | str, dict[str, Any]] = {
         },
         "content": {
             "application/json": {
-                # an image's or a polygon's document, or a volume's
-                "schema": {"anyOf": [{"$ref": REF + "PruneDocument"}, VOLUME_DOCUMENT]},
+                # an image's, a polygon's or a volume's document: one schema
+                "schema": {"$ref": REF + "PruneDocument"},
                 "example": DOCUMENT_EXAMPLE,
             },
             "image/png": {"schema": {"type": "string", "format": "binary"}},

@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from ..errors import InvalidOptionError
-from ..options_where import ANSWERS, ANSWERS_OF
+from ..options_where import ANSWERS, ANSWERS_OF, missing_answer
 from .finite import finite_json
 
 if TYPE_CHECKING:
@@ -74,10 +74,8 @@ def encode(result: PruneResult | VolumeResult, answer: str = "json") -> bytes:
             f"unknown answer {answer!r}; the answers: {', '.join(MEDIA_TYPES)}"
         )
     if answer not in ANSWERS_OF[kind]:
-        raise InvalidOptionError(
-            f"a {'volume' if kind == 'volume' else 'shape'} has no {ANSWERS[answer]}; its "
-            "answers: " + ", ".join(ANSWERS[a] for a in ANSWERS_OF[kind])
-        )
+        subject = "a volume" if kind == "volume" else "a shape"
+        raise InvalidOptionError(missing_answer(subject, kind, answer))
     if isinstance(result, VolumeResult):
         if answer == "png":
             return result.overlay_png()

@@ -2,6 +2,12 @@
 their fields are described with (:class:`Doc`, :class:`Len`) and the literal types the
 GeoJSON's types share. Importable from :mod:`skelprune.output.schema`, which says how
 they are read.
+
+One schema describes an image's (or a polygon's) document and a volume's: a volume's
+nodes have a ``z``, its points are ``[x, y, z, radius]``, and its keys of its own
+(``dimensions``, ``depth``, ``spacing``; per component ``volume``, ``lbar``, ``steps``,
+``tips_trimmed``) are ``NotRequired``, as are an image's that a volume's document has not
+(``version``, ``foreground``, ``dce_threshold``; per component ``area``).
 """
 
 # No `from __future__ import annotations`: the annotations are evaluated, so that
@@ -27,6 +33,7 @@ class Len:
 
 Point3 = Annotated[list[float], Len(3, 3), Doc("[x, y, radius]")]
 Point2 = Annotated[list[float], Len(2, 2), Doc("[x, y]")]
+Point = Annotated[list[float], Len(3, 4), Doc("[x, y, radius]; a volume's [x, y, z, radius]")]
 NodeKind = Literal["endpoint", "junction", "loop"]
 Method = Literal["bayesian", "dce"]
 Coarse = Literal["dce"] | None
@@ -39,34 +46,42 @@ class NodeDoc(TypedDict):
     id: int
     x: float
     y: float
+    z: NotRequired[
+        Annotated[float, Doc("A volume's nodes only: the voxel's index along the first axis.")]
+    ]
     radius: float
     kind: NodeKind
-    points: Annotated[list[Point3], Doc("Pixels of a junction cluster; empty otherwise.")]
+    points: Annotated[
+        list[Point], Doc("Pixels (a volume's voxels) of a junction cluster; empty otherwise.")
+    ]
 
 
 class BranchDoc(TypedDict):
-    id: int
-    source: int
-    target: int
+    id: Annotated[
+        int, Doc("Counted from 0; in a volume's document, the branch graph's own (with gaps).")
+    ]
+    source: Annotated[int | None, Doc("Null only for a volume's loop without junction.")]
+    target: Annotated[int | None, Doc("Null only for a volume's loop without junction.")]
     length: Annotated[
         float,
         Doc(
-            "Step length of the path (1 axial, √2 diagonal), "
-            "with the step into each junction cluster and a loop's closing step."
+            "Step length of the path (1 axial, √2 diagonal; a volume's in the units of "
+            "spacing), with the step into each junction cluster and a loop's closing step."
         ),
     ]
     points: Annotated[
-        list[Point3],
+        list[Point],
         Doc(
             "The path, in order from the source node to the "
-            "target node; consecutive points are 8-neighbours."
+            "target node; consecutive points are 8-neighbours (a volume's 26-neighbours)."
         ),
     ]
     off_path: Annotated[
-        list[Point3],
+        list[Point],
         Doc(
             "Skeleton pixels of the branch beside its path "
-            "(kept for reconstruction), sorted by (x, y)."
+            "(kept for reconstruction), sorted by (x, y); a volume's voxels in the "
+            "graph's order."
         ),
     ]
     margin: Annotated[
@@ -189,17 +204,35 @@ class SequenceDoc(TypedDict):
 
 class ComponentDoc(TypedDict):
     label: NotRequired[
-        Annotated[int, Doc("The component's label (label images only, labels=true).")]
+        Annotated[
+            int | None,
+            Doc(
+                "The component's label (label images only, labels=true; always in a "
+                "volume's document, null for a mask's component)."
+            ),
+        ]
     ]
-    area: Annotated[int, Doc("Λ(D) in pixels of the raster.")]
+    area: NotRequired[Annotated[int, Doc("Λ(D) in pixels of the raster (not for a volume).")]]
+    volume: NotRequired[Annotated[int, Doc("A volume's component only: its voxels.")]]
     alpha: float | None
+    lbar: NotRequired[
+        Annotated[float, Doc("A volume's component only: ℓ̄, the mean end-path length.")]
+    ]
     rer: float
     ss: float
     objective: float
     medial_axis: MedialAxisSummaryDoc
     skeleton: SkeletonDoc
-    curve: NotRequired[Annotated[list[CurveStepDoc], Doc("Absent when curve=false.")]]
+    curve: NotRequired[
+        Annotated[list[CurveStepDoc], Doc("Absent when curve=false (and for a volume).")]
+    ]
     chosen_step: int
+    steps: NotRequired[
+        Annotated[int, Doc("A volume's component only: the pruning sequence's removals.")]
+    ]
+    tips_trimmed: NotRequired[
+        Annotated[bool, Doc("A volume's component only: whether the answer's tips were cut.")]
+    ]
     sequence: NotRequired[Annotated[SequenceDoc, Doc("Only with sequence=true.")]]
 
 
@@ -315,21 +348,32 @@ class GeoreferenceDoc(TypedDict):
 
 
 class PruneDocument(TypedDict):
-    """The output document."""
+    """The output document: an image's, a polygon's or a volume's (``dimensions`` 3)."""
 
-    version: VersionsDoc
+    version: NotRequired[Annotated[VersionsDoc, Doc("Not in a volume's document.")]]
+    dimensions: NotRequired[Annotated[Literal[3], Doc("A volume's document only.")]]
     width: int
     height: int
+    depth: NotRequired[
+        Annotated[int, Doc("A volume's document only: its size along the first axis.")]
+    ]
+    spacing: NotRequired[
+        Annotated[
+            list[float],
+            Len(3, 3),
+            Doc("A volume's document only: a voxel's physical size (dz, dy, dx)."),
+        ]
+    ]
     method: Method
     beta: float
     coarse: Coarse
     choice: Annotated[Choice, Doc("How the answer was chosen from the pruning sequence.")]
     trim: Annotated[bool, Doc("Whether the answer's end branches were cut back at their tips.")]
     min_margin: Annotated[float | None, Doc(MIN_MARGIN_APPLIED)]
-    dce_threshold: Annotated[float | None, Doc(DCE_THRESHOLD_APPLIED)]
+    dce_threshold: NotRequired[Annotated[float | None, Doc(DCE_THRESHOLD_APPLIED)]]
     scope: NotRequired[Annotated[Scope, Doc(SCOPE_APPLIED)]]
     window: NotRequired[Annotated[int, Doc(WINDOW_APPLIED)]]
-    foreground: ForegroundTakenDoc
+    foreground: NotRequired[Annotated[ForegroundTakenDoc, Doc("Not in a volume's document.")]]
     components: list[ComponentDoc]
     raster: NotRequired[Annotated[RasterInfoDoc, Doc("Polygon input only.")]]
     georeference: NotRequired[Annotated[GeoreferenceDoc, Doc("GeoTIFF input only.")]]

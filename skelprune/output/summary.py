@@ -26,15 +26,13 @@ picture is seen (y up: an image's rows are flipped), in ``(-180, 180]``.
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 from typing import Any
 
 import numpy as np
 
 from ..io.frame import IDENTITY, PixelFrame
-from .finite import finite, finite_cell
+from .finite import finite, rows_csv, rows_frame
 from .table import ENDPOINT, JUNCTION, LOOP, BranchTable
 
 #: A :class:`~skelprune.output.document.PruneResult` (which imports this module).
@@ -371,13 +369,9 @@ def table(result: PruneResult, level: str = "branch") -> Any:
     if level not in ("branch", "component"):
         raise ValueError(f"level must be 'branch' or 'component', got {level!r}")
     rows = branch_rows(result) if level == "branch" else component_rows(result)
-    columns = BRANCH_COLUMNS if level == "branch" else COMPONENT_COLUMNS
-    try:
-        import pandas as pd
-    except ImportError:
-        return rows
-    frame = pd.DataFrame(rows, columns=list(columns))
-    frame.attrs["unit"] = unit_of(result)[1]
+    frame = rows_frame(rows, BRANCH_COLUMNS if level == "branch" else COMPONENT_COLUMNS)
+    if frame is not rows:  # a DataFrame
+        frame.attrs["unit"] = unit_of(result)[1]
     return frame
 
 
@@ -386,13 +380,7 @@ def table_csv(result: PruneResult, level: str = "branch") -> str:
     if level not in ("branch", "component"):
         raise ValueError(f"level must be 'branch' or 'component', got {level!r}")
     rows = branch_rows(result) if level == "branch" else component_rows(result)
-    columns = BRANCH_COLUMNS if level == "branch" else COMPONENT_COLUMNS
-    buf = io.StringIO()
-    writer = csv.DictWriter(buf, fieldnames=list(columns), lineterminator="\n")
-    writer.writeheader()
-    for row in rows:
-        writer.writerow({k: finite_cell(v) for k, v in row.items()})
-    return buf.getvalue()
+    return rows_csv(rows, BRANCH_COLUMNS if level == "branch" else COMPONENT_COLUMNS)
 
 
 def skeleton_mask(result: PruneResult) -> np.ndarray:

@@ -1,14 +1,18 @@
 """The branch table: a pruned skeleton as flat arrays, the one source of every output.
 
-A component's answer is read out of its mutable :class:`~skelprune.grid.graph.BranchGraph`
-once, into a :class:`BranchTable` in image pixel coordinates: one coordinate array
-(``x``, ``y``, ``radius`` of every skeleton pixel) and, per node and per branch, a row
-of plain arrays, with each branch's path and off-path pixels (and each junction's
-cluster) as offsets into index arrays over the coordinates (compressed sparse rows, as
-skan's ``Skeleton`` keeps its paths). The document, the GeoJSON, the networkx graph
-and the overlay's marks are views of it; a frame to the caller's coordinates is
-applied to the coordinate array once (:meth:`BranchTable.framed`), and not at all for
-the identity frame.
+A component's answer is read out of its mutable branch graph
+(:class:`~skelprune.pruning.branch_graph.PointGraph`, of an image or of a volume) once,
+into a :class:`BranchTable`: coordinate columns (``x``, ``y``, for a volume ``z``, and
+``radius`` of every skeleton point) and, per node and per branch, a row of plain arrays,
+with each branch's path and off-path points (and each junction's cluster) as offsets
+into index arrays over the coordinates (compressed sparse rows, as skan's ``Skeleton``
+keeps its paths). An image's table is in image pixel coordinates
+(:func:`branch_table`), a volume's in voxel indices of the whole volume with physical
+radii and lengths (:func:`volume_table`); both are built by :func:`graph_table`. The
+documents, the GeoJSON, the tables, the networkx graphs, SWC and the overlays' marks
+are views of it; a frame to the caller's coordinates is applied to an image's
+coordinate columns once (:meth:`BranchTable.framed`), and not at all for the identity
+frame.
 
 Examples
 --------
@@ -24,6 +28,7 @@ Examples
 from __future__ import annotations
 
 import itertools
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -32,6 +37,8 @@ import numpy as np
 from ..io.frame import IDENTITY, PixelFrame
 
 if TYPE_CHECKING:
+    from ..grid3d.skeleton import VolumeSkeleton
+    from ..pruning.branch_graph import PointGraph
     from ..pruning.margin import Margins
     from ..skeleton import Skeleton
 
@@ -44,8 +51,10 @@ __all__ = [
     "branch_table",
     "frame_distances",
     "frame_points",
+    "graph_table",
     "nullable",
     "round_like_python",
+    "volume_table",
 ]
 
 #: Node kinds, by their code in :attr:`BranchTable.node_kind`.
@@ -129,18 +138,19 @@ def _rounded(v: np.ndarray, frame: PixelFrame) -> np.ndarray:
 class BranchTable:
     """Nodes and branches of a skeleton as flat arrays (see the module's docstring).
 
-    Node ``i`` sits at pixel ``node_point[i]``; a junction's cluster is
+    Node ``i`` sits at point ``node_point[i]``; a junction's cluster is
     ``members[member_offsets[i]:member_offsets[i + 1]]`` (empty for endpoints and
     loops). Branch ``j`` runs from node ``source[j]`` to ``target[j]`` along
     ``paths[path_offsets[j]:path_offsets[j + 1]]``, with its pixels beside the path
     (of a dissolved junction cluster) in ``off_path[off_offsets[j]:off_offsets[j + 1]]``.
-    ``margin`` is NaN and ``removed_at`` -1 where the document says null.
+    ``margin`` is NaN and ``removed_at`` -1 where the document says null, ``source`` and
+    ``target`` -1 for a loop of a table without loop nodes (a volume's).
     ``graph_branch`` and ``node_junction`` are the graph's own ids of each branch and
     junction node (-1: not a junction), which the pruning sequence's events name.
     """
 
     #: Image column, row and radius of every pixel of the graph (pixels indexed as the
-    #: graph's points).
+    #: graph's points); for a volume, voxel x, y (``z`` below) and physical radius.
     x: np.ndarray
     y: np.ndarray
     radius: np.ndarray
@@ -159,6 +169,13 @@ class BranchTable:
     path_offsets: np.ndarray
     off_path: np.ndarray
     off_offsets: np.ndarray
+    #: A volume's third coordinate (the array's first axis); None in the plane.
+    z: np.ndarray | None = None
+
+    @property
+    def ndim(self) -> int:
+        """2 for an image's table, 3 for a volume's."""
+        return 2 if self.z is None else 3
 
     @property
     def n_nodes(self) -> int:
@@ -185,14 +202,24 @@ class BranchTable:
         """The step that removes each branch, None where none does."""
         return nullable(self.removed_at, -1)
 
+    def columns(self) -> list[np.ndarray]:
+        """The coordinate columns: ``x``, ``y`` and, for a volume, ``z``."""
+        return [self.x, self.y] if self.z is None else [self.x, self.y, self.z]
+
+    def coordinates(self) -> np.ndarray:
+        """``(n, ndim)`` coordinates of every point."""
+        return np.column_stack(self.columns())
+
     def xyr(self) -> np.ndarray:
-        """``(n, 3)`` x, y and radius of every pixel."""
-        return np.column_stack([self.x, self.y, self.radius])
+        """``(n, ndim + 1)`` coordinates and radius of every point: ``[x, y, radius]``,
+        for a volume ``[x, y, z, radius]``, as the documents list points."""
+        return np.column_stack([*self.columns(), self.radius])
 
     def path(self, j: int) -> np.ndarray:
-        """``(m, 3)`` x, y, radius of branch ``j``'s path, source to target."""
+        """``(m, ndim + 1)`` coordinates and radius of branch ``j``'s path, source to
+        target."""
         idx = self.paths[self.path_offsets[j] : self.path_offsets[j + 1]]
-        return np.column_stack([self.x[idx], self.y[idx], self.radius[idx]])
+        return np.column_stack([c[idx] for c in (*self.columns(), self.radius)])
 
     def lines(self) -> list[np.ndarray]:
         """Every branch as a polyline ``(m, 3)`` from its source node to its target node.
@@ -209,16 +236,19 @@ class BranchTable:
         for j, (s, e) in enumerate(itertools.pairwise(self.path_offsets.tolist())):
             line = pts[s:e]
             a, b = nodes[self.source[j]], nodes[self.target[j]]
-            head = [a[None]] if not np.array_equal(line[0, :2], a[:2]) else []
+            head = [a[None]] if not np.array_equal(line[0, :-1], a[:-1]) else []
             single = e - s == 1 and not head  # (after the source's point: two already)
-            tail = [b[None]] if single or not np.array_equal(line[-1, :2], b[:2]) else []
+            tail = [b[None]] if single or not np.array_equal(line[-1, :-1], b[:-1]) else []
             out.append(np.concatenate([*head, line, *tail]) if head or tail else line.copy())
         return out
 
     def framed(self, frame: PixelFrame) -> BranchTable:
-        """The table in ``frame``'s coordinates (itself for the identity frame)."""
+        """The table in ``frame``'s coordinates (itself for the identity frame); an
+        image's only (a frame maps the plane)."""
         if frame == IDENTITY:
             return self
+        if self.z is not None:
+            raise ValueError("a volume's branch table has no frame but the identity")
         x, y = frame_points(frame, self.x, self.y)
         return replace(
             self,
@@ -230,17 +260,58 @@ class BranchTable:
 
 
 def branch_table(sk: Skeleton, margins: Margins | None) -> BranchTable:
-    """The table of a skeleton's live nodes and branches, in image pixel coordinates.
-
-    Junction nodes come first (in the graph's order), each placed at its pixel of largest
-    radius (ties: the smaller row, then column, in the graph's own frame); then, branch by
-    branch, the endpoints (or a loop's node) as they are met. ``margins`` None: no
-    branch has a margin or a step that removes it.
+    """The table of an image skeleton's live nodes and branches, in image pixel
+    coordinates (:func:`graph_table`): each junction placed at its pixel of largest
+    radius, ties to the smaller row, then column, in the graph's own frame; a loop
+    without junction gets a node of its own; off-path pixels sorted.
     """
-    g, r2 = sk.graph, sk.r2
+    g = sk.graph
     rows, cols = sk.image_coordinates(g.rows, g.cols)
-    # (Python lists: a junction is a few pixels, too few for numpy's per-call cost)
-    neg_r2, grow, gcol = (-r2).tolist(), g.rows.tolist(), g.cols.tolist()
+    return graph_table(g, sk.r2, [cols, rows], margins, ties=[g.rows, g.cols])
+
+
+def volume_table(sk: VolumeSkeleton, margins: Margins | None) -> BranchTable:
+    """The table of a volume skeleton's live nodes and branches (:func:`graph_table`), in
+    voxel indices of the whole volume (``x`` the array's last axis, ``z`` its first),
+    radii and lengths physical: each junction placed at its voxel of largest radius,
+    ties to the smaller point index; a loop without junction has no node (its
+    ``source`` and ``target`` are -1); off-path voxels in the graph's order, as a
+    volume's document has always listed them.
+    """
+    oz, oy, ox = sk.origin
+    return graph_table(
+        sk.graph,
+        sk.r2,
+        [sk.x + ox, sk.y + oy, sk.z + oz],
+        margins,
+        ties=[],
+        loop_nodes=False,
+        sort_sides=False,
+    )
+
+
+def graph_table(
+    g: PointGraph,
+    r2: np.ndarray,
+    coords: Sequence[np.ndarray],
+    margins: Margins | None,
+    ties: Sequence[np.ndarray],
+    loop_nodes: bool = True,
+    sort_sides: bool = True,
+) -> BranchTable:
+    """The table of a branch graph's live nodes and branches, on any grid.
+
+    ``coords``: ``x``, ``y`` (and ``z``) of every point of the graph. Junction nodes come
+    first (in the graph's order), each placed at its point of largest radius (ties: the
+    smaller ``ties`` values in turn, then the smaller point index); then, branch by
+    branch, the endpoints (or, ``loop_nodes``, a loop's node) as they are met; a lone
+    point is one node, the source and target of its branch. ``sort_sides``: a branch's
+    off-path points sorted, else in the graph's order. ``margins`` None: no branch has a
+    margin or a step that removes it.
+    """
+    # (Python lists: a junction is a few points, too few for numpy's per-call cost)
+    neg_r2 = (-r2).tolist()
+    tie = [t.tolist() for t in ties]
     node_point: list[int] = []
     node_kind: list[int] = []
     node_junction: list[int] = []
@@ -251,7 +322,7 @@ def branch_table(sk: Skeleton, margins: Margins | None) -> BranchTable:
             continue
         pts = sorted(junc.points)
         junction_node[j] = len(node_point)
-        node_point.append(min(pts, key=lambda p: (neg_r2[p], grow[p], gcol[p])))
+        node_point.append(min(pts, key=lambda p: (neg_r2[p], [t[p] for t in tie], p)))
         node_kind.append(JUNCTION)
         node_junction.append(j)
         members.append(pts)
@@ -278,7 +349,7 @@ def branch_table(sk: Skeleton, margins: Margins | None) -> BranchTable:
             continue
         path = br.path()
         if br.loop:
-            src = dst = new_node(path[0], LOOP)
+            src = dst = new_node(path[0], LOOP) if loop_nodes else -1
         else:
             ends: list[int] = []
             for e, p in ((0, path[0]), (1, path[-1])):
@@ -299,13 +370,14 @@ def branch_table(sk: Skeleton, margins: Margins | None) -> BranchTable:
         removed.append(-1 if k is None else int(k))
         graph_branch.append(b)
         paths.append(path)
-        sides.append(sorted(br.side))
+        sides.append(sorted(br.side) if sort_sides else list(br.side))
     member_idx, member_off = _csr(members)
     path_idx, path_off = _csr(paths)
     side_idx, side_off = _csr(sides)
+    x, y, *z = (np.asarray(c, np.float64) for c in coords)
     return BranchTable(
-        x=cols.astype(np.float64),
-        y=rows.astype(np.float64),
+        x=x,
+        y=y,
         radius=np.sqrt(r2.astype(np.float64)),
         node_point=np.asarray(node_point, np.int64),
         node_kind=np.asarray(node_kind, np.int8),
@@ -322,4 +394,5 @@ def branch_table(sk: Skeleton, margins: Margins | None) -> BranchTable:
         path_offsets=path_off,
         off_path=side_idx,
         off_offsets=side_off,
+        z=z[0] if z else None,
     )

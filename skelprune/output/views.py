@@ -29,26 +29,38 @@ def _slices(values: list[Any], offsets: np.ndarray) -> list[list[Any]]:
 
 
 def node_dicts(t: BranchTable) -> list[NodeDoc]:
-    """The document's ``nodes``: id, position, radius, kind and a junction's pixels."""
+    """The document's ``nodes``: id, position (``x``, ``y``, a volume's ``z``), radius,
+    kind and a junction's points."""
     xyr = t.xyr()
     at = xyr[t.node_point].tolist()
     members = _slices(xyr[t.members].tolist(), t.member_offsets)
+    rows = enumerate(zip(at, t.kinds(), members, strict=True))
+    if t.z is not None:
+        out: list[Any] = [
+            {"id": i, "x": x, "y": y, "z": z, "radius": r, "kind": kind, "points": pts}
+            for i, ((x, y, z, r), kind, pts) in rows
+        ]
+        return out
     return [
         {"id": i, "x": x, "y": y, "radius": r, "kind": kind, "points": pts}
-        for i, ((x, y, r), kind, pts) in enumerate(zip(at, t.kinds(), members, strict=True))
+        for i, ((x, y, r), kind, pts) in rows
     ]
 
 
-def branch_dicts(t: BranchTable, margins: bool = True) -> list[BranchDoc]:
+def branch_dicts(t: BranchTable, margins: bool = True, graph_ids: bool = False) -> list[BranchDoc]:
     """The document's ``branches``; ``margins`` False leaves out ``margin`` and
-    ``removed_at`` (the sequence's branches carry events instead)."""
+    ``removed_at`` (the sequence's branches carry events instead). Ids count the
+    branches from 0, or, ``graph_ids``, are the graph's own (a volume's document); a
+    loop without a node (a volume's) has a null ``source`` and ``target``."""
     xyr = t.xyr()
     paths = _slices(xyr[t.paths].tolist(), t.path_offsets)
     off = _slices(xyr[t.off_path].tolist(), t.off_offsets)
-    rows = zip(t.source.tolist(), t.target.tolist(), t.length.tolist(), paths, off, strict=True)
+    ids = t.graph_branch.tolist() if graph_ids else range(t.n_branches)
+    ends = nullable(t.source, -1), nullable(t.target, -1)
+    rows = zip(ids, *ends, t.length.tolist(), paths, off, strict=True)
     out: list[Any] = [
         {"id": j, "source": s, "target": d, "length": L, "points": p, "off_path": o}
-        for j, (s, d, L, p, o) in enumerate(rows)
+        for j, s, d, L, p, o in rows
     ]
     if margins:
         for b, m, k in zip(out, t.margins(), t.removal_steps(), strict=True):

@@ -1,28 +1,35 @@
 """The answer for a volume: the document with ``z``, the branch table, networkx, SWC and
 the overlay of the three maximum-intensity projections (docs/volumes.md, "Outputs").
 
-Points are ``[x, y, z, radius]``: ``x`` the array's last axis, ``z`` its first, as voxel
-indices of the whole volume; radii, lengths and widths are physical (``spacing``), volumes
-counted in voxels.
+Each component's answer is read once into a :class:`~skelprune.output.table.BranchTable`
+with a ``z`` column (:func:`~skelprune.output.table.volume_table`), the table an image's
+answer is read into; the document's nodes and branches, the CSV rows, the networkx graph,
+SWC and the overlay's end marks are views of it. Points are ``[x, y, z, radius]``: ``x``
+the array's last axis, ``z`` its first, as voxel indices of the whole volume; radii,
+lengths and widths are physical (``spacing``), volumes counted in voxels.
 """
 
 from __future__ import annotations
 
-import csv
 import io
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from functools import cached_property
+from typing import Any, NoReturn
 
 import numpy as np
 
 from ..errors import InvalidOptionError
 from ..grid3d.skeleton import VolumeSkeleton
 from ..grid3d.tips import VolumeTrim
+from ..io.frame import PixelFrame
 from ..options import OutputOptions, PruneOptions
+from ..options_where import missing_answer
 from ..pruning.bayesian import PruningSequence, target
 from ..pruning.margin import Margins
-from .finite import finite, finite_cell, finite_number, finite_tree
+from .finite import finite, finite_number, finite_tree, rows_csv, rows_frame
+from .table import ENDPOINT, BranchTable, volume_table
+from .views import branch_dicts, node_dicts
 
 __all__ = ["VolumeComponent", "VolumeResult"]
 
@@ -90,80 +97,17 @@ class VolumeComponent:
             return float(seq.objective[self.chosen_step])
         return target(self.lost, seq.area, self.skeleton.length, seq.alpha, seq.lbar)
 
-    def _where(self, p: int) -> list[float]:
-        s, (oz, oy, ox) = self.skeleton, self.skeleton.origin
-        return [
-            float(s.x[p] + ox),
-            float(s.y[p] + oy),
-            float(s.z[p] + oz),
-            float(np.sqrt(s.r2[p])),
-        ]
+    @cached_property
+    def table(self) -> BranchTable:
+        """The answer's nodes and branches as flat arrays with a ``z`` column
+        (:func:`~skelprune.output.table.volume_table`): what every output reads."""
+        return volume_table(self.skeleton, self.margins)
 
     def graph_doc(self) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
-        """The answer's nodes (junction clusters and free ends) and branches."""
-        g, r2 = self.skeleton.graph, self.skeleton.r2
-        nodes: list[dict[str, Any]] = []
-        of_junction: dict[int, int] = {}
-        for j, junc in enumerate(g.junctions):
-            if not junc.alive:
-                continue
-            centre = max(junc.points, key=lambda p: (r2[p], -p))
-            x, y, z, radius = self._where(centre)
-            of_junction[j] = len(nodes)
-            nodes.append(
-                {
-                    "id": len(nodes),
-                    "x": x,
-                    "y": y,
-                    "z": z,
-                    "radius": radius,
-                    "kind": "junction",
-                    "points": [self._where(p) for p in sorted(junc.points)],
-                }
-            )
-        branches = []
-        for b, br in enumerate(g.branches):
-            if not br.alive:
-                continue
-            path = g.path(b)
-            ends: list[int | None] = []
-            for e in (0, 1):
-                node = br.node[e]
-                if br.loop:
-                    ends.append(None)
-                elif node is not None:
-                    ends.append(of_junction[node])
-                elif e == 1 and len(path) == 1 and br.node[0] is None:
-                    ends.append(ends[0])  # a lone voxel: one end point
-                else:
-                    x, y, z, radius = self._where(path[0] if e == 0 else path[-1])
-                    ends.append(len(nodes))
-                    nodes.append(
-                        {
-                            "id": len(nodes),
-                            "x": x,
-                            "y": y,
-                            "z": z,
-                            "radius": radius,
-                            "kind": "endpoint",
-                            "points": [],
-                        }
-                    )
-            length = 0.0
-            for c, w in zip(br.steps, self.skeleton.step_weights.tolist(), strict=True):
-                length += c * w
-            branches.append(
-                {
-                    "id": b,
-                    "source": ends[0],
-                    "target": ends[1],
-                    "length": length,
-                    "points": [self._where(p) for p in path],
-                    "off_path": [self._where(p) for p in br.side],
-                    "margin": self.margins.margin.get(b),
-                    "removed_at": self.margins.removed_at.get(b),
-                }
-            )
+        """The answer's nodes (junction clusters and free ends) and branches, as the
+        document lists them (branch ids: the graph's own)."""
+        nodes: list[Any] = node_dicts(self.table)
+        branches: list[Any] = branch_dicts(self.table, graph_ids=True)
         return nodes, branches
 
     def to_dict(self) -> dict[str, Any]:
@@ -247,35 +191,29 @@ class VolumeResult:
         (twice the ball radius: mean, least, largest) and its two ends, all in the units
         of ``spacing``; a pandas ``DataFrame`` when pandas is installed, else a list of
         row dicts (as an image's :meth:`~skelprune.output.document.PruneResult.summary`)."""
-        rows = self._branch_rows()
-        try:
-            import pandas as pd
-        except ImportError:
-            return rows
-        return pd.DataFrame(rows, columns=list(VOLUME_BRANCH_COLUMNS))
+        return rows_frame(self._branch_rows(), VOLUME_BRANCH_COLUMNS)
 
     def _branch_rows(self) -> list[dict[str, Any]]:
         dz, dy, dx = self.spacing
         rows = []
         for i, comp in enumerate(self.components):
-            nodes, branches = comp.graph_doc()
-            for br in branches:
-                pts = np.asarray(br["points"], float)
-                kind = (
-                    "loop"
-                    if br["source"] is None
-                    else "end"
-                    if "endpoint" in {nodes[br["source"]]["kind"], nodes[br["target"]]["kind"]}
-                    else "inner"
-                )
+            t = comp.table
+            ends = t.node_kind == ENDPOINT
+            off = np.diff(t.off_offsets).tolist()
+            margins, steps = t.margins(), t.removal_steps()
+            for j, (b, src, dst) in enumerate(
+                zip(t.graph_branch.tolist(), t.source.tolist(), t.target.tolist(), strict=True)
+            ):
+                pts = t.path(j)
+                kind = "loop" if src < 0 else "end" if ends[src] or ends[dst] else "inner"
                 rows.append(
                     {
                         "component": i,
                         "label": comp.label,
-                        "branch": br["id"],
+                        "branch": b,
                         "kind": kind,
-                        "length": br["length"],
-                        "voxels": len(pts) + len(br["off_path"]),
+                        "length": float(t.length[j]),
+                        "voxels": len(pts) + off[j],
                         "mean_width": float(2 * pts[:, 3].mean()),
                         "min_width": float(2 * pts[:, 3].min()),
                         "max_width": float(2 * pts[:, 3].max()),
@@ -285,8 +223,8 @@ class VolumeResult:
                         "x1": pts[-1, 0] * dx,
                         "y1": pts[-1, 1] * dy,
                         "z1": pts[-1, 2] * dz,
-                        "margin": br["margin"],
-                        "removed_at": br["removed_at"],
+                        "margin": margins[j],
+                        "removed_at": steps[j],
                     }
                 )
         return [{k: finite(v) for k, v in row.items()} for row in rows]
@@ -299,12 +237,7 @@ class VolumeResult:
     def to_csv(self) -> str:
         """:meth:`summary` as CSV text (a header row; empty cells for null), with or
         without pandas."""
-        buf = io.StringIO()
-        writer = csv.DictWriter(buf, fieldnames=list(VOLUME_BRANCH_COLUMNS), lineterminator="\n")
-        writer.writeheader()
-        for row in self._branch_rows():
-            writer.writerow({k: finite_cell(v) for k, v in row.items()})
-        return buf.getvalue()
+        return rows_csv(self._branch_rows(), VOLUME_BRANCH_COLUMNS)
 
     def to_networkx(self) -> Any:
         """The skeleton as a ``networkx.MultiGraph``: nodes ``(component, node id)`` with
@@ -339,8 +272,9 @@ class VolumeResult:
         lines = ["# skelprune curve skeleton; units of spacing " + " ".join(map(str, self.spacing))]
         next_id = 1
         for comp in self.components:
-            s = comp.skeleton
-            pts = s.points()
+            s, t = comp.skeleton, comp.table
+            pts = t.pixels()
+            cx, cy, cz = t.columns()
             local = np.full(s.z.size, -1, np.int64)
             local[pts] = np.arange(pts.size)
             nbr = s.graph.nbr[pts]
@@ -362,21 +296,30 @@ class VolumeResult:
                     p = pts[q]
                     up = -1 if parent[q] < 0 else ids[int(parent[q])]
                     # SWC has no null: every number is finite (finite_number)
-                    x, y, z = (
-                        (s.x[p] + s.origin[2]) * dx,
-                        (s.y[p] + s.origin[1]) * dy,
-                        (s.z[p] + s.origin[0]) * dz,
-                    )
-                    numbers = " ".join(map(finite_number, (x, y, z, np.sqrt(s.r2[p]))))
+                    x, y, z = cx[p] * dx, cy[p] * dy, cz[p] * dz
+                    numbers = " ".join(map(finite_number, (x, y, z, t.radius[p])))
                     lines.append(f"{ids[q]} 0 {numbers} {up}")
         return "\n".join(lines) + "\n"
 
-    def to_geojson(self, *args: Any, **kwargs: Any) -> Any:
-        """Refused: GeoJSON holds plane geometry, a volume's skeleton is 3-D."""
-        raise InvalidOptionError(
-            "GeoJSON holds 2-D geometry and a volume's skeleton is 3-D: ask for the JSON "
-            "document (to_dict), SWC (to_swc) or a networkx graph (to_networkx)"
-        )
+    def to_geojson(
+        self,
+        frame: PixelFrame | None = None,
+        simplify: float | None = None,
+        cut_ends: bool | None = None,
+    ) -> NoReturn:
+        """Refused, whatever the arguments (those of an image's
+        :meth:`~skelprune.output.document.PruneResult.to_geojson`): GeoJSON holds map
+        geometry, and a volume's points are voxel indices in three dimensions, not map
+        coordinates. Its answers are the JSON document (:meth:`to_dict`), the overlay
+        (:meth:`overlay_png`), the CSV table (:meth:`to_csv`) and SWC (:meth:`to_swc`),
+        as :func:`skelprune.encode` says.
+
+        Raises
+        ------
+        InvalidOptionError
+            Always, in the words of :func:`skelprune.encode`'s refusal.
+        """
+        raise InvalidOptionError(missing_answer("a volume", "volume", "geojson"))
 
     def render_overlay(self, scale: int = 1) -> np.ndarray:
         """RGB image of the three maximum-intensity projections (along ``z`` top left,
@@ -397,9 +340,9 @@ class VolumeResult:
                 idx = sk.points()
                 oz, oy, ox = sk.origin
                 drawn[sk.z[idx] + oz, sk.y[idx] + oy, sk.x[idx] + ox] = True
-            for node in comp.graph_doc()[0]:
-                if node["kind"] == "endpoint":
-                    ends[int(node["z"]), int(node["y"]), int(node["x"])] = True
+            t = comp.table
+            at = t.node_point[t.node_kind == ENDPOINT]
+            ends[tuple(c[at].astype(np.int64) for c in t.columns()[::-1])] = True
 
         def view(axis: int, f0: int, f1: int, turn: bool = False) -> np.ndarray:
             def mip(a: np.ndarray) -> np.ndarray:

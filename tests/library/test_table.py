@@ -14,7 +14,7 @@ import skelprune
 from skelprune.io.frame import IDENTITY, PixelFrame
 from skelprune.output.schema import PruneDocument, SkeletonGeoJSON, problems
 from skelprune.output.table import round_like_python
-from testkit.document_oracle import branch_line, component_dict
+from testkit.document_oracle import branch_line, component_dict, volume_skeleton_dict
 from testkit.shapes import dataset
 
 #: A frame with a flip, an offset and a pixel size whose products need rounding.
@@ -88,6 +88,29 @@ def test_documents_conform_to_the_library_schema() -> None:
     assert problems(res.to_geojson(), SkeletonGeoJSON) == []
 
 
+def test_one_schema_holds_an_images_and_a_volumes_document() -> None:
+    """The one document schema: real volume documents (labels, anisotropic voxels, a
+    loop with null ends, a lone voxel) and real image documents conform; a volume's
+    node without ``z`` or with a three-number point does not."""
+    for name, (volume, spacing) in _volumes().items():
+        for opts in ({}, {"trim": False, "min_margin": 0}):
+            doc = json.loads(json.dumps(skelprune.prune(volume, spacing=spacing, **opts).to_dict()))
+            assert problems(doc) == [], name
+    labels = np.zeros((40, 60), np.uint8)
+    labels[5:35, 5:28], labels[5:35, 32:55] = 3, 7
+    ring = np.zeros((40, 60), bool)
+    ring[5:35, 5:55], ring[15:25, 20:40] = True, False
+    for image, opts in ((labels, {"labels": True}), (ring, {})):
+        doc = skelprune.prune(image, **opts).to_dict(sequence=True)
+        assert problems(json.loads(json.dumps(doc))) == []
+    doc = skelprune.prune(_volumes()["tree0-iso"][0]).to_dict()
+    node = doc["components"][0]["skeleton"]["nodes"][0]
+    del node["z"]
+    node["points"] = [[1.0, 2.0, 3.0, 4.0, 5.0]]
+    found = problems(doc)
+    assert "$.components[0].skeleton.nodes[0].points[0]: length 5 outside [3, 4]" in found
+
+
 def test_the_schema_check_finds_what_departs() -> None:
     m = np.zeros((20, 40), bool)
     m[5:15, 5:35] = True
@@ -117,3 +140,50 @@ def test_frame_rounding_is_pythons_round_exactly() -> None:
             want = np.array([round(x, n) for x in a.tolist()])
             assert np.array_equal(got, want) and np.array_equal(np.signbit(got), np.signbit(want))
     assert round_like_python(np.array([1234.5]), -1).tolist() == [round(1234.5, -1)]
+
+
+def _volumes() -> dict[str, tuple[np.ndarray, tuple[float, float, float]]]:
+    from testkit.volume_snapshot import volumes
+
+    out = volumes(quick=True)
+    lone = np.zeros((5, 5, 5), bool)
+    lone[2, 2, 2] = True
+    zz, yy, xx = np.mgrid[:9, :15, :15]
+    rr = np.hypot(yy - 7, xx - 7)
+    out["lone"] = (lone, (1.0, 1.0, 1.0))
+    out["ring"] = ((rr > 3.5) & (rr < 6) & (abs(zz - 4) <= 1), (1.0, 1.0, 1.0))
+    return out
+
+
+def test_a_volume_reads_the_one_branch_table_with_a_z_column() -> None:
+    """A volume's answer is the image's table with ``z``: its document part equals the
+    voxel-by-voxel walk (loops without a node, lone voxels one node, the graph's branch
+    ids), its SWC lists the table's points, its CSV one row a table branch."""
+    seen = {"loop": 0, "lone": 0, "junction": 0}
+    for name, (volume, spacing) in _volumes().items():
+        res = skelprune.prune(volume, spacing=spacing, trim=name != "ring")
+        rows = res.summary()
+        assert len(rows) == sum(c.table.n_branches for c in res.components), name
+        swc = [ln for ln in res.to_swc().splitlines() if not ln.startswith("#")]
+        assert len(swc) == sum(c.table.pixels().size for c in res.components), name
+        for comp in res.components:
+            t = comp.table
+            assert t.ndim == 3 and t.coordinates().shape == (t.x.size, 3)
+            assert t.xyr().shape == (t.x.size, 4)
+            doc = comp.to_dict()["skeleton"]
+            ref = volume_skeleton_dict(comp)
+            assert _same([doc["nodes"], doc["branches"]], [ref["nodes"], ref["branches"]]), name
+            seen["loop"] += int((t.source < 0).sum())
+            seen["lone"] += int(np.sum(np.diff(t.path_offsets) == 1))
+            seen["junction"] += int(np.sum(t.node_kind == 1))
+            assert np.array_equal(t.source < 0, t.target < 0)
+    assert all(seen.values()), seen  # every case met
+
+
+def test_a_volume_table_has_no_frame() -> None:
+    v = np.zeros((12, 14, 40), bool)
+    v[3:9, 4:10, 3:37] = True
+    t = skelprune.prune(v).components[0].table
+    assert t.framed(IDENTITY) is t
+    with pytest.raises(ValueError, match="volume"):
+        t.framed(FRAME)

@@ -122,8 +122,13 @@ def test_npy_path_labels_table_networkx_swc_and_overlay(tmp_path) -> None:
 def test_volume_refusals(tmp_path) -> None:
     bar = tube(length=20.0, radius=2.0).volume()
     res = skelprune.prune(bar)
-    with pytest.raises(InvalidOptionError, match="GeoJSON"):
-        res.to_geojson()
+    with pytest.raises(InvalidOptionError, match="GeoJSON") as refused:
+        res.to_geojson(simplify=1.0)
+    said = str(refused.value)
+    assert "map coordinates" in said and "SWC" in said and "CSV" in said
+    with pytest.raises(InvalidOptionError) as encoded:
+        skelprune.encode(res, "geojson")
+    assert str(encoded.value) == said  # one wording
     with pytest.raises(InvalidOptionError, match="images only"):
         skelprune.prune(bar, method="dce")
     with pytest.raises(InvalidOptionError, match="images only"):

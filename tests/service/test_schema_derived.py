@@ -31,7 +31,10 @@ def _documents() -> tuple[dict, dict, dict, dict]:
 
 def test_the_service_models_accept_the_library_documents() -> None:
     image, polygon, image_geo, polygon_geo = _documents()
-    for doc in (image, polygon):
+    v = np.zeros((12, 14, 40), np.uint8)
+    v[3:9, 4:10, 3:20], v[3:9, 4:10, 22:37] = 1, 2  # a label volume
+    volume = skelprune.prune(v, spacing=(2.0, 1.0, 1.0)).to_dict()
+    for doc in (image, polygon, volume):
         assert schema.problems(doc) == []
         schemas.PruneDocument.model_validate(doc)
     for geo in (image_geo, polygon_geo):

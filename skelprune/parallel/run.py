@@ -233,6 +233,14 @@ def _run(
         for one in suspects:
             with contextlib.suppress(Exception):  # the workers restarted by the nanny
                 c.wait_for_workers(workers, timeout=RESTART_TIMEOUT)
+            if not _workers(c):  # none came back: nothing would ever run it
+                detail = (
+                    "its worker died while pruning it, and no worker came back within "
+                    f"{RESTART_TIMEOUT} s to try it alone"
+                )
+                results = [Done(one[0], problem=(WORKER_CRASHED, detail))]
+                yield _record(results[0], items[one[0]], store)
+                continue
             try:
                 results = c.submit(run_batch, [one], job, pure=False).result()
             except Exception as exc:

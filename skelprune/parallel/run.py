@@ -135,10 +135,14 @@ def forked_workers() -> Iterator[None]:
     if "forkserver" not in multiprocessing.get_all_start_methods():
         yield
         return
-    from distributed.utils import get_mp_context
+    import distributed.utils
 
+    multiprocessing.get_context("forkserver").set_forkserver_preload([f"{__package__}.preload"])
+    # dask's own preload list, set once unless this flag says it is: it imports numpy,
+    # pandas ... in this process first, to check them (0.4 s here); ours imports what a
+    # worker runs
+    distributed.utils._forkserver_preload_set = True
     with dask.config.set({"distributed.worker.multiprocessing-method": "forkserver"}):
-        get_mp_context().set_forkserver_preload([f"{__package__}.preload"])
         yield
 
 

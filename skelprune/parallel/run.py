@@ -323,7 +323,9 @@ def prune_many(
     client : distributed.Client or str, optional
         Where to run: a client, or a scheduler's address (``tcp://host:8786``). Default:
         a local cluster of ``jobs`` one-thread worker processes (one a core), closed at
-        the end.
+        the end; its workers are forked from a process that loads the library and its
+        kernels once (a forkserver, where the platform has one), which stays while this
+        process lives and starts the workers of its later runs.
     out : path, optional
         The folder to write to (made if missing): ``NAME.json`` a document (compact
         JSON, :func:`~skelprune.parallel.work.document_bytes`), ``NAME.jsonl`` a table

@@ -97,6 +97,22 @@ def test_library_loop_local_cluster_tcp_cluster_and_cli_write_the_same_bytes(
     assert (tmp_path / "cli" / PROBLEMS_FILE).read_bytes() == b""
 
 
+def test_a_relative_folder_is_read_by_workers_started_elsewhere(
+    tmp_path: Path, scheduler: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The cluster's workers run in the folder they were started in, not the caller's."""
+    write_masks(tmp_path / "in", 3)
+    monkeypatch.chdir(tmp_path)
+    assert Path.cwd() != REPO  # where the workers were started
+    outcomes = prune_many("in", client=scheduler, out="out", ordered=True)
+    assert [o.status for o in outcomes] == ["done"] * 3, [o.problem for o in outcomes]
+    assert sorted(p.name for p in (tmp_path / "out").glob("*.json")) == [
+        "m0000.json",
+        "m0001.json",
+        "m0002.json",
+    ]
+
+
 def test_a_poisoned_input_among_1000_leaves_999_results_and_one_problem(
     tmp_path: Path, scheduler: str
 ) -> None:

@@ -1,8 +1,8 @@
 """Imported once by the forkserver a local cluster's workers are forked from
 (:func:`skelprune.parallel.run.forked_workers`): dask's worker, the library and the
-numba kernels a mask's pruning uses, loaded once for all the workers (and for those the
-nanny restarts) instead of once in each. Nothing here may fail: the workers are forked
-all the same, and load what is missing on their first input."""
+numba kernels a mask's pruning uses, loaded once for all the workers instead of once in
+each. Nothing here may fail: the workers are forked all the same, and load what is
+missing on their first input."""
 
 from __future__ import annotations
 

@@ -346,19 +346,9 @@ def volume_components(
         from .volume_labels import label_groups, label_pieces
 
         return list(label_pieces(label_groups(volume)))
-    from scipy import ndimage
+    from .grid3d.components import binary_pieces
 
-    from .grid3d.distance import pad
-
-    out: list[tuple[np.ndarray, tuple[int, int, int], int | None]] = []
-    lab, _ = ndimage.label(volume != 0, structure=np.ones((3, 3, 3), bool))
-    for i, piece in enumerate(ndimage.find_objects(lab), start=1):
-        if piece is None:
-            continue
-        crop = pad(lab[piece] == i)
-        origin = (piece[0].start - 1, piece[1].start - 1, piece[2].start - 1)
-        out.append((crop, origin, None))
-    return out
+    return binary_pieces(volume != 0)
 
 
 def prune_volume(

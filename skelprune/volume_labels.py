@@ -117,25 +117,14 @@ def label_pieces(
     groups: LabelGroups,
 ) -> Iterator[tuple[np.ndarray, tuple[int, int, int], int]]:
     """Each label's 26-connected pieces as padded crops with their origins in the
-    volume: by label, then as ``scipy.ndimage.label`` finds them in the label's box."""
-    from scipy import ndimage
+    volume: by label, then as ``scipy.ndimage.label`` finds them in the label's box
+    (:func:`skelprune.grid3d.components.binary_pieces`)."""
+    from .grid3d.components import binary_pieces
 
-    from .grid3d.distance import pad
-
-    cube = np.ones((3, 3, 3), bool)
     for i, value in enumerate(groups.values):
-        box = groups.boxes[i]
-        lab, _ = ndimage.label(groups.mask(i), structure=cube)
-        for k, piece in enumerate(ndimage.find_objects(lab), start=1):
-            if piece is None:
-                continue
-            crop = pad(lab[piece] == k)
-            origin = (
-                int(box[0]) + piece[0].start - 1,
-                int(box[1]) + piece[1].start - 1,
-                int(box[2]) + piece[2].start - 1,
-            )
-            yield crop, origin, value
+        z0, y0, x0 = (int(v) for v in groups.boxes[i][:3])
+        for crop, (z, y, x), _ in binary_pieces(groups.mask(i)):
+            yield crop, (z0 + z, y0 + y, x0 + x), value
 
 
 @njit(cache=True)

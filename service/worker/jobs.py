@@ -150,6 +150,9 @@ def warmup() -> str:
     vres.to_dict()
     vres.to_csv()
     vres.overlay_png()
+    sparse = np.zeros((8, 20, 40), dtype=bool)  # a thin bar in a wide box: the sparse path
+    sparse[3:6, 9:12, 5:35] = True
+    skelprune.prune(sparse).to_dict()
     loaded, compiled = kernel_counts()
     took = f"{time.perf_counter() - t0:.1f} s"
     if compiled:

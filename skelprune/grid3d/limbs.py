@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 
 from ..pruning.limb_memory import LimbMemory
 from .balls import _paint, ball_counts
@@ -97,9 +98,15 @@ class VolumeLimbs(LimbMemory):
         before = self.counts[box]
         after = before.copy()
         _paint(after, z - lo[0], y - lo[1], x - lo[2], r2, np.array(self.spacing), -1)
-        only = (after == 0) & (before > 0)
-        d2 = squared_distance(only, self.spacing)
-        whole = d2[z[deep] - lo[0], y[deep] - lo[1], x[deep] - lo[2]] >= r2[deep]
+        zd, yd, xd = z[deep] - lo[0], y[deep] - lo[1], x[deep] - lo[2]
+        if all(float(s).is_integer() for s in self.spacing):
+            # exact squared distances: a ball is whole when none of its voxels is
+            # covered by another branch or lies outside, read ball by ball
+            whole = np.zeros(zd.size, np.bool_)
+            _whole_balls(after, before, zd, yd, xd, r2[deep], np.array(self.spacing), whole)
+        else:  # the distance to the nearest voxel not only this branch's, as measured
+            d2 = squared_distance((after == 0) & (before > 0), self.spacing)
+            whole = d2[zd, yd, xd] >= r2[deep]
         found = limb_rule(r2[deep][whole].tolist(), self.spacing)
         self.limb[b] = found
         return found
@@ -108,3 +115,46 @@ class VolumeLimbs(LimbMemory):
         z, y, x, r2 = self.z[points], self.y[points], self.x[points], self.r2[points]
         assert self.counts is not None
         _paint(self.counts, z, y, x, r2, np.array(self.spacing), -1)
+
+
+@njit(cache=True)
+def _whole_balls(after, before, z, y, x, r2, spacing, whole) -> None:
+    """``whole[k]``: every voxel of ball ``k`` (``|p − s|² < r2``, as :func:`_paint`
+    paints it) is covered (``before > 0``) and by no ball but the branch's (``after ==
+    0``); a ball reaching past the arrays is not. The test ``d2(s) ≥ r2(s)`` of the
+    distance to the nearest voxel not so covered, without the distance transform."""
+    sz, sy, sx = spacing[0], spacing[1], spacing[2]
+    nz, ny, nx = after.shape
+    for k in range(z.size):
+        v = r2[k]
+        reach_a = int(math.sqrt(v) / sz) + 1
+        reach_b = int(math.sqrt(v) / sy) + 1
+        ok = True
+        for a in range(-reach_a, reach_a + 1):
+            az = a * sz
+            for b in range(-reach_b, reach_b + 1):
+                by = b * sy
+                rest = v - (az * az + by * by)
+                if rest <= 0.0:
+                    continue
+                c = int(math.sqrt(rest) / sx) + 1
+                while c >= 0:  # the last c inside, by the exact test
+                    cx = c * sx
+                    if az * az + by * by + cx * cx < v:
+                        break
+                    c -= 1
+                if c < 0:
+                    continue
+                zz, yy = z[k] + a, y[k] + b
+                if zz < 0 or zz >= nz or yy < 0 or yy >= ny or x[k] - c < 0 or x[k] + c >= nx:
+                    ok = False
+                    break
+                for q in range(x[k] - c, x[k] + c + 1):
+                    if after[zz, yy, q] != 0 or before[zz, yy, q] <= 0:
+                        ok = False
+                        break
+                if not ok:
+                    break
+            if not ok:
+                break
+        whole[k] = ok

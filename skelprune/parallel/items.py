@@ -207,10 +207,11 @@ def expand(inputs: Any, labels: bool = False) -> list[Item]:
                     items.extend(Labels(p, name).items())
                 found = list(itertools.compress(found, volume))
             if name is not None and len(found) == 1:
-                items.append(Item(name, str(found[0])))
+                items.append(Item(name, os.path.abspath(found[0])))
             else:
                 files.extend(found)
-                items.extend(Item("", str(p)) for p in found)
+                # absolute: a cluster's workers need not share this process's folder
+                items.extend(Item("", os.path.abspath(p)) for p in found)
         elif labels and not is_volume(x):
             items.extend(Labels(x, name).items())
         else:

@@ -108,18 +108,42 @@ def _client(client: Client | str | None, jobs: int | None, limits: Limits) -> It
         len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
     )
     limit = "auto" if limits.memory_mb is None else f"{limits.memory_mb + WORKER_OWN_MB}MiB"
-    with (
-        LocalCluster(
+    with forked_workers():  # the workers start here
+        cluster = LocalCluster(
             n_workers=n,
             threads_per_worker=1,
             processes=True,
             memory_limit=limit,
             dashboard_address=":0",  # a free port: never a clash with another cluster
             silence_logs=logging.ERROR,
-        ) as cluster,
-        Client(cluster) as c,
-    ):
+        )
+    with cluster, Client(cluster) as c:
         yield c
+
+
+@contextlib.contextmanager
+def forked_workers() -> Iterator[None]:
+    """The workers a local cluster starts within: forked from one process that has
+    loaded dask's worker, the library and its kernels (:mod:`skelprune.parallel.preload`),
+    where the platform has a forkserver, instead of each started afresh and loading them
+    on its first input (about 1.5 s of CPU a worker, measured: docs/performance.md). A
+    worker its nanny restarts later is started afresh (dask's default)."""
+    import multiprocessing
+
+    import dask
+
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        yield
+        return
+    import distributed.utils
+
+    multiprocessing.get_context("forkserver").set_forkserver_preload([f"{__package__}.preload"])
+    # dask's own preload list, set once unless this flag says it is: it imports numpy,
+    # pandas ... in this process first, to check them (0.4 s here); ours imports what a
+    # worker runs
+    distributed.utils._forkserver_preload_set = True
+    with dask.config.set({"distributed.worker.multiprocessing-method": "forkserver"}):
+        yield
 
 
 def _workers(client: Client) -> int:
@@ -233,6 +257,14 @@ def _run(
         for one in suspects:
             with contextlib.suppress(Exception):  # the workers restarted by the nanny
                 c.wait_for_workers(workers, timeout=RESTART_TIMEOUT)
+            if not _workers(c):  # none came back: nothing would ever run it
+                detail = (
+                    "its worker died while pruning it, and no worker came back within "
+                    f"{RESTART_TIMEOUT} s to try it alone"
+                )
+                results = [Done(one[0], problem=(WORKER_CRASHED, detail))]
+                yield _record(results[0], items[one[0]], store)
+                continue
             try:
                 results = c.submit(run_batch, [one], job, pure=False).result()
             except Exception as exc:
@@ -299,7 +331,9 @@ def prune_many(
     client : distributed.Client or str, optional
         Where to run: a client, or a scheduler's address (``tcp://host:8786``). Default:
         a local cluster of ``jobs`` one-thread worker processes (one a core), closed at
-        the end.
+        the end; its workers are forked from a process that loads the library and its
+        kernels once (a forkserver, where the platform has one), which stays while this
+        process lives and starts the workers of its later runs.
     out : path, optional
         The folder to write to (made if missing): ``NAME.json`` a document (compact
         JSON, :func:`~skelprune.parallel.work.document_bytes`), ``NAME.jsonl`` a table

@@ -1,5 +1,8 @@
 """What runs inside a task, on a worker: read, check the budget, prune and serialise a
 batch of items, each one's failure caught and named, so that one bad input fails alone.
+
+The client imports this module for :class:`Job` and :class:`Done`: the pruning's own
+modules (numba's kernels, scipy, the output) are imported where they run, on a worker.
 """
 
 from __future__ import annotations
@@ -11,12 +14,9 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from ..budget import out_of_memory
 from ..errors import JobTooLargeError, SkelpruneError, problem_kind
 from ..limits import DATASET_LIMITS, Limits
 from ..options import OutputOptions, PruneOptions, RasterOptions, ReadOptions, VolumeOptions
-from ..output.encode import json_bytes
-from ..output.finite import OVERFLOW, finite_tree
 from ..volume import is_volume
 from .items import Feature, Item, LabelObject
 
@@ -91,6 +91,8 @@ def document_bytes(doc: Any) -> bytes:
     >>> document_bytes({"a": [1, 2.5], "b": None})
     b'{"a":[1,2.5],"b":null}\\n'
     """
+    from ..output.encode import json_bytes
+
     return json_bytes(doc) + b"\n"
 
 
@@ -103,6 +105,8 @@ def finite_lines(collection: dict[str, Any]) -> dict[str, Any]:
     ...
     skelprune.errors.SkelpruneError: the answer would hold a number JSON cannot write ...
     """
+    from ..output.finite import OVERFLOW
+
     for feature in collection["features"]:
         if not np.isfinite(np.asarray(feature["geometry"]["coordinates"], float)).all():
             raise SkelpruneError(OVERFLOW)
@@ -111,6 +115,8 @@ def finite_lines(collection: dict[str, Any]) -> dict[str, Any]:
 
 def feature_lines(item: Item, result: Any, job: Job) -> dict[str, Any]:
     """A feature's GeoJSON lines, non-finite numbers null, coordinates all finite."""
+    from ..output.finite import finite_tree
+
     return finite_lines(finite_tree(result.to_geojson()))
 
 
@@ -165,6 +171,8 @@ def run_item(
     try:
         return write(item, _result(item, job), job), None
     except MemoryError:
+        from ..budget import out_of_memory
+
         err: JobTooLargeError = out_of_memory(job.limits.memory)
         return None, (err.kind, str(err))
     except SkelpruneError as exc:

@@ -4,6 +4,7 @@ local cluster of processes, against a plain library loop, byte for byte."""
 
 from __future__ import annotations
 
+import ast
 import json
 import os
 import signal
@@ -257,17 +258,29 @@ def test_an_input_that_kills_its_worker_fails_alone_as_worker_crashed() -> None:
 
 def test_a_local_clusters_workers_start_with_the_kernels_loaded() -> None:
     """Forked from one process that loaded them: no worker loads the library's numba
-    kernels again on its first input (about 1.5 s of CPU a worker, for each run)."""
-    from service.worker.jobs import kernel_counts
-    from skelprune.limits import DATASET_LIMITS
-    from skelprune.parallel.run import _client
-
-    with _client(None, 2, DATASET_LIMITS) as client:
-        counts = client.run(kernel_counts)  # before any task
-        outcomes = prune_many({"a": blob(np.random.default_rng(1))}, client=client)
-    assert len(counts) == 2
-    assert all(loaded > 0 and compiled == 0 for loaded, compiled in counts.values()), counts
-    assert outcomes[0].status == "done"
+    kernels again on its first input (about 1.5 s of CPU a worker, for each run). In a
+    fresh process, as a run starts: a process whose forkserver already runs (this test
+    session's service pools) forks the workers from that one instead."""
+    code = (
+        "import numpy as np\n"
+        "from service.worker.jobs import kernel_counts\n"
+        "from skelprune.limits import DATASET_LIMITS\n"
+        "from skelprune.parallel import prune_many\n"
+        "from skelprune.parallel.run import _client\n"
+        "if __name__ == '__main__':\n"
+        "    m = np.zeros((20, 40), bool); m[4:16, 4:36] = True\n"
+        "    with _client(None, 2, DATASET_LIMITS) as client:\n"
+        "        counts = client.run(kernel_counts)  # before any task\n"
+        "        outcomes = prune_many({'a': m}, client=client)\n"
+        "    print(sorted(counts.values()), outcomes[0].status)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=True
+    )
+    counts, status = done.stdout.strip().splitlines()[-1].rsplit(" ", 1)
+    pairs = ast.literal_eval(counts)
+    assert len(pairs) == 2 and status == "done"
+    assert all(loaded > 0 and compiled == 0 for loaded, compiled in pairs), pairs
 
 
 def test_the_client_imports_none_of_the_pruning_modules(tmp_path: Path) -> None:

@@ -121,6 +121,24 @@ def exclusive_volume(
     return int(np.count_nonzero(volume & (own > 0) & (counts == own)))
 
 
+@njit(cache=True, inline="always")
+def row_half_width(v, ab2, sx):
+    """The largest ``c ≥ 0`` with ``ab2 + (c·dx)² < v``, by the exact test: the half
+    width of the row of a ball of squared radius ``v`` whose offsets along ``z`` and
+    ``y`` give ``ab2 = (a·dz)² + (b·dy)²``; -1 where the row holds no voxel. Every kernel
+    that walks a ball row by row takes its rows from here."""
+    rest = v - ab2
+    if rest <= 0.0:
+        return -1
+    c = int(math.sqrt(rest) / sx) + 1
+    while c >= 0:  # the last c inside, by the exact test
+        cx = c * sx
+        if ab2 + cx * cx < v:
+            break
+        c -= 1
+    return c
+
+
 @njit(cache=True)
 def _paint(out, z, y, x, r2, spacing, value) -> None:
     """Add ``value`` to every voxel of every ball, a row of voxels at a time."""
@@ -136,15 +154,7 @@ def _paint(out, z, y, x, r2, spacing, value) -> None:
             az = a * sz
             for b in range(max(-reach_b, -y[k]), min(reach_b, ny - 1 - y[k]) + 1):
                 by = b * sy
-                rest = v - (az * az + by * by)
-                if rest <= 0.0:
-                    continue
-                c = int(math.sqrt(rest) / sx) + 1
-                while c >= 0:  # the last c inside, by the exact test
-                    cx = c * sx
-                    if az * az + by * by + cx * cx < v:
-                        break
-                    c -= 1
+                c = row_half_width(v, az * az + by * by, sx)
                 if c < 0:
                     continue
                 row = out[z[k] + a, y[k] + b]

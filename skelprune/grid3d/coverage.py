@@ -21,6 +21,7 @@ import math
 import numpy as np
 from numba import njit
 
+from .balls import row_half_width
 from .distance import check_spacing
 
 __all__ = ["VolumeCoverage"]
@@ -174,15 +175,7 @@ def _update(index, c, s, q, exclusive, z, y, x, r2, spacing, dc, ds, dq):
             az = a * sz
             for b in range(max(-reach_b, -y[k]), min(reach_b, ny - 1 - y[k]) + 1):
                 by = b * sy
-                rest = v - (az * az + by * by)
-                if rest <= 0.0:
-                    continue
-                w = int(math.sqrt(rest) / sx) + 1
-                while w >= 0:  # the last offset inside, by the exact test
-                    cx = w * sx
-                    if az * az + by * by + cx * cx < v:
-                        break
-                    w -= 1
+                w = row_half_width(v, az * az + by * by, sx)
                 if w < 0:
                     continue
                 row = index[z[k] + a, y[k] + b]

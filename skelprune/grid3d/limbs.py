@@ -17,7 +17,7 @@ import numpy as np
 from numba import njit
 
 from ..pruning.limb_memory import LimbMemory
-from .balls import _paint, ball_counts
+from .balls import _paint, ball_counts, row_half_width
 from .distance import squared_distance
 from .graph import VolumeBranchGraph
 
@@ -134,15 +134,7 @@ def _whole_balls(after, before, z, y, x, r2, spacing, whole) -> None:
             az = a * sz
             for b in range(-reach_b, reach_b + 1):
                 by = b * sy
-                rest = v - (az * az + by * by)
-                if rest <= 0.0:
-                    continue
-                c = int(math.sqrt(rest) / sx) + 1
-                while c >= 0:  # the last c inside, by the exact test
-                    cx = c * sx
-                    if az * az + by * by + cx * cx < v:
-                        break
-                    c -= 1
+                c = row_half_width(v, az * az + by * by, sx)
                 if c < 0:
                     continue
                 zz, yy = z[k] + a, y[k] + b

@@ -36,6 +36,7 @@ import numpy as np
 from numba import njit
 
 from ._topology import ADJ6, ADJ26, FACES, N18, OFFSETS, end_point, is_simple, neighbourhood_code
+from .balls import row_half_width
 from .distance import check_spacing, check_volume, pad, padded_squared_distance
 
 __all__ = ["CurveSkeleton", "curve_skeleton"]
@@ -196,15 +197,7 @@ def _maximal(r2, p, steps, offsets, spacing) -> bool:
         az = a * sz
         for b in range(-reach_b, reach_b + 1):
             by = b * sy
-            rest = v - (az * az + by * by)
-            if rest <= 0.0:
-                continue
-            c = int(math.sqrt(rest) / sx) + 1
-            while c >= 0:
-                cx = c * sx
-                if az * az + by * by + cx * cx < v:
-                    break
-                c -= 1
+            c = row_half_width(v, az * az + by * by, sx)
             if c < 0:
                 continue
             for i in range(26):

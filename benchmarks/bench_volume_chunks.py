@@ -16,10 +16,12 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 import tempfile
 import time
 from pathlib import Path
 
+import cloudpickle
 import numpy as np
 
 from .common import table
@@ -35,6 +37,10 @@ def _peak_mb() -> float:
     import resource
 
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+# sent to the workers by value: they cannot import this package
+cloudpickle.register_pickle_by_value(sys.modules[__name__])
 
 
 def write_store(path: Path, side: int = SIDE) -> np.ndarray:

@@ -147,7 +147,9 @@ def map_batches(
     try:
         futures = {executor.submit(fn, b, *args, **options): i for i, b in enumerate(batches)}
         for fut in as_completed(futures):
-            i = futures[fut]
+            # let each result go on the cluster once it is here: a worker keeps a
+            # future's result for as long as the client holds the future
+            i = futures.pop(fut)
             results[i] = fut.result()
             if progress is not None:
                 progress(len(batches[i]))

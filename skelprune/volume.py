@@ -341,14 +341,14 @@ def volume_components(
     >>> [(c.shape, o, lab) for c, o, lab in volume_components(v)]
     [((3, 4, 3), (0, 1, 3), 2), ((3, 3, 4), (0, 0, 0), 7)]
     """
-    binary = volume.dtype == np.bool_ or not np.any((volume != 0) & (volume != 1))
-    if not binary:
+    inside = volume != 0
+    if volume.dtype != np.bool_ and np.any(inside & (volume != 1)):  # labels, not 0/1
         from .volume_labels import label_groups, label_pieces
 
         return list(label_pieces(label_groups(volume)))
     from .grid3d.components import binary_pieces
 
-    return binary_pieces(volume != 0)
+    return binary_pieces(inside)
 
 
 def prune_volume(

@@ -91,8 +91,8 @@ def binary_pieces(inside: np.ndarray) -> list[Piece]:
     """The 26-connected components of a boolean volume as padded crops with their
     corners, in ``scipy.ndimage.label``'s order; a sparse volume's found from its
     foreground voxels (:func:`sparse_components`), a fuller one's by scipy."""
-    flat = np.flatnonzero(inside)
-    if flat.size > SPARSE * inside.size or flat.size >= 2**31:
+    n = int(np.count_nonzero(inside))  # no index array for a full volume: scipy's pass
+    if n > SPARSE * inside.size or n >= 2**31:
         from scipy import ndimage
 
         from .distance import pad
@@ -103,7 +103,8 @@ def binary_pieces(inside: np.ndarray) -> list[Piece]:
             for i, box in enumerate(ndimage.find_objects(lab), start=1)
             if box is not None
         ]
-    nz, ny, nx = (int(n) for n in inside.shape)
+    flat = np.flatnonzero(inside)
+    nz, ny, nx = (int(d) for d in inside.shape)
     component, k = sparse_components(flat, (nz, ny, nx))
     order = np.argsort(component, kind="stable")  # each component's voxels, raster order
     starts = np.searchsorted(component[order], np.arange(k + 1))

@@ -215,7 +215,26 @@ def _prune_volume(
     store's voxel size from its OME-Zarr scale, unless a spacing is given). A Zarr store
     pruned inside a Dask task (as ``prune_many`` runs it on a cluster) is pruned chunk by
     chunk on that cluster instead, never whole in one worker."""
-    if is_zarr(source) and (cluster := _task_cluster()) is not None:
+    cluster = _task_cluster() if is_zarr(source) else None
+    voxels = None
+    if cluster is not None:  # only the store's metadata here
+        from .io.zarr import open_zarr_volume
+
+        shape = tuple(int(n) for n in open_zarr_volume(source).shape)
+    elif is_zarr(source):
+        voxels, stored = read_zarr(source, limits.max_pixels or MAX_VOLUME_VOXELS)
+        if stored is not None and volume == VolumeOptions():
+            volume = VolumeOptions(spacing=stored)
+        voxels = read_volume(voxels)  # the dims' and the dtype's checks
+        shape = voxels.shape
+    else:
+        voxels = read_volume(source, max_voxels=limits.max_pixels)
+        shape = voxels.shape
+    answer_pixels = 0
+    if answers is not None and "png" in answers:
+        scale, answer_pixels = projections_scale(shape, output, limits.max_pixels)
+        output = replace(output, overlay_scale=scale)
+    if cluster is not None:
         from .parallel.volume_chunks import MAX_BOX_VOXELS, prune_zarr_chunked
 
         with cluster as client:  # the task's slot is given back while its tasks run
@@ -227,17 +246,7 @@ def _prune_volume(
                 output,
                 max_box_voxels=min(MAX_BOX_VOXELS, limits.max_pixels or MAX_BOX_VOXELS),
             )
-    if is_zarr(source):
-        voxels, stored = read_zarr(source, limits.max_pixels or MAX_VOLUME_VOXELS)
-        if stored is not None and volume == VolumeOptions():
-            volume = VolumeOptions(spacing=stored)
-        voxels = read_volume(voxels)  # the dims' and the dtype's checks
-    else:
-        voxels = read_volume(source, max_voxels=limits.max_pixels)
-    answer_pixels = 0
-    if answers is not None and "png" in answers:
-        scale, answer_pixels = projections_scale(voxels.shape, output, limits.max_pixels)
-        output = replace(output, overlay_scale=scale)
+    assert voxels is not None
     check_budget(
         volume_estimate(voxels, answer_pixels), limits.memory, limits.seconds, VOLUME_BASIS
     )

@@ -62,8 +62,11 @@ def test_prune_many_prunes_a_zarr_store_chunk_by_chunk_on_its_cluster(tmp_path: 
     path = _store(tmp_path / "in" / "cells.zarr", labels)
     out = tmp_path / "out"
     small = replace(DATASET_LIMITS, max_pixels=1000)
+    fit = replace(DATASET_LIMITS, max_pixels=500_000)  # the overlay's default scale shrinks
     with dask_cluster(tmp_path / "dask", workers=2) as address:
-        (done,) = prune_many(tmp_path / "in", client=address, out=out, files=("csv",))
+        (done,) = prune_many(
+            tmp_path / "in", client=address, out=out, files=("csv", "png"), limits=fit
+        )
         (refused,) = prune_many(path, client=address, limits=small)
         with distributed.Client(address) as client:  # what ran: the chunked path's tasks
             ran = client.run_on_scheduler(lambda dask_scheduler: set(dask_scheduler.task_prefixes))
@@ -71,6 +74,9 @@ def test_prune_many_prunes_a_zarr_store_chunk_by_chunk_on_its_cluster(tmp_path: 
     assert done.status == "done"
     assert (out / "cells.json").read_bytes() == skelprune.encode(whole, "json") + b"\n"
     assert (out / "cells.csv").read_bytes() == skelprune.encode(whole, "csv")
+    # the overlay's scale held to the run's limits as for a store pruned whole
+    answered = skelprune.prune(path, limits=fit, answers=("json", "png", "csv"))
+    assert (out / "cells.png").read_bytes() == skelprune.encode(answered, "png")
     assert {"chunk_labels", "prune_labels"} <= ran  # (dask drops the leading _)
     # a label's box, not the whole volume, is held to the run's size limit
     assert refused.status == "failed" and refused.problem["kind"] == "image-too-large"

@@ -30,6 +30,7 @@ if TYPE_CHECKING:
 
 from .grid import IDENTITY_ORIENTATION, Orientation, oriented
 from .grid._intervals import owner_runs
+from .grid._label import holes
 from .grid._open_edge import open_edge, open_extension
 from .grid._roughness import boundary_roughness
 from .grid._rowcover import cover_counts, last_losses, uncover_count
@@ -78,14 +79,6 @@ def _path_lengths(nbr, seed):
     return dist
 
 
-def _holes(img: np.ndarray) -> int:
-    """The holes of an 8-connected foreground: 4-connected background pieces off the
-    array's border."""
-    background, n = ndimage.label(~img)
-    edge = np.concatenate([background[0], background[-1], background[:, 0], background[:, -1]])
-    return n - int(np.count_nonzero(np.unique(edge)))
-
-
 def _homotopic(rows: np.ndarray, cols: np.ndarray, shape: np.ndarray) -> bool:
     """Whether the pixels are one non-empty 8-connected set with the holes of
     ``shape`` (a padded one-component crop): an axis with its topology."""
@@ -95,7 +88,7 @@ def _homotopic(rows: np.ndarray, cols: np.ndarray, shape: np.ndarray) -> bool:
     img[rows, cols] = True
     if int(ndimage.label(img, np.ones((3, 3), bool))[1]) != 1:
         return False
-    return _holes(img) == _holes(shape)
+    return holes(img) == holes(shape)
 
 
 def _beyond(shape: tuple[int, ...], origin: tuple[int, int], image_shape: tuple[int, int]) -> bool:

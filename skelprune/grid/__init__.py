@@ -20,7 +20,7 @@ from .._lazy import lazy_exports
 if TYPE_CHECKING:
     from ._contours import boundary_polygons, trace_boundaries
     from ._digital import disk_half_width, isqrt
-    from ._label import components8, label8
+    from ._label import components8, holes, label8
     from ._orientation import IDENTITY_ORIENTATION, Orientation, oriented
     from .coverage import Coverage
     from .graph import BranchGraph
@@ -34,6 +34,7 @@ _LAZY = {
     "disk_half_width": "_digital",
     "isqrt": "_digital",
     "components8": "_label",
+    "holes": "_label",
     "label8": "_label",
     "IDENTITY_ORIENTATION": "_orientation",
     "Orientation": "_orientation",
@@ -61,6 +62,7 @@ __all__ = [
     "components8",
     "count_covered",
     "disk_half_width",
+    "holes",
     "isqrt",
     "label8",
     "medial_axis",

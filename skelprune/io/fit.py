@@ -32,6 +32,7 @@ from scipy.spatial import cKDTree
 from shapely.geometry import MultiPolygon, Polygon
 
 from ..errors import SkelpruneError
+from ..grid._label import holes
 
 __all__ = [
     "RasterWarning",
@@ -218,14 +219,7 @@ def _part_holds(part: Polygon, size: float, margin: int, rasterize: Any) -> bool
     except SkelpruneError:  # over a limit: not a size to offer
         return False
     n = ndimage.label(mask, EIGHT)[1]
-    return n == 1 and _holes(mask) == len(part.interiors)
-
-
-def _holes(mask: np.ndarray) -> int:
-    """Background components (4-connected) that do not touch the raster's border."""
-    labels, n = ndimage.label(~mask)
-    border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
-    return n - int(np.count_nonzero(border))
+    return n == 1 and holes(mask) == len(part.interiors)
 
 
 def holding_size(
@@ -309,7 +303,7 @@ def check_topology(
             )
         )
     want = sum(len(p.interiors) for p in parts)
-    have = _holes(mask)
+    have = holes(mask)
     if not warnings and have != want:
         fix = None
         minx, miny, maxx, maxy = geom.bounds
@@ -321,7 +315,7 @@ def check_topology(
                 m, _ = rasterize(geom, s)
             except SkelpruneError:
                 break
-            if _holes(m) == want:
+            if holes(m) == want:
                 fix = s
                 break
         advice = f"; a pixel_size of {fix:.4g} or less keeps them" if fix else ""
